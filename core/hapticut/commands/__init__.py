@@ -1,0 +1,1 @@
+"""Sub-commands of ``hapticut`` (see hapticut.cli)."""

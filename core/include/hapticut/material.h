@@ -1,0 +1,39 @@
+// The material's move function, eq. (1): given the target p' and the current
+// proxy q, decide whether and where the proxy moves. Pure functions: the same
+// inputs give the same output, and q' always lies on the segment [q, p'] so
+// FACE and EDGE motion stays on its constraint (ALGORITHM.md).
+#pragma once
+
+#include "hapticut/scene.h"
+#include "hapticut/vec3.h"
+
+namespace hapticut {
+
+// What a move may depend on besides p' and q; fixed for the whole tick so a
+// tick's transitions see one consistent material.
+struct MoveContext {
+  double stiffness_N_per_mm = 0.1;    // k, for the membrane's push k|p'-q|.
+  double target_speed_mm_per_s = 0.0; // Speed of the device point this tick (viscous).
+  double tolerance_mm = 1e-9;         // Repair 5: "not moved" means |p'-q| < D + eps.
+};
+
+struct MoveResult {
+  bool moved = false;
+  Vec3 q;  // q' (equal to q when not moved).
+};
+
+// Free: q' = p'. Drag (16): the proxy trails p' by at most D. Rigid (17):
+// never moves. Viscous: drag whose lag D = c v / k grows with the stroke
+// speed v, so the force k D equals the viscous resistance c v (capped at
+// max_lag_mm). Membrane: rigid until the push k|p'-q| exceeds break_force_N,
+// then free.
+MoveResult move(const Material& material, const Vec3& target, const Vec3& q,
+                const MoveContext& context);
+
+// The lag distance below which the material holds the proxy (drag-like
+// models), or a negative number for models without one.
+double lag_distance_mm(const Material& material, const MoveContext& context);
+
+inline bool is_rigid(const Material& material) { return material.model == MaterialModel::Rigid; }
+
+}  // namespace hapticut

@@ -1,0 +1,108 @@
+// Proxy: the ideal point q of one device point p, moving through the Space
+// under the rules of Table 1 (ALGORITHM.md) with the paper's typos fixed and
+// the listed repairs applied. Deterministic, bounded work per tick, no
+// allocation, never NaN, never inside rigid material.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+
+#include "hapticut/material.h"
+#include "hapticut/space.h"
+
+namespace hapticut {
+
+enum class ProxyState : std::uint8_t { Tet = 0, Face = 1, Edge = 2, Vertex = 3, Outside = 4 };
+inline constexpr int kProxyStateCount = 5;
+const char* proxy_state_name(ProxyState state);
+
+// Where the proxy is: its state, the tet that owns the state (ALGORITHM.md,
+// "Every constrained state is owned by a tet") and which of that tet's faces
+// (0-3), edges (0-5) or vertices (0-3) constrains it.
+struct ProxyPlace {
+  ProxyState state = ProxyState::Outside;
+  std::int32_t tet = kNoTet;
+  std::int8_t local = 0;
+  Vec3 q;
+};
+
+// One call of Proxy::transition: the state before and after, whether the new
+// state is owned by another tet than before ("neighbour" in Table 2), and
+// whether anything changed (state, owner or |dq| > tolerance).
+struct Transition {
+  ProxyState from = ProxyState::Outside;
+  ProxyState to = ProxyState::Outside;
+  bool to_neighbour = false;
+  bool changed = false;
+};
+
+struct ProxyCounters {
+  // transitions[from][to][to_neighbour]; "stay" transitions are not counted.
+  std::array<std::array<std::array<std::uint64_t, 2>, kProxyStateCount>, kProxyStateCount>
+      transitions{};
+  std::uint64_t ticks = 0;
+  std::uint64_t capped_ticks = 0;    // Ticks that hit max_transitions_per_tick.
+  std::uint64_t rejected_inputs = 0; // Ticks whose p was not finite (state kept).
+  std::uint32_t max_transitions_in_tick = 0;
+  std::uint64_t total_transitions = 0;
+};
+
+struct TickResult {
+  int transitions = 0;
+  bool capped = false;
+  bool rejected = false;  // p was NaN/inf: nothing moved, force zero.
+};
+
+// How a reset went: where the proxy started.
+enum class StartKind : std::uint8_t {
+  InsideTet,           // p located in a non-rigid tet: TET, q = p.
+  Outside,             // p outside the mesh: OUTSIDE, q = p.
+  PushedOutOfRigid,    // p inside rigid material: q on the nearest face out of it.
+};
+
+class Proxy {
+ public:
+  explicit Proxy(const Space& space);
+
+  // Places the proxy for device point p (ALGORITHM.md repair 6; docs/decisions.md).
+  StartKind reset(const Vec3& p);
+  // One servo tick: transitions until nothing changes or the cap is hit.
+  // dt_s is the tick's duration (for the viscous material's speed).
+  TickResult step(const Vec3& p, double dt_s);
+  // A single transition of Table 1 (one pass of (a) then (b) for the current state).
+  Transition transition(const Vec3& p, const MoveContext& context);
+
+  const ProxyPlace& place() const { return place_; }
+  void set_place(const ProxyPlace& place) { place_ = place; }
+  const Vec3& q() const { return place_.q; }
+  const Vec3& last_p() const { return last_p_; }
+  // Force on the device point, eq. (15); on a capped tick clamped to
+  // capped_tick_force_N. Zero after a rejected input.
+  Vec3 force_N() const { return force_N_; }
+  const ProxyCounters& counters() const { return counters_; }
+  void clear_counters() { counters_ = {}; }
+
+  // Does the state agree with q (within tolerance_factor x the mesh tolerance),
+  // and is q outside every rigid tet? Returns "" when it does, else the reason.
+  std::string check_invariants(double tolerance_factor = 100.0) const;
+
+ private:
+  Transition step_tet(const Vec3& p, const MoveContext& context);
+  Transition step_face(const Vec3& p, const MoveContext& context);
+  Transition step_edge(const Vec3& p, const MoveContext& context);
+  Transition step_vertex(const Vec3& p, const MoveContext& context);
+  Transition step_outside(const Vec3& p);
+  Transition go(ProxyState to, std::int32_t tet, int local, const Vec3& q);
+  Transition stay() const;
+  StartKind push_out_of_rigid(std::int32_t start_tet, const Vec3& p);
+
+  const Space* space_;
+  ProxyPlace place_;
+  Vec3 last_p_;
+  bool has_last_p_ = false;
+  Vec3 force_N_;
+  ProxyCounters counters_;
+};
+
+}  // namespace hapticut

@@ -1,0 +1,171 @@
+// TetMesh: the space split into tetrahedra, each with a material index, and
+// everything the paper precomputes (section 3) so that a servo tick never
+// searches or allocates. Immutable after construction.
+//
+// Local conventions (used by every file that walks the mesh):
+//   - face i of a tet is the face opposite its local vertex i;
+//   - local edge e joins local vertices kEdgeVertices[e];
+//   - tets are stored positively oriented (inverted input is re-oriented).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "hapticut/aabb_tree.h"
+#include "hapticut/vec3.h"
+
+namespace hapticut {
+
+// Sentinel for "no tet here" (the outside of a boundary face, or a failed locate).
+inline constexpr std::int32_t kNoTet = -1;
+
+inline constexpr std::array<std::array<int, 2>, 6> kEdgeVertices{
+    {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}}};
+// The two faces that contain local edge e (the faces opposite the other two vertices).
+inline constexpr std::array<std::array<int, 2>, 6> kEdgeFaces{
+    {{2, 3}, {1, 3}, {1, 2}, {0, 3}, {0, 2}, {0, 1}}};
+// The local edge shared by faces i and j (i != j); -1 on the diagonal.
+inline constexpr std::array<std::array<int, 4>, 4> kEdgeOfFaces{
+    {{-1, 5, 4, 3}, {5, -1, 2, 1}, {4, 2, -1, 0}, {3, 1, 0, -1}}};
+// The local edge joining local vertices a and b (a != b); -1 on the diagonal.
+inline constexpr std::array<std::array<int, 4>, 4> kEdgeOfVertices{
+    {{-1, 0, 1, 2}, {0, -1, 3, 4}, {1, 3, -1, 5}, {2, 4, 5, -1}}};
+
+class MeshError : public std::runtime_error {
+ public:
+  MeshError(const std::string& what, std::int64_t index)
+      : std::runtime_error(what), index_(index) {}
+  // The offending vertex, tet or face index (-1 when none applies).
+  std::int64_t index() const { return index_; }
+
+ private:
+  std::int64_t index_;
+};
+
+// An oriented plane: signed_distance(x) = dot(normal, x) - offset, normal unit
+// and pointing out of the tet that owns it (eq. 2: outside when >= 0).
+struct Plane {
+  Vec3 normal;
+  double offset = 0.0;
+  double signed_distance(const Vec3& x) const { return dot(normal, x) - offset; }
+};
+
+struct FaceRef {
+  std::int32_t tet = kNoTet;
+  std::int8_t face = 0;
+};
+
+struct EdgeFanEntry {
+  std::int32_t tet = kNoTet;
+  std::int8_t local_edge = 0;
+  std::array<std::int8_t, 2> faces{};  // The tet's two faces through the edge.
+};
+
+struct VertexFanEntry {
+  std::int32_t tet = kNoTet;
+  std::int8_t local_vertex = 0;
+};
+
+struct MeshStats {
+  std::int64_t reoriented_tets = 0;
+  int max_tets_per_edge = 0;
+  double mean_tets_per_edge = 0.0;
+  int max_tets_per_vertex = 0;
+  double mean_tets_per_vertex = 0.0;
+  double min_dihedral_deg = 0.0;
+  std::int64_t boundary_faces = 0;
+};
+
+class TetMesh {
+ public:
+  // Validates and precomputes. Throws MeshError naming the offending index for:
+  // an index out of range, a NaN/inf coordinate, a zero-volume tet, a face
+  // shared by more than two tets, a material index < 0. tolerance_mm <= 0
+  // derives the tolerance from the mesh size (kRelativeTolerance x bbox diagonal).
+  TetMesh(std::vector<Vec3> vertices_mm, std::vector<std::array<std::int32_t, 4>> tets,
+          std::vector<std::int32_t> tet_materials, double tolerance_mm = 0.0);
+
+  static constexpr double kRelativeTolerance = 1e-9;
+
+  std::int32_t vertex_count() const { return static_cast<std::int32_t>(vertices_.size()); }
+  std::int32_t tet_count() const { return static_cast<std::int32_t>(tets_.size()); }
+  std::int32_t edge_count() const { return static_cast<std::int32_t>(edge_vertices_.size()); }
+
+  const Vec3& vertex(std::int32_t v) const { return vertices_[v]; }
+  const std::array<std::int32_t, 4>& tet(std::int32_t t) const { return tets_[t]; }
+  std::int32_t material(std::int32_t t) const { return materials_[t]; }
+  const std::vector<Vec3>& vertices() const { return vertices_; }
+  const std::vector<std::array<std::int32_t, 4>>& tets() const { return tets_; }
+  const std::vector<std::int32_t>& materials() const { return materials_; }
+
+  // Absolute tolerance (mm) of every geometric test; stated once, see docs/decisions.md.
+  double tolerance() const { return tolerance_; }
+
+  const Plane& face_plane(std::int32_t t, int face) const { return planes_[4 * t + face]; }
+  std::int32_t neighbour(std::int32_t t, int face) const { return neighbours_[4 * t + face]; }
+  int neighbour_face(std::int32_t t, int face) const { return neighbour_faces_[4 * t + face]; }
+  std::int32_t edge_of(std::int32_t t, int local_edge) const { return tet_edges_[6 * t + local_edge]; }
+
+  const std::array<std::int32_t, 2>& edge_vertices(std::int32_t e) const { return edge_vertices_[e]; }
+  // Unit direction from edge_vertices(e)[0] to [1]: the inward direction at
+  // end 0; its negation is the inward direction at end 1 (eq. 10).
+  const Vec3& edge_direction(std::int32_t e) const { return edge_directions_[e]; }
+  std::span<const EdgeFanEntry> edge_fan(std::int32_t e) const {
+    return {edge_fan_.data() + edge_fan_start_[e], edge_fan_.data() + edge_fan_start_[e + 1]};
+  }
+  std::span<const VertexFanEntry> vertex_fan(std::int32_t v) const {
+    return {vertex_fan_.data() + vertex_fan_start_[v],
+            vertex_fan_.data() + vertex_fan_start_[v + 1]};
+  }
+  bool is_boundary_edge(std::int32_t e) const { return boundary_edge_[e] != 0; }
+  bool is_boundary_vertex(std::int32_t v) const { return boundary_vertex_[v] != 0; }
+
+  const std::vector<FaceRef>& boundary_faces() const { return boundary_faces_; }
+  const AabbTree& boundary_tree() const { return boundary_tree_; }
+  const AabbTree& tet_tree() const { return tet_tree_; }
+
+  // The tet containing p (within the tolerance), or kNoTet.
+  std::int32_t locate(const Vec3& p) const;
+  // Largest signed distance of p to the planes of tet t (<= 0 inside).
+  double outside_distance(std::int32_t t, const Vec3& p) const;
+
+  double signed_volume(std::int32_t t) const;
+  const MeshStats& stats() const { return stats_; }
+  std::size_t memory_bytes() const;
+
+ private:
+  void validate_and_orient();
+  void build_faces();
+  void build_edges();
+  void build_vertex_fans();
+  void build_trees();
+  void compute_stats();
+
+  std::vector<Vec3> vertices_;
+  std::vector<std::array<std::int32_t, 4>> tets_;
+  std::vector<std::int32_t> materials_;
+  double tolerance_ = 0.0;
+
+  std::vector<Plane> planes_;                   // 4 per tet.
+  std::vector<std::int32_t> neighbours_;        // 4 per tet.
+  std::vector<std::int8_t> neighbour_faces_;    // 4 per tet.
+  std::vector<std::int32_t> tet_edges_;         // 6 per tet.
+  std::vector<std::array<std::int32_t, 2>> edge_vertices_;
+  std::vector<Vec3> edge_directions_;
+  std::vector<std::int32_t> edge_fan_start_;
+  std::vector<EdgeFanEntry> edge_fan_;
+  std::vector<std::int32_t> vertex_fan_start_;
+  std::vector<VertexFanEntry> vertex_fan_;
+  std::vector<std::uint8_t> boundary_edge_;
+  std::vector<std::uint8_t> boundary_vertex_;
+  std::vector<FaceRef> boundary_faces_;
+  AabbTree boundary_tree_;
+  AabbTree tet_tree_;
+  MeshStats stats_;
+};
+
+}  // namespace hapticut

@@ -1,0 +1,60 @@
+#include "hapticut/material.h"
+
+#include <algorithm>
+
+namespace hapticut {
+
+namespace {
+
+// Eq. (16): hold while the target is within D, else trail it at distance D.
+MoveResult trail(const Vec3& target, const Vec3& q, double lag_mm, double tolerance_mm) {
+  const Vec3 back = q - target;
+  const double distance = norm(back);
+  // Repair 5: "< D + eps" so rounding does not creep q by an ulp each call.
+  if (distance < lag_mm + tolerance_mm) return {false, q};
+  return {true, target + back * (lag_mm / distance)};
+}
+
+}  // namespace
+
+double lag_distance_mm(const Material& material, const MoveContext& context) {
+  switch (material.model) {
+    case MaterialModel::Drag:
+      return material.drag_distance_mm;
+    case MaterialModel::Viscous:
+      // Steady state of a proxy dragged at speed v: k D = c v.
+      return std::min(material.max_lag_mm, material.viscosity_N_s_per_mm *
+                                               context.target_speed_mm_per_s /
+                                               context.stiffness_N_per_mm);
+    case MaterialModel::Free:
+      return 0.0;
+    case MaterialModel::Rigid:
+    case MaterialModel::Membrane:
+      break;
+  }
+  return -1.0;
+}
+
+MoveResult move(const Material& material, const Vec3& target, const Vec3& q,
+                const MoveContext& context) {
+  switch (material.model) {
+    case MaterialModel::Free:
+      return {true, target};
+    case MaterialModel::Drag:
+    case MaterialModel::Viscous: {
+      const double lag = lag_distance_mm(material, context);
+      if (lag <= context.tolerance_mm) return {true, target};
+      return trail(target, q, lag, context.tolerance_mm);
+    }
+    case MaterialModel::Rigid:
+      return {false, q};
+    case MaterialModel::Membrane:
+      if (context.stiffness_N_per_mm * norm(target - q) > material.break_force_N) {
+        return {true, target};
+      }
+      return {false, q};
+  }
+  return {false, q};
+}
+
+}  // namespace hapticut

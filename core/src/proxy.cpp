@@ -1,0 +1,462 @@
+#include "hapticut/proxy.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include "hapticut/geometry.h"
+
+namespace hapticut {
+
+namespace {
+
+// The nearest plane among a tet's faces (all but skip_face) that q->q1 exits
+// through (repair 1), and where.
+struct Exit {
+  int face = -1;
+  double parameter = 2.0;
+};
+
+Exit find_exit(const TetMesh& mesh, std::int32_t t, const Vec3& q, const Vec3& q1,
+               int skip_face, double eps) {
+  Exit best;
+  for (int f = 0; f < 4; ++f) {
+    if (f == skip_face) continue;
+    const Plane& plane = mesh.face_plane(t, f);
+    const double s =
+        segment_exit_parameter(plane.signed_distance(q), plane.signed_distance(q1), eps);
+    if (s >= 0.0 && s < best.parameter) best = {f, s};
+  }
+  return best;
+}
+
+int local_index_of(const std::array<std::int32_t, 4>& tet, std::int32_t vertex) {
+  for (int k = 0; k < 4; ++k) {
+    if (tet[k] == vertex) return k;
+  }
+  return 0;
+}
+
+// A candidate of the (a-3) steps of EDGE and VERTEX: the widest constraint
+// the target can move along. Ties keep the first found (faces before edges
+// within a tet, tets in fan order), so the choice is deterministic.
+struct Candidate {
+  ProxyState state = ProxyState::Outside;
+  std::int32_t tet = kNoTet;
+  int local = 0;
+  double score = -1.0;
+};
+
+}  // namespace
+
+const char* proxy_state_name(ProxyState state) {
+  switch (state) {
+    case ProxyState::Tet:
+      return "TET";
+    case ProxyState::Face:
+      return "FACE";
+    case ProxyState::Edge:
+      return "EDGE";
+    case ProxyState::Vertex:
+      return "VERTEX";
+    case ProxyState::Outside:
+      return "OUTSIDE";
+  }
+  return "?";
+}
+
+Proxy::Proxy(const Space& space) : space_(&space) {}
+
+Transition Proxy::stay() const { return {place_.state, place_.state, false, false}; }
+
+Transition Proxy::go(ProxyState to, std::int32_t tet, int local, const Vec3& q) {
+  Transition result;
+  result.from = place_.state;
+  result.to = to;
+  result.to_neighbour = place_.tet != kNoTet && tet != kNoTet && tet != place_.tet;
+  result.changed = to != place_.state || tet != place_.tet || local != place_.local ||
+                   squared_norm(q - place_.q) > space_->tolerance() * space_->tolerance();
+  place_ = {to, tet, static_cast<std::int8_t>(local), q};
+  return result;
+}
+
+StartKind Proxy::reset(const Vec3& p) {
+  if (!is_finite(p)) throw std::invalid_argument("proxy start point is not finite");
+  const TetMesh& mesh = space_->mesh();
+  force_N_ = {};
+  last_p_ = p;
+  has_last_p_ = true;
+  const std::int32_t t = mesh.locate(p);
+  if (t == kNoTet) {
+    place_ = {ProxyState::Outside, kNoTet, 0, p};
+    return StartKind::Outside;
+  }
+  if (!space_->tet_is_rigid(t)) {
+    place_ = {ProxyState::Tet, t, 0, p};
+    return StartKind::InsideTet;
+  }
+  return push_out_of_rigid(t, p);
+}
+
+// A start inside rigid material: the proxy goes to the nearest point of the
+// rigid region's boundary (searched over the connected rigid tets), so the
+// first force pushes the hand out of the bone, as touching it would.
+StartKind Proxy::push_out_of_rigid(std::int32_t start_tet, const Vec3& p) {
+  const TetMesh& mesh = space_->mesh();
+  std::vector<std::int32_t> queue{start_tet};
+  std::vector<std::uint8_t> seen(mesh.tet_count(), 0);
+  seen[start_tet] = 1;
+  double best_distance = 1e300;
+  ProxyPlace best;
+  for (std::size_t k = 0; k < queue.size(); ++k) {
+    const std::int32_t t = queue[k];
+    for (int f = 0; f < 4; ++f) {
+      const std::int32_t u = mesh.neighbour(t, f);
+      if (u != kNoTet && space_->tet_is_rigid(u)) {
+        if (!seen[u]) {
+          seen[u] = 1;
+          queue.push_back(u);
+        }
+        continue;
+      }
+      std::array<Vec3, 3> corner;
+      int n = 0;
+      for (int v = 0; v < 4; ++v) {
+        if (v != f) corner[n++] = mesh.vertex(mesh.tet(t)[v]);
+      }
+      const Vec3 c = closest_point_on_triangle(p, corner[0], corner[1], corner[2]);
+      const double d = norm(c - p);
+      if (d < best_distance) {
+        best_distance = d;
+        best = u == kNoTet ? ProxyPlace{ProxyState::Outside, kNoTet, 0, c}
+                           : ProxyPlace{ProxyState::Face, u,
+                                        static_cast<std::int8_t>(mesh.neighbour_face(t, f)), c};
+      }
+    }
+  }
+  place_ = best;
+  force_N_ = (place_.q - p) * space_->settings().stiffness_N_per_mm;
+  return StartKind::PushedOutOfRigid;
+}
+
+TickResult Proxy::step(const Vec3& p, double dt_s) {
+  TickResult result;
+  ++counters_.ticks;
+  if (!is_finite(p)) {
+    ++counters_.rejected_inputs;
+    force_N_ = {};
+    result.rejected = true;
+    return result;
+  }
+  const EngineSettings& settings = space_->settings();
+  MoveContext context;
+  context.stiffness_N_per_mm = settings.stiffness_N_per_mm;
+  context.tolerance_mm = space_->tolerance();
+  context.target_speed_mm_per_s =
+      has_last_p_ && dt_s > 0.0 && std::isfinite(dt_s) ? norm(p - last_p_) / dt_s : 0.0;
+  for (;;) {
+    if (result.transitions == settings.max_transitions_per_tick) {
+      result.capped = true;
+      break;
+    }
+    const Transition t = transition(p, context);
+    if (!t.changed) break;
+    ++result.transitions;
+    ++counters_.transitions[static_cast<int>(t.from)][static_cast<int>(t.to)][t.to_neighbour];
+  }
+  counters_.total_transitions += static_cast<std::uint64_t>(result.transitions);
+  counters_.max_transitions_in_tick =
+      std::max(counters_.max_transitions_in_tick, static_cast<std::uint32_t>(result.transitions));
+  Vec3 force = (place_.q - p) * settings.stiffness_N_per_mm;  // Eq. (15).
+  if (result.capped) {
+    // The proxy is valid but behind: its lag is the computation's, not the
+    // material's, so the hand must not feel it in full.
+    ++counters_.capped_ticks;
+    const double magnitude = norm(force);
+    if (magnitude > settings.capped_tick_force_N) force = force * (settings.capped_tick_force_N / magnitude);
+  }
+  force_N_ = is_finite(force) ? force : Vec3{};
+  last_p_ = p;
+  has_last_p_ = true;
+  return result;
+}
+
+Transition Proxy::transition(const Vec3& p, const MoveContext& context) {
+  switch (place_.state) {
+    case ProxyState::Tet:
+      return step_tet(p, context);
+    case ProxyState::Face:
+      return step_face(p, context);
+    case ProxyState::Edge:
+      return step_edge(p, context);
+    case ProxyState::Vertex:
+      return step_vertex(p, context);
+    case ProxyState::Outside:
+      return step_outside(p);
+  }
+  return stay();
+}
+
+// TET: (a) nothing widens; (b-1) move; (b-2) stay inside; (b-3) stop on the
+// nearest exit face (eqs. 2-4 with repair 1).
+Transition Proxy::step_tet(const Vec3& p, const MoveContext& context) {
+  const TetMesh& mesh = space_->mesh();
+  const std::int32_t t = place_.tet;
+  const Vec3 q = place_.q;
+  const MoveResult moved = move(space_->material_of_tet(t), p, q, context);
+  if (!moved.moved) return stay();
+  const Exit exit = find_exit(mesh, t, q, moved.q, -1, context.tolerance_mm);
+  if (exit.face < 0) return go(ProxyState::Tet, t, 0, moved.q);
+  return go(ProxyState::Face, t, exit.face, q + (moved.q - q) * exit.parameter);
+}
+
+// FACE: (a-1) toward the outside of the owner (eq. 5): into the neighbour or
+// OUTSIDE; (a-2) back into the owner; (b) slide on the plane (eq. 6) and stop
+// on the nearest edge.
+Transition Proxy::step_face(const Vec3& p, const MoveContext& context) {
+  const TetMesh& mesh = space_->mesh();
+  const std::int32_t t = place_.tet;
+  const int face = place_.local;
+  const Vec3 q = place_.q;
+  const Plane& plane = mesh.face_plane(t, face);
+  const double eps = context.tolerance_mm;
+  if (dot(plane.normal, p - q) > eps) {
+    const std::int32_t u = mesh.neighbour(t, face);
+    if (u == kNoTet) return go(ProxyState::Outside, kNoTet, 0, q);  // Repair 3: keep q.
+    if (move(space_->material_of_tet(u), p, q, context).moved) return go(ProxyState::Tet, u, 0, q);
+  } else if (move(space_->material_of_tet(t), p, q, context).moved) {
+    return go(ProxyState::Tet, t, 0, q);
+  }
+  const MoveResult moved =
+      move(space_->material_of_tet(t), project_to_plane(p, plane), q, context);
+  if (!moved.moved) return stay();
+  const Exit exit = find_exit(mesh, t, q, moved.q, face, eps);
+  if (exit.face < 0) return go(ProxyState::Face, t, face, moved.q);
+  return go(ProxyState::Edge, t, kEdgeOfFaces[face][exit.face],
+            q + (moved.q - q) * exit.parameter);
+}
+
+// EDGE: (a-1) into a tet of the fan whose wedge holds p (eq. 7); (a-2) out
+// of the mesh only from a boundary edge when p is outside every closed wedge
+// (repair 2); (a-3) onto the fan face the projected target moves furthest
+// along (eq. 8); (b) slide on the line (eq. 9), stopping at an end (eq. 10).
+Transition Proxy::step_edge(const Vec3& p, const MoveContext& context) {
+  const TetMesh& mesh = space_->mesh();
+  const std::int32_t t = place_.tet;
+  const int local_edge = place_.local;
+  const std::int32_t e = mesh.edge_of(t, local_edge);
+  const Vec3 q = place_.q;
+  const Vec3 d = p - q;
+  const double eps = context.tolerance_mm;
+  if (squared_norm(d) <= eps * eps) return stay();
+  const auto fan = mesh.edge_fan(e);
+
+  bool any_toward = false;
+  for (const EdgeFanEntry& entry : fan) {
+    const double along_a = dot(d, mesh.face_plane(entry.tet, entry.faces[0]).normal);
+    const double along_b = dot(d, mesh.face_plane(entry.tet, entry.faces[1]).normal);
+    if (along_a < -eps && along_b < -eps) {
+      any_toward = true;
+      if (move(space_->material_of_tet(entry.tet), p, q, context).moved) {
+        return go(ProxyState::Tet, entry.tet, 0, q);
+      }
+    }
+  }
+  if (!any_toward && mesh.is_boundary_edge(e)) {
+    bool outside_every_wedge = true;
+    for (const EdgeFanEntry& entry : fan) {
+      const double along_a = dot(d, mesh.face_plane(entry.tet, entry.faces[0]).normal);
+      const double along_b = dot(d, mesh.face_plane(entry.tet, entry.faces[1]).normal);
+      if (!(along_a > eps || along_b > eps)) {
+        outside_every_wedge = false;
+        break;
+      }
+    }
+    if (outside_every_wedge) return go(ProxyState::Outside, kNoTet, 0, q);
+  }
+
+  Candidate best;
+  for (const EdgeFanEntry& entry : fan) {
+    const Material& material = space_->material_of_tet(entry.tet);
+    for (int side = 0; side < 2; ++side) {
+      const Plane& on = mesh.face_plane(entry.tet, entry.faces[side]);
+      const Vec3& other_normal = mesh.face_plane(entry.tet, entry.faces[1 - side]).normal;
+      const Vec3 target = project_to_plane(p, on);
+      if (dot(target - q, other_normal) >= -eps) continue;  // Eq. (8).
+      const double score = norm(target - q);
+      if (score > best.score && move(material, target, q, context).moved) {
+        best = {ProxyState::Face, entry.tet, entry.faces[side], score};
+      }
+    }
+  }
+  if (best.tet != kNoTet) return go(best.state, best.tet, best.local, q);
+
+  const auto& ends = mesh.edge_vertices(e);
+  const Vec3& direction = mesh.edge_direction(e);
+  const Vec3& o0 = mesh.vertex(ends[0]);
+  const MoveResult moved =
+      move(space_->material_of_tet(t), project_to_line(p, o0, direction), q, context);
+  if (!moved.moved) return stay();
+  if (dot(moved.q - o0, direction) <= 0.0) {
+    return go(ProxyState::Vertex, t, local_index_of(mesh.tet(t), ends[0]), o0);
+  }
+  const Vec3& o1 = mesh.vertex(ends[1]);
+  if (dot(moved.q - o1, direction) >= 0.0) {
+    return go(ProxyState::Vertex, t, local_index_of(mesh.tet(t), ends[1]), o1);
+  }
+  return go(ProxyState::Edge, t, local_edge, moved.q);
+}
+
+// VERTEX: (a-1) into a tet whose corner cone holds p (eq. 11); (a-2) out of
+// the mesh only from a boundary vertex, p outside every closed cone (repair
+// 2); (a-3) onto the face (eq. 12) or edge (eq. 13, sign fixed) the projected
+// target moves furthest along; (b) no motion of its own.
+Transition Proxy::step_vertex(const Vec3& p, const MoveContext& context) {
+  const TetMesh& mesh = space_->mesh();
+  const std::int32_t vertex = mesh.tet(place_.tet)[place_.local];
+  const Vec3 q = place_.q;
+  const Vec3 d = p - q;
+  const double eps = context.tolerance_mm;
+  if (squared_norm(d) <= eps * eps) return stay();
+  const auto fan = mesh.vertex_fan(vertex);
+
+  bool any_toward = false;
+  bool outside_every_cone = true;
+  for (const VertexFanEntry& entry : fan) {
+    bool toward = true;
+    bool out_of_cone = false;
+    for (int f = 0; f < 4; ++f) {
+      if (f == entry.local_vertex) continue;
+      const double along = dot(d, mesh.face_plane(entry.tet, f).normal);
+      toward = toward && along < -eps;
+      out_of_cone = out_of_cone || along > eps;
+    }
+    outside_every_cone = outside_every_cone && out_of_cone;
+    if (toward) {
+      any_toward = true;
+      if (move(space_->material_of_tet(entry.tet), p, q, context).moved) {
+        return go(ProxyState::Tet, entry.tet, 0, q);
+      }
+    }
+  }
+  if (!any_toward && outside_every_cone && mesh.is_boundary_vertex(vertex)) {
+    return go(ProxyState::Outside, kNoTet, 0, q);
+  }
+
+  Candidate best;
+  for (const VertexFanEntry& entry : fan) {
+    const Material& material = space_->material_of_tet(entry.tet);
+    const int corner = entry.local_vertex;
+    for (int f = 0; f < 4; ++f) {
+      if (f == corner) continue;
+      const Plane& on = mesh.face_plane(entry.tet, f);
+      const Vec3 target = project_to_plane(p, on);
+      bool inside_wedge = true;
+      for (int g = 0; g < 4; ++g) {
+        if (g == corner || g == f) continue;
+        inside_wedge = inside_wedge && dot(target - q, mesh.face_plane(entry.tet, g).normal) < -eps;
+      }
+      if (!inside_wedge) continue;  // Eq. (12).
+      const double score = norm(target - q);
+      if (score > best.score && move(material, target, q, context).moved) {
+        best = {ProxyState::Face, entry.tet, f, score};
+      }
+    }
+    for (int other = 0; other < 4; ++other) {
+      if (other == corner) continue;
+      const int local_edge = kEdgeOfVertices[corner][other];
+      const std::int32_t e = mesh.edge_of(entry.tet, local_edge);
+      // Eq. (13) with the sign fixed: a_j points from the vertex along the edge.
+      const Vec3 along_edge =
+          mesh.edge_vertices(e)[0] == vertex ? mesh.edge_direction(e) : -mesh.edge_direction(e);
+      const double score = dot(d, along_edge);
+      if (score <= eps) continue;
+      if (score > best.score && move(material, q + along_edge * score, q, context).moved) {
+        best = {ProxyState::Edge, entry.tet, local_edge, score};
+      }
+    }
+  }
+  if (best.tet != kNoTet) return go(best.state, best.tet, best.local, q);
+  return stay();
+}
+
+// OUTSIDE: q' = p unless q->p enters through a boundary triangle (eq. 14,
+// repairs 3 and 4); the nearest entry wins. The boundary tree makes this
+// logarithmic in the number of boundary faces rather than linear.
+Transition Proxy::step_outside(const Vec3& p) {
+  const TetMesh& mesh = space_->mesh();
+  const Vec3 q = place_.q;
+  const Vec3 d = p - q;
+  const double eps = space_->tolerance();
+  double best_parameter = 2.0;
+  FaceRef best_face;
+  const auto& faces = mesh.boundary_faces();
+  mesh.boundary_tree().for_each_on_segment(q, p, eps, [&](std::int32_t k) {
+    const FaceRef& face = faces[k];
+    const Plane& plane = mesh.face_plane(face.tet, face.face);
+    const double s =
+        segment_entry_parameter(plane.signed_distance(q), plane.signed_distance(p), eps);
+    if (s < 0.0 || s >= best_parameter) return;
+    const Vec3 c = q + d * s;
+    for (int f = 0; f < 4; ++f) {
+      if (f == face.face) continue;
+      const Plane& side = mesh.face_plane(face.tet, f);
+      const double distance = side.signed_distance(c);
+      if (distance > eps) return;  // Outside the triangle (eq. 14, "<= eps": repair 4).
+      if (distance >= -eps && dot(d, side.normal) > eps) return;  // On its rim, heading away.
+    }
+    best_parameter = s;
+    best_face = face;
+  });
+  if (best_face.tet != kNoTet) {
+    return go(ProxyState::Face, best_face.tet, best_face.face, q + d * best_parameter);
+  }
+  return go(ProxyState::Outside, kNoTet, 0, p);
+}
+
+std::string Proxy::check_invariants(double tolerance_factor) const {
+  const TetMesh& mesh = space_->mesh();
+  const double tol = tolerance_factor * space_->tolerance();
+  const Vec3& q = place_.q;
+  if (!is_finite(q)) return "q is not finite";
+  if (!is_finite(force_N_)) return "force is not finite";
+  const std::int32_t t = place_.tet;
+  switch (place_.state) {
+    case ProxyState::Tet:
+      if (mesh.outside_distance(t, q) > tol) return "TET: q outside its tet";
+      if (space_->tet_is_rigid(t)) return "TET: owner tet is rigid";
+      break;
+    case ProxyState::Face: {
+      if (std::abs(mesh.face_plane(t, place_.local).signed_distance(q)) > tol) {
+        return "FACE: q off its face plane";
+      }
+      if (mesh.outside_distance(t, q) > tol) return "FACE: q outside its triangle";
+      break;
+    }
+    case ProxyState::Edge: {
+      const std::int32_t e = mesh.edge_of(t, place_.local);
+      const Vec3& o0 = mesh.vertex(mesh.edge_vertices(e)[0]);
+      const Vec3& o1 = mesh.vertex(mesh.edge_vertices(e)[1]);
+      const Vec3& a = mesh.edge_direction(e);
+      if (norm(project_to_line(q, o0, a) - q) > tol) return "EDGE: q off its edge line";
+      const double s = dot(q - o0, a);
+      if (s < -tol || s > norm(o1 - o0) + tol) return "EDGE: q beyond its edge's ends";
+      break;
+    }
+    case ProxyState::Vertex:
+      if (norm(mesh.vertex(mesh.tet(t)[place_.local]) - q) > tol) return "VERTEX: q off its vertex";
+      break;
+    case ProxyState::Outside:
+      break;
+  }
+  std::string problem;
+  mesh.tet_tree().for_each_containing(q, 0.0, [&](std::int32_t u) {
+    if (!problem.empty() || mesh.outside_distance(u, q) >= -tol) return;
+    if (space_->tet_is_rigid(u)) problem = "q inside rigid tet " + std::to_string(u);
+    if (place_.state == ProxyState::Outside) problem = "OUTSIDE: q inside tet " + std::to_string(u);
+  });
+  return problem;
+}
+
+}  // namespace hapticut

@@ -1,0 +1,177 @@
+// Invariant and fuzz tests (issue: engine, item 7): random meshes with
+// slivers and large fans, random trajectories with jumps across many tets.
+// After every tick: q finite, the state agrees with q, q outside every rigid
+// tet; rigid layers one tet thick are never crossed. At least 10^6 steps run
+// here; HAPTICUT_FUZZ_STEPS raises it (tests/run_long_fuzz.sh).
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <random>
+
+#include "hapticut/proxy.h"
+#include "test_support.h"
+
+namespace hapticut {
+namespace {
+
+using testing::make_space;
+
+std::int64_t steps_per_scenario(std::int64_t minimum) {
+  const char* env = std::getenv("HAPTICUT_FUZZ_STEPS");
+  return env != nullptr ? std::max<std::int64_t>(minimum, std::atoll(env)) : minimum;
+}
+
+std::vector<Material> all_materials() {
+  std::vector<Material> materials = testing::paper_materials();
+  Material fluid{"fluid", MaterialModel::Viscous};
+  fluid.viscosity_N_s_per_mm = 0.002;
+  fluid.max_lag_mm = 3.0;
+  Material skin{"skin", MaterialModel::Membrane};
+  skin.break_force_N = 0.3;
+  materials.push_back(fluid);
+  materials.push_back(skin);
+  return materials;
+}
+
+struct Box {
+  Vec3 lo, hi;
+};
+
+Box bounds(const MeshData& mesh) {
+  Box b{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
+  for (const Vec3& v : mesh.vertices_mm) {
+    b.lo = {std::min(b.lo.x, v.x), std::min(b.lo.y, v.y), std::min(b.lo.z, v.z)};
+    b.hi = {std::max(b.hi.x, v.x), std::max(b.hi.y, v.y), std::max(b.hi.z, v.z)};
+  }
+  return b;
+}
+
+// A random walk of several proxies: small steps, sliding strokes, and now and
+// then a jump anywhere in (and a little beyond) the mesh's box.
+std::int64_t run_walk(const Space& space, const MeshData& mesh, std::int64_t steps,
+                      std::uint64_t seed, bool expect_vertex = true) {
+  std::mt19937_64 rng(seed);
+  const Box box = bounds(mesh);
+  const Vec3 size = box.hi - box.lo;
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  auto anywhere = [&] {
+    return Vec3{box.lo.x - 0.1 * size.x + 1.2 * size.x * unit(rng),
+                box.lo.y - 0.1 * size.y + 1.2 * size.y * unit(rng),
+                box.lo.z - 0.1 * size.z + 1.2 * size.z * unit(rng)};
+  };
+  const double scale = norm(size);
+  std::vector<Proxy> proxies(8, Proxy(space));
+  std::vector<Vec3> points(proxies.size());
+  for (std::size_t i = 0; i < proxies.size(); ++i) {
+    points[i] = anywhere();
+    proxies[i].reset(points[i]);
+  }
+  std::int64_t capped = 0;
+  for (std::int64_t s = 0; s < steps; ++s) {
+    const std::size_t i = static_cast<std::size_t>(s) % proxies.size();
+    const double kind = unit(rng);
+    if (kind < 0.02) {
+      points[i] = anywhere();  // A jump across many tets in one tick.
+    } else {
+      const double step = kind < 0.5 ? 1e-3 * scale : 2e-2 * scale;
+      points[i] += Vec3{gauss(rng), gauss(rng), gauss(rng)} * step;
+    }
+    const TickResult r = proxies[i].step(points[i], 0.001);
+    capped += r.capped ? 1 : 0;
+    const std::string problem = proxies[i].check_invariants();
+    if (!problem.empty()) {
+      ADD_FAILURE() << "step " << s << ", proxy " << i << ", state "
+                    << proxy_state_name(proxies[i].place().state) << ": " << problem;
+      return capped;
+    }
+  }
+  // The walk must have reached every state, or it proved little.
+  std::array<std::uint64_t, kProxyStateCount> entered{};
+  for (const Proxy& proxy : proxies) {
+    for (int from = 0; from < kProxyStateCount; ++from) {
+      for (int to = 0; to < kProxyStateCount; ++to) {
+        entered[to] += proxy.counters().transitions[from][to][0] +
+                       proxy.counters().transitions[from][to][1];
+      }
+    }
+  }
+  for (int state = 0; state < kProxyStateCount; ++state) {
+    if (!expect_vertex && ProxyState(state) == ProxyState::Vertex) continue;
+    EXPECT_GT(entered[state], 0u) << "never entered " << proxy_state_name(ProxyState(state));
+  }
+  return capped;
+}
+
+std::vector<std::int32_t> random_materials(std::size_t tets, std::uint64_t seed, int count) {
+  std::mt19937_64 rng(seed);
+  std::uniform_int_distribution<int> pick(0, count - 1);
+  std::vector<std::int32_t> m(tets);
+  for (auto& x : m) x = pick(rng);
+  return m;
+}
+
+TEST(Invariants, JitteredGridWithSliversAndAllMaterials) {
+  const MeshData mesh =
+      grid_mesh({0, 7, 15, 16, 30, 41}, {0, 9, 12, 25, 33}, {0, 10, 19, 20.5, 32}, 0.45, 11);
+  const Space space = make_space(mesh, random_materials(mesh.tets.size(), 3, 5), all_materials());
+  EXPECT_LT(space.mesh().stats().min_dihedral_deg, 5.0) << "the mesh should contain slivers";
+  EXPECT_GE(space.mesh().stats().max_tets_per_vertex, 20);
+  run_walk(space, mesh, steps_per_scenario(400000), 101);
+}
+
+TEST(Invariants, EdgeSharedBySixteenTetsAndFlatSlivers) {
+  for (double half_height : {10.0, 0.05}) {
+    const MeshData mesh = edge_fan_mesh(16, 10.0, half_height);
+    const Space space = make_space(mesh, random_materials(mesh.tets.size(), 5, 5), all_materials());
+    EXPECT_EQ(space.mesh().stats().max_tets_per_edge, 16);
+    run_walk(space, mesh, steps_per_scenario(150000), 202, /*expect_vertex=*/false);
+  }
+}
+
+TEST(Invariants, IcosahedronCentreSharedByTwentyTets) {
+  const MeshData mesh = icosahedron_mesh(10.0);
+  const Space space = make_space(mesh, random_materials(mesh.tets.size(), 9, 5), all_materials());
+  EXPECT_EQ(space.mesh().stats().max_tets_per_vertex, 20);
+  run_walk(space, mesh, steps_per_scenario(150000), 303);
+}
+
+TEST(Invariants, MostlyRigidGridKeepsProxiesOut) {
+  const MeshData mesh = grid_mesh({0, 5, 10, 15, 20}, {0, 5, 10, 15, 20}, {0, 5, 10, 15}, 0.3, 4);
+  std::mt19937_64 rng(17);
+  std::vector<std::int32_t> m(mesh.tets.size());
+  for (auto& x : m) x = (rng() % 10 < 6) ? 2 : int(rng() % 2);
+  const Space space = make_space(mesh, m);
+  run_walk(space, mesh, steps_per_scenario(200000), 404);
+}
+
+// A rigid layer of a single cell, w thick, between two free layers; the
+// device point jumps straight across it in one tick, or wanders below it.
+TEST(Invariants, ThinRigidLayerIsNeverCrossed) {
+  for (double w : {1.0, 1e-3, 1e-7}) {
+    const MeshData mesh = grid_mesh({0, 10, 20, 30}, {0, 10, 20, 30}, {0, 10, 10 + w, 20}, 0.0);
+    std::vector<std::int32_t> m(mesh.tets.size(), 0);
+    for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+      double z = 0;
+      for (std::int32_t v : mesh.tets[t]) z += mesh.vertices_mm[v].z * 0.25;
+      if (z > 10 && z < 10 + w) m[t] = 2;
+    }
+    const Space space = make_space(mesh, m);
+    std::mt19937_64 rng(99);
+    std::uniform_real_distribution<double> xy(0.5, 29.5);
+    std::uniform_real_distribution<double> below(-5.0, 9.9);
+    std::uniform_real_distribution<double> above(10.5 + w, 19.5);
+    for (int trial = 0; trial < 2000; ++trial) {
+      Proxy proxy(space);
+      proxy.reset({xy(rng), xy(rng), above(rng)});
+      for (int k = 0; k < 10; ++k) {
+        proxy.step({xy(rng), xy(rng), below(rng)}, 0.001);
+        ASSERT_GE(proxy.q().z, 10 + w - 1e3 * space.tolerance()) << "w = " << w;
+        ASSERT_EQ(proxy.check_invariants(), "") << "w = " << w;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace hapticut
