@@ -1,0 +1,170 @@
+// Bindings: materials, Space (a TetMesh with its materials) and the
+// reference meshes of the paper's set-ups.
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/tuple.h>
+#include <nanobind/stl/vector.h>
+
+#include <stdexcept>
+#include <string>
+
+#include "arrays.h"
+#include "hapticut/reference_meshes.h"
+#include "hapticut/space.h"
+
+namespace hapticut::python {
+
+namespace {
+
+MaterialModel model_from_name(const std::string& name) {
+  for (MaterialModel m : {MaterialModel::Free, MaterialModel::Drag, MaterialModel::Rigid,
+                          MaterialModel::Viscous, MaterialModel::Membrane}) {
+    if (name == material_model_name(m)) return m;
+  }
+  throw std::invalid_argument("unknown material model '" + name +
+                              "' (expected free, drag, rigid, viscous, membrane)");
+}
+
+double get_number(const nb::dict& d, const char* key, double fallback) {
+  return d.contains(key) ? nb::cast<double>(d[key]) : fallback;
+}
+
+// A material from a dict of the scene file's fields ({"name", "model", ...}).
+Material material_from_dict(const nb::dict& d) {
+  Material m;
+  m.name = d.contains("name") ? nb::cast<std::string>(d["name"]) : "";
+  m.model = model_from_name(nb::cast<std::string>(d["model"]));
+  m.drag_distance_mm = get_number(d, "drag_distance_mm", 0.0);
+  m.viscosity_N_s_per_mm = get_number(d, "viscosity_N_s_per_mm", 0.0);
+  m.max_lag_mm = get_number(d, "max_lag_mm", 50.0);
+  m.break_force_N = get_number(d, "break_force_N", 0.0);
+  return m;
+}
+
+MeshData to_mesh_data(const PointsIn& vertices, const TetsIn& tets) {
+  MeshData data;
+  data.vertices_mm = to_points(vertices);
+  data.tets.resize(tets.shape(0));
+  for (std::size_t t = 0; t < data.tets.size(); ++t) {
+    for (int k = 0; k < 4; ++k) data.tets[t][k] = tets(t, k);
+  }
+  return data;
+}
+
+nb::tuple mesh_to_arrays(const MeshData& data) {
+  auto tets = new_array<std::int32_t>({data.tets.size(), 4});
+  for (std::size_t t = 0; t < data.tets.size(); ++t) {
+    for (int k = 0; k < 4; ++k) tets.data()[4 * t + k] = data.tets[t][k];
+  }
+  return nb::make_tuple(from_points(data.vertices_mm), tets);
+}
+
+Space make_space(const PointsIn& vertices, const TetsIn& tets, const IndicesIn& tet_materials,
+                 const nb::list& materials, double stiffness_N_per_mm, double servo_rate_Hz,
+                 int max_transitions_per_tick, double capped_tick_force_N, double tolerance_mm) {
+  const MeshData data = to_mesh_data(vertices, tets);
+  std::vector<std::int32_t> labels(tet_materials.data(),
+                                   tet_materials.data() + tet_materials.shape(0));
+  std::vector<Material> table;
+  for (nb::handle h : materials) table.push_back(material_from_dict(nb::cast<nb::dict>(h)));
+  EngineSettings settings{stiffness_N_per_mm, servo_rate_Hz, max_transitions_per_tick,
+                          capped_tick_force_N};
+  return Space(TetMesh(data.vertices_mm, data.tets, std::move(labels), tolerance_mm),
+               std::move(table), settings);
+}
+
+}  // namespace
+
+void bind_mesh(nb::module_& m) {
+  nb::exception<MeshError>(m, "MeshError", PyExc_ValueError);
+
+  nb::class_<Space>(m, "Space",
+                    "A tet mesh with a material per tet and the engine's settings (immutable).")
+      .def(nb::new_([](const PointsIn& vertices, const TetsIn& tets, const IndicesIn& tet_materials,
+                       const nb::list& materials, double stiffness_N_per_mm, double servo_rate_Hz,
+                       int max_transitions_per_tick, double capped_tick_force_N,
+                       double tolerance_mm) {
+             return make_space(vertices, tets, tet_materials, materials, stiffness_N_per_mm,
+                               servo_rate_Hz, max_transitions_per_tick, capped_tick_force_N,
+                               tolerance_mm);
+           }),
+           nb::arg("vertices"), nb::arg("tets"), nb::arg("tet_materials"), nb::arg("materials"),
+           nb::arg("stiffness_N_per_mm") = 0.1, nb::arg("servo_rate_Hz") = 1000.0,
+           nb::arg("max_transitions_per_tick") = 64, nb::arg("capped_tick_force_N") = 1.0,
+           nb::arg("tolerance_mm") = 0.0,
+           "Validates the mesh (raises MeshError naming the offending index) and precomputes "
+           "planes, fans and the boundary tree. materials: list of dicts with the scene file's "
+           "fields.")
+      .def_prop_ro("tet_count", [](const Space& s) { return s.mesh().tet_count(); }, nb::rv_policy::move)
+      .def_prop_ro("vertex_count", [](const Space& s) { return s.mesh().vertex_count(); }, nb::rv_policy::move)
+      .def_prop_ro("edge_count", [](const Space& s) { return s.mesh().edge_count(); }, nb::rv_policy::move)
+      .def_prop_ro("boundary_face_count",
+                   [](const Space& s) { return s.mesh().boundary_faces().size(); }, nb::rv_policy::move)
+      .def_prop_ro("tolerance_mm", &Space::tolerance, nb::rv_policy::move)
+      .def_prop_ro("stiffness_N_per_mm",
+                   [](const Space& s) { return s.settings().stiffness_N_per_mm; }, nb::rv_policy::move)
+      .def_prop_ro("memory_bytes", [](const Space& s) { return s.mesh().memory_bytes(); }, nb::rv_policy::move)
+      .def_prop_ro("vertices", [](const Space& s) { return from_points(s.mesh().vertices()); }, nb::rv_policy::move)
+      .def_prop_ro("tets",
+                   [](const Space& s) {
+                     MeshData d;
+                     d.tets = s.mesh().tets();
+                     return nb::cast<nb::tuple>(mesh_to_arrays(d))[1];
+                   }, nb::rv_policy::move)
+      .def_prop_ro("tet_materials",
+                   [](const Space& s) {
+                     const auto& labels = s.mesh().materials();
+                     auto out = new_array<std::int32_t>({labels.size()});
+                     std::copy(labels.begin(), labels.end(), out.data());
+                     return out;
+                   }, nb::rv_policy::move)
+      .def_prop_ro("material_names",
+                   [](const Space& s) {
+                     std::vector<std::string> names;
+                     for (const Material& mat : s.materials()) names.push_back(mat.name);
+                     return names;
+                   }, nb::rv_policy::move)
+      .def_prop_ro("stats",
+                   [](const Space& s) {
+                     const MeshStats& st = s.mesh().stats();
+                     nb::dict d;
+                     d["reoriented_tets"] = st.reoriented_tets;
+                     d["max_tets_per_edge"] = st.max_tets_per_edge;
+                     d["mean_tets_per_edge"] = st.mean_tets_per_edge;
+                     d["max_tets_per_vertex"] = st.max_tets_per_vertex;
+                     d["mean_tets_per_vertex"] = st.mean_tets_per_vertex;
+                     d["min_dihedral_deg"] = st.min_dihedral_deg;
+                     d["boundary_faces"] = st.boundary_faces;
+                     return d;
+                   }, nb::rv_policy::move)
+      .def(
+          "locate",
+          [](const Space& s, const PointsIn& points) {
+            auto out = new_array<std::int32_t>({points.shape(0)});
+            for (std::size_t i = 0; i < points.shape(0); ++i) {
+              out.data()[i] = s.mesh().locate({points(i, 0), points(i, 1), points(i, 2)});
+            }
+            return out;
+          },
+          nb::arg("points"), "The tet containing each point, or -1 outside the mesh.");
+
+  m.def("two_tets_mesh", [](double size) { return mesh_to_arrays(two_tets_mesh(size)); },
+        nb::arg("size_mm") = 10.0, "Two tets sharing a face (Table 2's TET/FACE set-up).");
+  m.def("edge_fan_mesh",
+        [](int n, double r, double h) { return mesh_to_arrays(edge_fan_mesh(n, r, h)); },
+        nb::arg("fan_size") = 12, nb::arg("radius_mm") = 10.0, nb::arg("half_height_mm") = 10.0,
+        "One edge (vertices 0-1) shared by fan_size tets (Table 2's EDGE set-up).");
+  m.def("icosahedron_mesh", [](double r) { return mesh_to_arrays(icosahedron_mesh(r)); },
+        nb::arg("radius_mm") = 10.0, "The icosahedron's centre (vertex 0) in 20 tets.");
+  m.def("cube_mesh", [](double s) { return mesh_to_arrays(cube_mesh(s)); },
+        nb::arg("size_mm") = 10.0, "A cube of 6 tets, 12 boundary triangles.");
+  m.def(
+      "grid_mesh",
+      [](const std::vector<double>& xs, const std::vector<double>& ys,
+         const std::vector<double>& zs, double jitter, std::uint64_t seed) {
+        return mesh_to_arrays(grid_mesh(xs, ys, zs, jitter, seed));
+      },
+      nb::arg("xs"), nb::arg("ys"), nb::arg("zs"), nb::arg("jitter") = 0.0, nb::arg("seed") = 1,
+      "A box of cells on the given plane coordinates, 6 Kuhn tets per cell.");
+}
+
+}  // namespace hapticut::python

@@ -1,0 +1,22 @@
+// hapticut._core: the engine for Python (authoring, tests, benchmarks, charts).
+#include <nanobind/nanobind.h>
+
+namespace nb = nanobind;
+
+namespace hapticut::python {
+void bind_mesh(nb::module_& m);
+void bind_proxy(nb::module_& m);
+void bind_benchmarks(nb::module_& m);
+}  // namespace hapticut::python
+
+void bind_scene(nb::module_& m);
+void bind_baselines(nb::module_& m);
+
+NB_MODULE(_core, m) {
+  m.doc() = "Hapticut engine: tet meshes, materials, proxies and blades (C++).";
+  hapticut::python::bind_mesh(m);
+  hapticut::python::bind_proxy(m);
+  hapticut::python::bind_benchmarks(m);
+  bind_scene(m);
+  bind_baselines(m);
+}
