@@ -6,6 +6,7 @@
 #include "hapticut/scene_io.h"
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -76,7 +77,14 @@ class Path {
   throw SceneError(pointer.empty() ? "(root)" : std::move(pointer), reason);
 }
 
-std::string quoted(std::string_view text) { return "'" + std::string(text) + "'"; }
+std::string in_quotes(std::string_view text) {
+  std::string out;
+  out.reserve(text.size() + 2);
+  out += '\'';
+  out += text;
+  out += '\'';
+  return out;
+}
 
 const char* kind_of(const Json& value) {
   switch (value.type()) {
@@ -137,7 +145,7 @@ const std::string& read_name(const Json& value, const Path& path) {
 
 void expect_exact_string(const Json& value, const Path& path, std::string_view expected) {
   const std::string& text = read_string(value, path);
-  if (text != expected) fail(path, "expected " + quoted(expected) + ", got " + quoted(text));
+  if (text != expected) fail(path, "expected " + in_quotes(expected) + ", got " + in_quotes(text));
 }
 
 double read_finite(const Json& value, const Path& path) {
@@ -213,7 +221,7 @@ class NameRegistry {
  public:
   void add(const std::string& name, const Path& name_path, const Path& item_path) {
     auto [it, inserted] = first_.emplace(name, item_path.pointer());
-    if (!inserted) fail(name_path, "duplicate name " + quoted(name) + " (first at " + it->second + ")");
+    if (!inserted) fail(name_path, "duplicate name " + in_quotes(name) + " (first at " + it->second + ")");
   }
 
  private:
@@ -331,7 +339,7 @@ Material read_material(const Json& object, const Path& path, NameRegistry& names
   const auto parsed = material_model_from_name(model);
   if (!parsed) {
     fail(model_path,
-         "unknown model " + quoted(model) + " (expected " + std::string(kModelList) + ")");
+         "unknown model " + in_quotes(model) + " (expected " + std::string(kModelList) + ")");
   }
   material.model = *parsed;
   for (const MaterialParameter& parameter : kMaterialParameters) {
@@ -339,7 +347,7 @@ Material read_material(const Json& object, const Path& path, NameRegistry& names
     const Json* value = find(object, parameter.key);
     const Path parameter_path(path, parameter.key);
     if (need == Need::NotAParameter) {
-      if (value != nullptr) fail(parameter_path, "not a parameter of model " + quoted(model));
+      if (value != nullptr) fail(parameter_path, "not a parameter of model " + in_quotes(model));
       continue;
     }
     if (value == nullptr) {
@@ -596,8 +604,7 @@ Json metadata_tree(const std::string& metadata_json) {
 }
 
 // Every section is written out, defaults included, so a file says everything.
-Json document_tree(const SceneDocument& document) {
-  const Scene& scene = document.scene;
+Json document_tree(const Scene& scene, const std::string& metadata_json) {
   Json tree = Json::object();
   tree["format"] = kFormatName;
   tree["version"] = kSceneFormatVersion;
@@ -623,7 +630,7 @@ Json document_tree(const SceneDocument& document) {
                           {"points", blade.points}});
   }
   tree["blades"] = std::move(blades);
-  tree["metadata"] = metadata_tree(document.metadata_json);
+  tree["metadata"] = metadata_tree(metadata_json);
   return tree;
 }
 
@@ -669,7 +676,7 @@ std::vector<std::uint8_t> encode(const Json& tree, SceneEncoding encoding) {
 // Files.
 
 [[noreturn]] void fail_file(const std::string& action, const std::string& path, int error) {
-  throw SceneError("(file)", "cannot " + action + " " + quoted(path) + ": " + std::strerror(error));
+  throw SceneError("(file)", "cannot " + action + " " + in_quotes(path) + ": " + std::strerror(error));
 }
 
 std::vector<std::uint8_t> read_file(const std::string& path) {
@@ -717,7 +724,7 @@ void write_file_atomically(const std::vector<std::uint8_t>& bytes, const std::st
   std::filesystem::rename(temporary, path, rename_error);
   if (rename_error) {
     std::remove(temporary.c_str());
-    fail_file("rename " + quoted(temporary) + " to", path, rename_error.value());
+    fail_file("rename " + in_quotes(temporary) + " to", path, rename_error.value());
   }
 }
 
@@ -754,15 +761,15 @@ Scene parse_scene(const std::vector<std::uint8_t>& bytes, SceneEncoding encoding
 
 std::vector<std::uint8_t> serialize_scene_document(const SceneDocument& document,
                                                    SceneEncoding encoding) {
-  const Json tree = document_tree(document);
+  const Json tree = document_tree(document.scene, document.metadata_json);
   read_tree(tree, ReadOptions{});  // Never write what the reader would reject.
   return encode(tree, encoding);
 }
 
 std::vector<std::uint8_t> serialize_scene(const Scene& scene, SceneEncoding encoding) {
-  SceneDocument document;
-  document.scene = scene;
-  return serialize_scene_document(document, encoding);
+  const Json tree = document_tree(scene, "{}");
+  read_tree(tree, ReadOptions{});
+  return encode(tree, encoding);
 }
 
 SceneDocument load_scene_document(const std::string& path, const ReadOptions& options) {
@@ -780,9 +787,7 @@ void save_scene_document(const SceneDocument& document, const std::string& path)
 }
 
 void save_scene(const Scene& scene, const std::string& path) {
-  SceneDocument document;
-  document.scene = scene;
-  save_scene_document(document, path);
+  write_file_atomically(serialize_scene(scene, encoding_for_path(path)), path);
 }
 
 }  // namespace hapticut

@@ -226,6 +226,15 @@ void TetMesh::build_vertex_fans() {
 }
 
 void TetMesh::build_trees() {
+  boundary_planes_.clear();
+  for (const FaceRef& f : boundary_faces_) {
+    const Plane& plane = face_plane(f.tet, f.face);
+    boundary_planes_.push_back(plane);
+    boundary_plane_columns_[0].push_back(plane.normal.x);
+    boundary_plane_columns_[1].push_back(plane.normal.y);
+    boundary_plane_columns_[2].push_back(plane.normal.z);
+    boundary_plane_columns_[3].push_back(plane.offset);
+  }
   std::vector<Aabb> boxes(boundary_faces_.size());
   for (std::size_t k = 0; k < boundary_faces_.size(); ++k) {
     const FaceRef& f = boundary_faces_[k];
@@ -294,7 +303,7 @@ std::size_t TetMesh::memory_bytes() const {
          edge_fan_start_.capacity() * 4 + edge_fan_.capacity() * sizeof(EdgeFanEntry) +
          vertex_fan_start_.capacity() * 4 + vertex_fan_.capacity() * sizeof(VertexFanEntry) +
          boundary_edge_.capacity() + boundary_vertex_.capacity() +
-         boundary_faces_.capacity() * sizeof(FaceRef) + boundary_tree_.memory_bytes() +
+         boundary_faces_.capacity() * sizeof(FaceRef) + boundary_planes_.capacity() * sizeof(Plane) + boundary_tree_.memory_bytes() +
          tet_tree_.memory_bytes();
 }
 

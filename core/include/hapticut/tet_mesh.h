@@ -125,6 +125,13 @@ class TetMesh {
   bool is_boundary_vertex(std::int32_t v) const { return boundary_vertex_[v] != 0; }
 
   const std::vector<FaceRef>& boundary_faces() const { return boundary_faces_; }
+  // The outward plane of boundary_faces()[k], stored contiguously for OUTSIDE's scan.
+  const Plane& boundary_plane(std::size_t k) const { return boundary_planes_[k]; }
+  // The same planes as separate coordinate arrays (normal x, y, z, offset), so
+  // a scan over all of them vectorizes.
+  const std::array<std::vector<double>, 4>& boundary_plane_columns() const {
+    return boundary_plane_columns_;
+  }
   const AabbTree& boundary_tree() const { return boundary_tree_; }
   const AabbTree& tet_tree() const { return tet_tree_; }
 
@@ -163,6 +170,8 @@ class TetMesh {
   std::vector<std::uint8_t> boundary_edge_;
   std::vector<std::uint8_t> boundary_vertex_;
   std::vector<FaceRef> boundary_faces_;
+  std::vector<Plane> boundary_planes_;
+  std::array<std::vector<double>, 4> boundary_plane_columns_;
   AabbTree boundary_tree_;
   AabbTree tet_tree_;
   MeshStats stats_;

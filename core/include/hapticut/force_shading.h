@@ -1,0 +1,52 @@
+// Force shading on the surface of rigid material (Morgenbesser and
+// Srinivasan, beyond the paper): the proxy still slides over flat facets, but
+// the force direction is the normal interpolated from per-vertex normals, so
+// a faceted sphere feels round. Built once per Space; pure lookups per tick.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "hapticut/proxy.h"
+#include "hapticut/space.h"
+
+namespace hapticut {
+
+// The surface of the rigid region: every tet face with a rigid tet on one side
+// and a non-rigid tet or the mesh's outside on the other. #T by 3 triangles
+// into `vertices_mm`, wound counter-clockwise seen from outside the rigid region.
+struct RigidSurface {
+  std::vector<Vec3> vertices_mm;
+  std::vector<std::array<std::int32_t, 3>> triangles;
+  std::vector<std::int32_t> mesh_vertex;  // Surface vertex -> TetMesh vertex.
+};
+
+RigidSurface extract_rigid_surface(const Space& space);
+
+class ForceShading {
+ public:
+  explicit ForceShading(const Space& space);
+
+  // The shaded force for a proxy at `place` whose raw force is k (q - p), eq. (15).
+  // FACE on the rigid surface: the normal component keeps its size and takes
+  // the direction interpolated (barycentric) from the face's vertex normals;
+  // the tangential component is kept. EDGE or VERTEX on the rigid surface:
+  // the whole force (which lies in the feature's normal cone) takes the
+  // interpolated direction. Anywhere else, or a force pulling into the
+  // surface: the raw force.
+  Vec3 shade(const ProxyPlace& place, const Vec3& raw_force_N) const;
+
+  // Angle-weighted unit normal of a mesh vertex out of the rigid region,
+  // zero for a vertex not on the rigid surface.
+  const Vec3& vertex_normal(std::int32_t v) const { return vertex_normals_[v]; }
+  bool is_surface_edge(std::int32_t e) const { return surface_edge_[e] != 0; }
+  std::size_t memory_bytes() const;
+
+ private:
+  const Space* space_;
+  std::vector<Vec3> vertex_normals_;
+  std::vector<std::uint8_t> surface_edge_;
+};
+
+}  // namespace hapticut
