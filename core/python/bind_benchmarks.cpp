@@ -31,8 +31,8 @@ void bind_benchmarks(nb::module_& m) {
       "time_transition",
       [](const Space& space, ProxyState state, std::int32_t tet, int local,
          const nb::ndarray<const double, nb::shape<3>, nb::device::cpu>& q_array,
-         const nb::ndarray<const double, nb::shape<3>, nb::device::cpu>& p_array,
-         int repeats, int batches) {
+         const nb::ndarray<const double, nb::shape<3>, nb::device::cpu>& p_array, int repeats,
+         int batches) {
         const ProxyPlace start{state, tet, static_cast<std::int8_t>(local), vec3_from(q_array)};
         const Vec3 p = vec3_from(p_array);
         MoveContext context;
@@ -82,12 +82,14 @@ void bind_benchmarks(nb::module_& m) {
 
   m.def(
       "time_blade",
-      [](const Space& space, const std::vector<double>& start_mm,
-         const std::vector<double>& end_mm, int points,
+      [](const Space& space, const std::vector<double>& start_mm, const std::vector<double>& end_mm,
+         int points,
          const nb::ndarray<const double, nb::shape<-1, 7>, nb::c_contig, nb::device::cpu>& poses,
          double dt_s) {
-        Blade blade(space, {"bench", {start_mm.at(0), start_mm.at(1), start_mm.at(2)},
-                            {end_mm.at(0), end_mm.at(1), end_mm.at(2)}, points});
+        Blade blade(space, {"bench",
+                            {start_mm.at(0), start_mm.at(1), start_mm.at(2)},
+                            {end_mm.at(0), end_mm.at(1), end_mm.at(2)},
+                            points});
         const std::size_t n = poses.shape(0);
         auto pose_at = [&](std::size_t k) {
           return Pose{{poses(k, 0), poses(k, 1), poses(k, 2)},
@@ -114,9 +116,8 @@ void bind_benchmarks(nb::module_& m) {
         d["total_transitions"] = total;
         return d;
       },
-      nb::arg("space"), nb::arg("start_mm"), nb::arg("end_mm"), nb::arg("points"),
-      nb::arg("poses"), nb::arg("dt_s") = 0.001,
-      "Run a blade along (M, 7) poses; wall-clock ns of every tick.");
+      nb::arg("space"), nb::arg("start_mm"), nb::arg("end_mm"), nb::arg("points"), nb::arg("poses"),
+      nb::arg("dt_s") = 0.001, "Run a blade along (M, 7) poses; wall-clock ns of every tick.");
 }
 
 }  // namespace hapticut::python

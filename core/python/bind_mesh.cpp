@@ -94,48 +94,66 @@ void bind_mesh(nb::module_& m) {
            "Validates the mesh (raises MeshError naming the offending index) and precomputes "
            "planes, fans and the boundary tree. materials: list of dicts with the scene file's "
            "fields.")
-      .def_prop_ro("tet_count", [](const Space& s) { return s.mesh().tet_count(); }, nb::rv_policy::move)
-      .def_prop_ro("vertex_count", [](const Space& s) { return s.mesh().vertex_count(); }, nb::rv_policy::move)
-      .def_prop_ro("edge_count", [](const Space& s) { return s.mesh().edge_count(); }, nb::rv_policy::move)
-      .def_prop_ro("boundary_face_count",
-                   [](const Space& s) { return s.mesh().boundary_faces().size(); }, nb::rv_policy::move)
+      .def_prop_ro(
+          "tet_count", [](const Space& s) { return s.mesh().tet_count(); }, nb::rv_policy::move)
+      .def_prop_ro(
+          "vertex_count", [](const Space& s) { return s.mesh().vertex_count(); },
+          nb::rv_policy::move)
+      .def_prop_ro(
+          "edge_count", [](const Space& s) { return s.mesh().edge_count(); }, nb::rv_policy::move)
+      .def_prop_ro(
+          "boundary_face_count", [](const Space& s) { return s.mesh().boundary_faces().size(); },
+          nb::rv_policy::move)
       .def_prop_ro("tolerance_mm", &Space::tolerance, nb::rv_policy::move)
-      .def_prop_ro("stiffness_N_per_mm",
-                   [](const Space& s) { return s.settings().stiffness_N_per_mm; }, nb::rv_policy::move)
-      .def_prop_ro("memory_bytes", [](const Space& s) { return s.mesh().memory_bytes(); }, nb::rv_policy::move)
-      .def_prop_ro("vertices", [](const Space& s) { return from_points(s.mesh().vertices()); }, nb::rv_policy::move)
-      .def_prop_ro("tets",
-                   [](const Space& s) {
-                     MeshData d;
-                     d.tets = s.mesh().tets();
-                     return nb::cast<nb::tuple>(mesh_to_arrays(d))[1];
-                   }, nb::rv_policy::move)
-      .def_prop_ro("tet_materials",
-                   [](const Space& s) {
-                     const auto& labels = s.mesh().materials();
-                     auto out = new_array<std::int32_t>({labels.size()});
-                     std::copy(labels.begin(), labels.end(), out.data());
-                     return out;
-                   }, nb::rv_policy::move)
-      .def_prop_ro("material_names",
-                   [](const Space& s) {
-                     std::vector<std::string> names;
-                     for (const Material& mat : s.materials()) names.push_back(mat.name);
-                     return names;
-                   }, nb::rv_policy::move)
-      .def_prop_ro("stats",
-                   [](const Space& s) {
-                     const MeshStats& st = s.mesh().stats();
-                     nb::dict d;
-                     d["reoriented_tets"] = st.reoriented_tets;
-                     d["max_tets_per_edge"] = st.max_tets_per_edge;
-                     d["mean_tets_per_edge"] = st.mean_tets_per_edge;
-                     d["max_tets_per_vertex"] = st.max_tets_per_vertex;
-                     d["mean_tets_per_vertex"] = st.mean_tets_per_vertex;
-                     d["min_dihedral_deg"] = st.min_dihedral_deg;
-                     d["boundary_faces"] = st.boundary_faces;
-                     return d;
-                   }, nb::rv_policy::move)
+      .def_prop_ro(
+          "stiffness_N_per_mm", [](const Space& s) { return s.settings().stiffness_N_per_mm; },
+          nb::rv_policy::move)
+      .def_prop_ro(
+          "memory_bytes", [](const Space& s) { return s.mesh().memory_bytes(); },
+          nb::rv_policy::move)
+      .def_prop_ro(
+          "vertices", [](const Space& s) { return from_points(s.mesh().vertices()); },
+          nb::rv_policy::move)
+      .def_prop_ro(
+          "tets",
+          [](const Space& s) {
+            MeshData d;
+            d.tets = s.mesh().tets();
+            return nb::cast<nb::tuple>(mesh_to_arrays(d))[1];
+          },
+          nb::rv_policy::move)
+      .def_prop_ro(
+          "tet_materials",
+          [](const Space& s) {
+            const auto& labels = s.mesh().materials();
+            auto out = new_array<std::int32_t>({labels.size()});
+            std::copy(labels.begin(), labels.end(), out.data());
+            return out;
+          },
+          nb::rv_policy::move)
+      .def_prop_ro(
+          "material_names",
+          [](const Space& s) {
+            std::vector<std::string> names;
+            for (const Material& mat : s.materials()) names.push_back(mat.name);
+            return names;
+          },
+          nb::rv_policy::move)
+      .def_prop_ro(
+          "stats",
+          [](const Space& s) {
+            const MeshStats& st = s.mesh().stats();
+            nb::dict d;
+            d["reoriented_tets"] = st.reoriented_tets;
+            d["max_tets_per_edge"] = st.max_tets_per_edge;
+            d["mean_tets_per_edge"] = st.mean_tets_per_edge;
+            d["max_tets_per_vertex"] = st.max_tets_per_vertex;
+            d["mean_tets_per_vertex"] = st.mean_tets_per_vertex;
+            d["min_dihedral_deg"] = st.min_dihedral_deg;
+            d["boundary_faces"] = st.boundary_faces;
+            return d;
+          },
+          nb::rv_policy::move)
       .def(
           "locate",
           [](const Space& s, const PointsIn& points) {
@@ -147,22 +165,25 @@ void bind_mesh(nb::module_& m) {
           },
           nb::arg("points"), "The tet containing each point, or -1 outside the mesh.");
 
-  m.def("two_tets_mesh", [](double size) { return mesh_to_arrays(two_tets_mesh(size)); },
-        nb::arg("size_mm") = 10.0, "Two tets sharing a face (Table 2's TET/FACE set-up).");
-  m.def("edge_fan_mesh",
-        [](int n, double r, double h) { return mesh_to_arrays(edge_fan_mesh(n, r, h)); },
-        nb::arg("fan_size") = 12, nb::arg("radius_mm") = 10.0, nb::arg("half_height_mm") = 10.0,
-        "One edge (vertices 0-1) shared by fan_size tets (Table 2's EDGE set-up).");
-  m.def("icosahedron_mesh", [](double r) { return mesh_to_arrays(icosahedron_mesh(r)); },
-        nb::arg("radius_mm") = 10.0, "The icosahedron's centre (vertex 0) in 20 tets.");
-  m.def("cube_mesh", [](double s) { return mesh_to_arrays(cube_mesh(s)); },
-        nb::arg("size_mm") = 10.0, "A cube of 6 tets, 12 boundary triangles.");
+  m.def(
+      "two_tets_mesh", [](double size) { return mesh_to_arrays(two_tets_mesh(size)); },
+      nb::arg("size_mm") = 10.0, "Two tets sharing a face (Table 2's TET/FACE set-up).");
+  m.def(
+      "edge_fan_mesh",
+      [](int n, double r, double h) { return mesh_to_arrays(edge_fan_mesh(n, r, h)); },
+      nb::arg("fan_size") = 12, nb::arg("radius_mm") = 10.0, nb::arg("half_height_mm") = 10.0,
+      "One edge (vertices 0-1) shared by fan_size tets (Table 2's EDGE set-up).");
+  m.def(
+      "icosahedron_mesh", [](double r) { return mesh_to_arrays(icosahedron_mesh(r)); },
+      nb::arg("radius_mm") = 10.0, "The icosahedron's centre (vertex 0) in 20 tets.");
+  m.def(
+      "cube_mesh", [](double s) { return mesh_to_arrays(cube_mesh(s)); }, nb::arg("size_mm") = 10.0,
+      "A cube of 6 tets, 12 boundary triangles.");
   m.def(
       "grid_mesh",
       [](const std::vector<double>& xs, const std::vector<double>& ys,
-         const std::vector<double>& zs, double jitter, std::uint64_t seed) {
-        return mesh_to_arrays(grid_mesh(xs, ys, zs, jitter, seed));
-      },
+         const std::vector<double>& zs, double jitter,
+         std::uint64_t seed) { return mesh_to_arrays(grid_mesh(xs, ys, zs, jitter, seed)); },
       nb::arg("xs"), nb::arg("ys"), nb::arg("zs"), nb::arg("jitter") = 0.0, nb::arg("seed") = 1,
       "A box of cells on the given plane coordinates, 6 Kuhn tets per cell.");
 }

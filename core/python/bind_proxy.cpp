@@ -23,8 +23,8 @@ struct ProxySet {
 
   void check_count(std::size_t n) const {
     if (n != proxies.size()) {
-      throw std::invalid_argument("expected " + std::to_string(proxies.size()) +
-                                  " points, got " + std::to_string(n));
+      throw std::invalid_argument("expected " + std::to_string(proxies.size()) + " points, got " +
+                                  std::to_string(n));
     }
   }
 
@@ -34,8 +34,7 @@ struct ProxySet {
 
 nb::dict counters_dict(const std::vector<Proxy>& proxies) {
   const std::size_t n = proxies.size();
-  auto transitions =
-      new_array<std::uint64_t>({n, kProxyStateCount, kProxyStateCount, 2});
+  auto transitions = new_array<std::uint64_t>({n, kProxyStateCount, kProxyStateCount, 2});
   auto ticks = new_array<std::uint64_t>({n});
   auto capped = new_array<std::uint64_t>({n});
   auto rejected = new_array<std::uint64_t>({n});
@@ -80,7 +79,7 @@ Pose pose_from(const nb::ndarray<const double, nb::shape<7>, nb::device::cpu>& a
 }  // namespace
 
 void bind_proxy(nb::module_& m) {
-  nb::enum_<ProxyState>(m, "ProxyState")
+  nb::enum_<ProxyState>(m, "ProxyState", nb::is_arithmetic())
       .value("TET", ProxyState::Tet)
       .value("FACE", ProxyState::Face)
       .value("EDGE", ProxyState::Edge)
@@ -117,8 +116,9 @@ void bind_proxy(nb::module_& m) {
           nb::arg("points"), nb::arg("dt_s") = 0.001, "One servo tick for every proxy.")
       .def(
           "run",
-          [](ProxySet& s, const nb::ndarray<const double, nb::shape<-1, -1, 3>, nb::c_contig,
-                                            nb::device::cpu>& path,
+          [](ProxySet& s,
+             const nb::ndarray<const double, nb::shape<-1, -1, 3>, nb::c_contig, nb::device::cpu>&
+                 path,
              double dt_s) {
             s.check_count(path.shape(1));
             const std::size_t ticks = path.shape(0);
@@ -137,55 +137,72 @@ void bind_proxy(nb::module_& m) {
           },
           nb::arg("path"), nb::arg("dt_s") = 0.001,
           "Step through a (ticks, N, 3) path; returns q for every tick, shape (ticks, N, 3).")
-      .def_prop_ro("q", [](const ProxySet& s) {
-        return gather_points(s.proxies, [](const Proxy& p) { return p.q(); });
-      }, nb::rv_policy::move)
-      .def_prop_ro("force_N", [](const ProxySet& s) {
-        return gather_points(s.proxies, [](const Proxy& p) { return p.force_N(); });
-      }, nb::rv_policy::move)
-      .def_prop_ro("state",
-                   [](const ProxySet& s) {
-                     auto out = new_array<std::uint8_t>({s.proxies.size()});
-                     for (std::size_t i = 0; i < s.proxies.size(); ++i) {
-                       out.data()[i] = static_cast<std::uint8_t>(s.proxies[i].place().state);
-                     }
-                     return out;
-                   }, nb::rv_policy::move)
-      .def_prop_ro("tet",
-                   [](const ProxySet& s) {
-                     auto out = new_array<std::int32_t>({s.proxies.size()});
-                     for (std::size_t i = 0; i < s.proxies.size(); ++i) {
-                       out.data()[i] = s.proxies[i].place().tet;
-                     }
-                     return out;
-                   },
-                   "The tet that owns each proxy's state (-1 when OUTSIDE).", nb::rv_policy::move)
-      .def_prop_ro("local",
-                   [](const ProxySet& s) {
-                     auto out = new_array<std::int8_t>({s.proxies.size()});
-                     for (std::size_t i = 0; i < s.proxies.size(); ++i) {
-                       out.data()[i] = s.proxies[i].place().local;
-                     }
-                     return out;
-                   },
-                   "The owner's local face (0-3), edge (0-5) or vertex (0-3) of the state.", nb::rv_policy::move)
-      .def_prop_ro("last_transitions",
-                   [](const ProxySet& s) {
-                     auto out = new_array<std::int32_t>({s.proxies.size()});
-                     for (std::size_t i = 0; i < s.proxies.size(); ++i) {
-                       out.data()[i] = s.last[i].transitions;
-                     }
-                     return out;
-                   }, nb::rv_policy::move)
-      .def_prop_ro("last_capped",
-                   [](const ProxySet& s) {
-                     auto out = new_array<bool>({s.proxies.size()});
-                     for (std::size_t i = 0; i < s.proxies.size(); ++i) {
-                       out.data()[i] = s.last[i].capped;
-                     }
-                     return out;
-                   }, nb::rv_policy::move)
-      .def_prop_ro("counters", [](const ProxySet& s) { return counters_dict(s.proxies); }, nb::rv_policy::move)
+      .def_prop_ro(
+          "q",
+          [](const ProxySet& s) {
+            return gather_points(s.proxies, [](const Proxy& p) { return p.q(); });
+          },
+          nb::rv_policy::move)
+      .def_prop_ro(
+          "force_N",
+          [](const ProxySet& s) {
+            return gather_points(s.proxies, [](const Proxy& p) { return p.force_N(); });
+          },
+          nb::rv_policy::move)
+      .def_prop_ro(
+          "state",
+          [](const ProxySet& s) {
+            auto out = new_array<std::uint8_t>({s.proxies.size()});
+            for (std::size_t i = 0; i < s.proxies.size(); ++i) {
+              out.data()[i] = static_cast<std::uint8_t>(s.proxies[i].place().state);
+            }
+            return out;
+          },
+          nb::rv_policy::move)
+      .def_prop_ro(
+          "tet",
+          [](const ProxySet& s) {
+            auto out = new_array<std::int32_t>({s.proxies.size()});
+            for (std::size_t i = 0; i < s.proxies.size(); ++i) {
+              out.data()[i] = s.proxies[i].place().tet;
+            }
+            return out;
+          },
+          "The tet that owns each proxy's state (-1 when OUTSIDE).", nb::rv_policy::move)
+      .def_prop_ro(
+          "local",
+          [](const ProxySet& s) {
+            auto out = new_array<std::int8_t>({s.proxies.size()});
+            for (std::size_t i = 0; i < s.proxies.size(); ++i) {
+              out.data()[i] = s.proxies[i].place().local;
+            }
+            return out;
+          },
+          "The owner's local face (0-3), edge (0-5) or vertex (0-3) of the state.",
+          nb::rv_policy::move)
+      .def_prop_ro(
+          "last_transitions",
+          [](const ProxySet& s) {
+            auto out = new_array<std::int32_t>({s.proxies.size()});
+            for (std::size_t i = 0; i < s.proxies.size(); ++i) {
+              out.data()[i] = s.last[i].transitions;
+            }
+            return out;
+          },
+          nb::rv_policy::move)
+      .def_prop_ro(
+          "last_capped",
+          [](const ProxySet& s) {
+            auto out = new_array<bool>({s.proxies.size()});
+            for (std::size_t i = 0; i < s.proxies.size(); ++i) {
+              out.data()[i] = s.last[i].capped;
+            }
+            return out;
+          },
+          nb::rv_policy::move)
+      .def_prop_ro(
+          "counters", [](const ProxySet& s) { return counters_dict(s.proxies); },
+          nb::rv_policy::move)
       .def("clear_counters",
            [](ProxySet& s) {
              for (Proxy& p : s.proxies) p.clear_counters();
@@ -204,7 +221,8 @@ void bind_proxy(nb::module_& m) {
           [](ProxySet& s, std::size_t i, ProxyState state, std::int32_t tet, int local,
              const nb::ndarray<const double, nb::shape<3>, nb::device::cpu>& q) {
             if (i >= s.proxies.size()) throw std::out_of_range("proxy index");
-            s.proxies[i].set_place({state, tet, static_cast<std::int8_t>(local), {q(0), q(1), q(2)}});
+            s.proxies[i].set_place(
+                {state, tet, static_cast<std::int8_t>(local), {q(0), q(1), q(2)}});
           },
           nb::arg("index"), nb::arg("state"), nb::arg("tet"), nb::arg("local"), nb::arg("q"),
           "Put proxy i in a given state (tests and benchmarks of single transitions).");
@@ -217,8 +235,10 @@ void bind_proxy(nb::module_& m) {
             if (start_mm.size() != 3 || end_mm.size() != 3) {
               throw std::invalid_argument("start_mm and end_mm need 3 coordinates");
             }
-            new (self) Blade(space, {"blade", {start_mm[0], start_mm[1], start_mm[2]},
-                                     {end_mm[0], end_mm[1], end_mm[2]}, points});
+            new (self) Blade(space, {"blade",
+                                     {start_mm[0], start_mm[1], start_mm[2]},
+                                     {end_mm[0], end_mm[1], end_mm[2]},
+                                     points});
           },
           nb::arg("space"), nb::arg("start_mm"), nb::arg("end_mm"), nb::arg("points") = 50,
           nb::keep_alive<1, 2>())
@@ -245,8 +265,9 @@ void bind_proxy(nb::module_& m) {
           nb::arg("pose"), nb::arg("dt_s") = 0.001)
       .def(
           "run",
-          [](Blade& b, const nb::ndarray<const double, nb::shape<-1, 7>, nb::c_contig,
-                                         nb::device::cpu>& poses,
+          [](Blade& b,
+             const nb::ndarray<const double, nb::shape<-1, 7>, nb::c_contig, nb::device::cpu>&
+                 poses,
              double dt_s) {
             const std::size_t n = poses.shape(0);
             auto force = new_array<double>({n, 3});
@@ -273,19 +294,27 @@ void bind_proxy(nb::module_& m) {
           },
           nb::arg("poses"), nb::arg("dt_s") = 0.001,
           "Step along an (M, 7) path of poses in one call; forces and torques per tick.")
-      .def_prop_ro("p", [](const Blade& b) { return from_points(b.world_points()); }, nb::rv_policy::move)
-      .def_prop_ro("q", [](const Blade& b) {
-        return gather_points(b.proxies(), [](const Proxy& p) { return p.q(); });
-      }, nb::rv_policy::move)
-      .def_prop_ro("state",
-                   [](const Blade& b) {
-                     auto out = new_array<std::uint8_t>({b.proxies().size()});
-                     for (std::size_t i = 0; i < b.proxies().size(); ++i) {
-                       out.data()[i] = static_cast<std::uint8_t>(b.proxies()[i].place().state);
-                     }
-                     return out;
-                   }, nb::rv_policy::move)
-      .def_prop_ro("counters", [](const Blade& b) { return counters_dict(b.proxies()); }, nb::rv_policy::move);
+      .def_prop_ro(
+          "p", [](const Blade& b) { return from_points(b.world_points()); }, nb::rv_policy::move)
+      .def_prop_ro(
+          "q",
+          [](const Blade& b) {
+            return gather_points(b.proxies(), [](const Proxy& p) { return p.q(); });
+          },
+          nb::rv_policy::move)
+      .def_prop_ro(
+          "state",
+          [](const Blade& b) {
+            auto out = new_array<std::uint8_t>({b.proxies().size()});
+            for (std::size_t i = 0; i < b.proxies().size(); ++i) {
+              out.data()[i] = static_cast<std::uint8_t>(b.proxies()[i].place().state);
+            }
+            return out;
+          },
+          nb::rv_policy::move)
+      .def_prop_ro(
+          "counters", [](const Blade& b) { return counters_dict(b.proxies()); },
+          nb::rv_policy::move);
 }
 
 }  // namespace hapticut::python

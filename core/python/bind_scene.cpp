@@ -81,7 +81,8 @@ nb::dict document_to_dict(const SceneDocument& document) {
   }
   std::vector<double> vertices;
   vertices.reserve(3 * scene.vertices_mm.size());
-  for (const hapticut::Vec3& v : scene.vertices_mm) vertices.insert(vertices.end(), {v.x, v.y, v.z});
+  for (const hapticut::Vec3& v : scene.vertices_mm)
+    vertices.insert(vertices.end(), {v.x, v.y, v.z});
   std::vector<std::int32_t> tets;
   tets.reserve(4 * scene.tets.size());
   for (const auto& tet : scene.tets) tets.insert(tets.end(), tet.begin(), tet.end());
@@ -139,15 +140,14 @@ std::vector<T> read_array(nb::handle value, const char* dtype_kinds, const char*
   }
   const auto ndim = nb::cast<std::size_t>(array.attr("ndim"));
   const nb::tuple shape = nb::cast<nb::tuple>(array.attr("shape"));
-  const bool shape_ok = size == 0 || (columns == 0 ? ndim == 1
-                                                   : ndim == 2 && nb::cast<std::size_t>(
-                                                                      shape[1]) == columns);
+  const bool shape_ok =
+      size == 0 ||
+      (columns == 0 ? ndim == 1 : ndim == 2 && nb::cast<std::size_t>(shape[1]) == columns);
   if (!shape_ok) {
-    throw SceneError(field, "expected an array of shape " +
-                                std::string(columns == 0 ? "(n,)" : "(n, " +
-                                                                        std::to_string(columns) +
-                                                                        ")") +
-                                ", got shape " + nb::cast<std::string>(nb::str(shape)));
+    throw SceneError(
+        field, "expected an array of shape " +
+                   std::string(columns == 0 ? "(n,)" : "(n, " + std::to_string(columns) + ")") +
+                   ", got shape " + nb::cast<std::string>(nb::str(shape)));
   }
   nb::object converted = numpy.attr("ascontiguousarray")(array, "dtype"_a = dtype_name);
   auto flat = nb::cast<nb::ndarray<const T, nb::c_contig, nb::device::cpu>>(converted);
@@ -176,9 +176,9 @@ hapticut::Material read_material(const nb::dict& item, std::size_t index) {
   const auto model_name = nb::cast<std::string>(item["model"]);
   const auto model = hapticut::material_model_from_name(model_name);
   if (!model) {
-    throw SceneError("/materials/" + std::to_string(index) + "/model",
-                     "unknown model '" + model_name +
-                         "' (expected free, drag, rigid, viscous, membrane)");
+    throw SceneError(
+        "/materials/" + std::to_string(index) + "/model",
+        "unknown model '" + model_name + "' (expected free, drag, rigid, viscous, membrane)");
   }
   material.model = *model;
   material.drag_distance_mm = get_or(item, "drag_distance_mm", material.drag_distance_mm);
@@ -207,8 +207,8 @@ SceneDocument document_from_dict(const nb::dict& scene_dict) {
     scene.tets[i / 4][i % 4] =
         to_index(tets[i], "/mesh/tets/" + std::to_string(i / 4) + "/" + std::to_string(i % 4));
   }
-  const auto tet_materials = read_array<std::int64_t>(scene_dict["tet_materials"], "iu", "int64",
-                                                      0, "/mesh/tet_materials");
+  const auto tet_materials = read_array<std::int64_t>(scene_dict["tet_materials"], "iu", "int64", 0,
+                                                      "/mesh/tet_materials");
   for (std::size_t i = 0; i < tet_materials.size(); ++i) {
     scene.tet_materials.push_back(
         to_index(tet_materials[i], "/mesh/tet_materials/" + std::to_string(i)));

@@ -58,8 +58,8 @@ AabbTree::AabbTree(const std::vector<Aabb>& item_boxes) {
   build(item_boxes, centres, 0, static_cast<int>(item_boxes.size()), 0);
 }
 
-std::int32_t AabbTree::build(const std::vector<Aabb>& boxes, std::vector<Vec3>& centres,
-                             int begin, int end, int depth) {
+std::int32_t AabbTree::build(const std::vector<Aabb>& boxes, std::vector<Vec3>& centres, int begin,
+                             int end, int depth) {
   const auto index = static_cast<std::int32_t>(nodes_.size());
   nodes_.push_back({});
   Aabb box;
@@ -75,10 +75,12 @@ std::int32_t AabbTree::build(const std::vector<Aabb>& boxes, std::vector<Vec3>& 
     return index;
   }
   const Vec3 extent = centre_box.hi - centre_box.lo;
-  const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+  const int axis =
+      extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
   const int middle = begin + (end - begin) / 2;
-  std::nth_element(items_.begin() + begin, items_.begin() + middle, items_.begin() + end,
-                   [&](std::int32_t a, std::int32_t b) { return centres[a][axis] < centres[b][axis]; });
+  std::nth_element(
+      items_.begin() + begin, items_.begin() + middle, items_.begin() + end,
+      [&](std::int32_t a, std::int32_t b) { return centres[a][axis] < centres[b][axis]; });
   const std::int32_t left = build(boxes, centres, begin, middle, depth + 1);
   const std::int32_t right = build(boxes, centres, middle, end, depth + 1);
   nodes_[index].first = left;

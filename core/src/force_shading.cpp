@@ -50,7 +50,8 @@ RigidSurface extract_rigid_surface(const Space& space) {
       // Make the winding agree with the stored outward plane whatever the
       // table above assumed about orientation.
       const Vec3& a = surface.vertices_mm[triangle[0]];
-      const Vec3 n = cross(surface.vertices_mm[triangle[1]] - a, surface.vertices_mm[triangle[2]] - a);
+      const Vec3 n =
+          cross(surface.vertices_mm[triangle[1]] - a, surface.vertices_mm[triangle[2]] - a);
       if (dot(n, mesh.face_plane(t, f).normal) < 0.0) std::swap(triangle[1], triangle[2]);
       surface.triangles.push_back(triangle);
     }
@@ -136,8 +137,8 @@ Vec3 ForceShading::shade(const ProxyPlace& place, const Vec3& raw_force_N) const
       const Vec3& a = mesh.vertex(ends[0]);
       const Vec3& b = mesh.vertex(ends[1]);
       const double length = norm(b - a);
-      const double s = length > 0.0 ? std::clamp(dot(place.q - a, b - a) / (length * length), 0.0, 1.0)
-                                    : 0.5;
+      const double s =
+          length > 0.0 ? std::clamp(dot(place.q - a, b - a) / (length * length), 0.0, 1.0) : 0.5;
       shaded_normal =
           normalized_or_zero(vertex_normals_[ends[0]] * (1.0 - s) + vertex_normals_[ends[1]] * s);
       break;

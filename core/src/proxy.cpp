@@ -18,8 +18,8 @@ struct Exit {
   double parameter = 2.0;
 };
 
-Exit find_exit(const TetMesh& mesh, std::int32_t t, const Vec3& q, const Vec3& q1,
-               int skip_face, double eps) {
+Exit find_exit(const TetMesh& mesh, std::int32_t t, const Vec3& q, const Vec3& q1, int skip_face,
+               double eps) {
   Exit best;
   for (int f = 0; f < 4; ++f) {
     if (f == skip_face) continue;
@@ -177,7 +177,8 @@ TickResult Proxy::step(const Vec3& p, double dt_s) {
     // material's, so the hand must not feel it in full.
     ++counters_.capped_ticks;
     const double magnitude = norm(force);
-    if (magnitude > settings.capped_tick_force_N) force = force * (settings.capped_tick_force_N / magnitude);
+    if (magnitude > settings.capped_tick_force_N)
+      force = force * (settings.capped_tick_force_N / magnitude);
   }
   force_N_ = is_finite(force) ? force : Vec3{};
   last_p_ = p;
@@ -231,13 +232,11 @@ Transition Proxy::step_face(const Vec3& p, const MoveContext& context) {
   } else if (move(space_->material_of_tet(t), p, q, context).moved) {
     return go(ProxyState::Tet, t, 0, q);
   }
-  const MoveResult moved =
-      move(space_->material_of_tet(t), project_to_plane(p, plane), q, context);
+  const MoveResult moved = move(space_->material_of_tet(t), project_to_plane(p, plane), q, context);
   if (!moved.moved) return stay();
   const Exit exit = find_exit(mesh, t, q, moved.q, face, eps);
   if (exit.face < 0) return go(ProxyState::Face, t, face, moved.q);
-  return go(ProxyState::Edge, t, kEdgeOfFaces[face][exit.face],
-            q + (moved.q - q) * exit.parameter);
+  return go(ProxyState::Edge, t, kEdgeOfFaces[face][exit.face], q + (moved.q - q) * exit.parameter);
 }
 
 // EDGE: (a-1) into a tet of the fan whose wedge holds p (eq. 7); (a-2) out
@@ -358,8 +357,7 @@ Transition Proxy::step_vertex(const Vec3& p, const MoveContext& context) {
       if (!inside_wedge) continue;
       const double score =
           std::sqrt(std::max(0.0, d_squared - 2.0 * height * along[m] + height * height));
-      if (score > best.score &&
-          move(material, p - planes[m]->normal * height, q, context).moved) {
+      if (score > best.score && move(material, p - planes[m]->normal * height, q, context).moved) {
         best = {ProxyState::Face, entry.tet, faces[m], score};
       }
     }
@@ -420,7 +418,7 @@ Transition Proxy::step_outside(const Vec3& p) {
     const auto& column = mesh.boundary_plane_columns();
     const std::size_t n = faces.size();
     std::array<double, kLinearEntryScanMax> before;  // NOLINT: filled below, first n used.
-    std::array<double, kLinearEntryScanMax> after;  // NOLINT: filled below, first n used.
+    std::array<double, kLinearEntryScanMax> after;   // NOLINT: filled below, first n used.
     for (std::size_t k = 0; k < n; ++k) {
       const double offset = column[3][k];
       before[k] = column[0][k] * q.x + column[1][k] * q.y + column[2][k] * q.z - offset;

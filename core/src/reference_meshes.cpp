@@ -50,15 +50,23 @@ MeshData icosahedron_mesh(double radius_mm) {
   const double scale = radius_mm / std::sqrt(1.0 + g * g);
   MeshData mesh;
   mesh.vertices_mm = {{0, 0, 0}};
-  const std::array<Vec3, 12> corners{{{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0},
-                                      {0, -1, g}, {0, 1, g}, {0, -1, -g}, {0, 1, -g},
-                                      {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}}};
+  const std::array<Vec3, 12> corners{{{-1, g, 0},
+                                      {1, g, 0},
+                                      {-1, -g, 0},
+                                      {1, -g, 0},
+                                      {0, -1, g},
+                                      {0, 1, g},
+                                      {0, -1, -g},
+                                      {0, 1, -g},
+                                      {g, 0, -1},
+                                      {g, 0, 1},
+                                      {-g, 0, -1},
+                                      {-g, 0, 1}}};
   for (const Vec3& c : corners) mesh.vertices_mm.push_back(c * scale);
-  const std::array<std::array<int, 3>, 20> faces{{{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10},
-                                                  {0, 10, 11}, {1, 5, 9}, {5, 11, 4},  {11, 10, 2},
-                                                  {10, 7, 6}, {7, 1, 8},  {3, 9, 4},   {3, 4, 2},
-                                                  {3, 2, 6},  {3, 6, 8},  {3, 8, 9},   {4, 9, 5},
-                                                  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}}};
+  const std::array<std::array<int, 3>, 20> faces{
+      {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+       {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+       {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}}};
   for (const auto& f : faces) mesh.tets.push_back({0, f[0] + 1, f[1] + 1, f[2] + 1});
   orient_positive(mesh);
   return mesh;

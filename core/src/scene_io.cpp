@@ -221,7 +221,8 @@ class NameRegistry {
  public:
   void add(const std::string& name, const Path& name_path, const Path& item_path) {
     auto [it, inserted] = first_.emplace(name, item_path.pointer());
-    if (!inserted) fail(name_path, "duplicate name " + in_quotes(name) + " (first at " + it->second + ")");
+    if (!inserted)
+      fail(name_path, "duplicate name " + in_quotes(name) + " (first at " + it->second + ")");
   }
 
  private:
@@ -356,9 +357,9 @@ Material read_material(const Json& object, const Path& path, NameRegistry& names
     }
     material.*(parameter.field) = read_positive(*value, parameter_path);
   }
-  reject_unknown_fields(object, path,
-                        {"name", "model", "drag_distance_mm", "viscosity_N_s_per_mm",
-                         "max_lag_mm", "break_force_N"});
+  reject_unknown_fields(
+      object, path,
+      {"name", "model", "drag_distance_mm", "viscosity_N_s_per_mm", "max_lag_mm", "break_force_N"});
   return material;
 }
 
@@ -639,9 +640,9 @@ Json document_tree(const Scene& scene, const std::string& metadata_json) {
 // readable and small. tree_writer.py lays out text the same way.
 void append_layout(std::string& out, const Json& value, int depth) {
   const auto is_container = [](const Json& item) { return item.is_object() || item.is_array(); };
-  const bool expand = value.is_object() ? !value.empty()
-                                        : value.is_array() && std::any_of(value.begin(),
-                                                                          value.end(), is_container);
+  const bool expand =
+      value.is_object() ? !value.empty()
+                        : value.is_array() && std::any_of(value.begin(), value.end(), is_container);
   if (!expand) {
     out += value.dump();
     return;
@@ -676,7 +677,8 @@ std::vector<std::uint8_t> encode(const Json& tree, SceneEncoding encoding) {
 // Files.
 
 [[noreturn]] void fail_file(const std::string& action, const std::string& path, int error) {
-  throw SceneError("(file)", "cannot " + action + " " + in_quotes(path) + ": " + std::strerror(error));
+  throw SceneError("(file)",
+                   "cannot " + action + " " + in_quotes(path) + ": " + std::strerror(error));
 }
 
 std::vector<std::uint8_t> read_file(const std::string& path) {

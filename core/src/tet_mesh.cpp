@@ -127,9 +127,9 @@ void TetMesh::build_faces() {
     while (end < faces.size() && faces[end].key == faces[k].key) ++end;
     if (end - k > 2) {
       throw MeshError("a face (vertices " + std::to_string(faces[k].key[0]) + ", " +
-                          std::to_string(faces[k].key[1]) + ", " +
-                          std::to_string(faces[k].key[2]) + ") is shared by more than two tets, " +
-                          "among them tet " + std::to_string(faces[k + 2].tet),
+                          std::to_string(faces[k].key[1]) + ", " + std::to_string(faces[k].key[2]) +
+                          ") is shared by more than two tets, " + "among them tet " +
+                          std::to_string(faces[k + 2].tet),
                       faces[k + 2].tet);
     }
     // The plane comes from the sorted vertex triple, so the two tets sharing
@@ -171,7 +171,8 @@ void TetMesh::build_edges() {
     for (int e = 0; e < 6; ++e) {
       const std::int32_t a = tv[kEdgeVertices[e][0]];
       const std::int32_t b = tv[kEdgeVertices[e][1]];
-      edges.push_back({{std::min(a, b), std::max(a, b), 0}, static_cast<std::int32_t>(t),
+      edges.push_back({{std::min(a, b), std::max(a, b), 0},
+                       static_cast<std::int32_t>(t),
                        static_cast<std::int8_t>(e)});
     }
   }
@@ -191,7 +192,8 @@ void TetMesh::build_edges() {
     for (std::size_t j = k; j < end; ++j) {
       const int e = edges[j].local;
       tet_edges_[6 * edges[j].tet + e] = id;
-      edge_fan_.push_back({edges[j].tet, static_cast<std::int8_t>(e),
+      edge_fan_.push_back({edges[j].tet,
+                           static_cast<std::int8_t>(e),
                            {static_cast<std::int8_t>(kEdgeFaces[e][0]),
                             static_cast<std::int8_t>(kEdgeFaces[e][1])}});
     }
@@ -215,12 +217,14 @@ void TetMesh::build_vertex_fans() {
   for (const auto& tv : tets_) {
     for (std::int32_t v : tv) ++vertex_fan_start_[v + 1];
   }
-  for (std::size_t v = 0; v < vertices_.size(); ++v) vertex_fan_start_[v + 1] += vertex_fan_start_[v];
+  for (std::size_t v = 0; v < vertices_.size(); ++v)
+    vertex_fan_start_[v + 1] += vertex_fan_start_[v];
   vertex_fan_.resize(4 * tets_.size());
   std::vector<std::int32_t> cursor(vertex_fan_start_.begin(), vertex_fan_start_.end() - 1);
   for (std::size_t t = 0; t < tets_.size(); ++t) {
     for (int k = 0; k < 4; ++k) {
-      vertex_fan_[cursor[tets_[t][k]]++] = {static_cast<std::int32_t>(t), static_cast<std::int8_t>(k)};
+      vertex_fan_[cursor[tets_[t][k]]++] = {static_cast<std::int32_t>(t),
+                                            static_cast<std::int8_t>(k)};
     }
   }
 }
@@ -268,7 +272,8 @@ void TetMesh::compute_stats() {
   for (std::size_t t = 0; t < tets_.size(); ++t) {
     for (int i = 0; i < 4; ++i) {
       for (int j = i + 1; j < 4; ++j) {
-        const double c = std::clamp(dot(planes_[4 * t + i].normal, planes_[4 * t + j].normal), -1.0, 1.0);
+        const double c =
+            std::clamp(dot(planes_[4 * t + i].normal, planes_[4 * t + j].normal), -1.0, 1.0);
         min_angle = std::min(min_angle, std::numbers::pi - std::acos(c));
       }
     }
@@ -297,13 +302,14 @@ std::int32_t TetMesh::locate(const Vec3& p) const {
 
 std::size_t TetMesh::memory_bytes() const {
   return vertices_.capacity() * sizeof(Vec3) + tets_.capacity() * sizeof(tets_[0]) +
-         materials_.capacity() * 4 + planes_.capacity() * sizeof(Plane) + neighbours_.capacity() * 4 +
-         neighbour_faces_.capacity() + tet_edges_.capacity() * 4 +
+         materials_.capacity() * 4 + planes_.capacity() * sizeof(Plane) +
+         neighbours_.capacity() * 4 + neighbour_faces_.capacity() + tet_edges_.capacity() * 4 +
          edge_vertices_.capacity() * 8 + edge_directions_.capacity() * sizeof(Vec3) +
          edge_fan_start_.capacity() * 4 + edge_fan_.capacity() * sizeof(EdgeFanEntry) +
          vertex_fan_start_.capacity() * 4 + vertex_fan_.capacity() * sizeof(VertexFanEntry) +
          boundary_edge_.capacity() + boundary_vertex_.capacity() +
-         boundary_faces_.capacity() * sizeof(FaceRef) + boundary_planes_.capacity() * sizeof(Plane) + boundary_tree_.memory_bytes() +
+         boundary_faces_.capacity() * sizeof(FaceRef) +
+         boundary_planes_.capacity() * sizeof(Plane) + boundary_tree_.memory_bytes() +
          tet_tree_.memory_bytes();
 }
 

@@ -91,8 +91,8 @@ std::int64_t run_walk(const Space& space, const MeshData& mesh, std::int64_t ste
   for (const Proxy& proxy : proxies) {
     for (int from = 0; from < kProxyStateCount; ++from) {
       for (int to = 0; to < kProxyStateCount; ++to) {
-        entered[to] += proxy.counters().transitions[from][to][0] +
-                       proxy.counters().transitions[from][to][1];
+        entered[to] +=
+            proxy.counters().transitions[from][to][0] + proxy.counters().transitions[from][to][1];
       }
     }
   }

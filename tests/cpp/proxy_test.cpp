@@ -167,12 +167,11 @@ TEST(Proxy, IcosahedronVertexSlidesAlongARigidNeighbourhood) {
 }
 
 TEST(Proxy, StartInsideRigidIsPushedToTheNearestFreeFace) {
-  const Space space =
-      make_space(grid_mesh({0, 10, 20, 30}, {0, 10, 20, 30}, {0, 10, 20, 30}), [] {
-        std::vector<std::int32_t> m(27 * 6, 0);
-        for (int t = 13 * 6; t < 14 * 6; ++t) m[t] = 2;  // The middle cell is bone.
-        return m;
-      }());
+  const Space space = make_space(grid_mesh({0, 10, 20, 30}, {0, 10, 20, 30}, {0, 10, 20, 30}), [] {
+    std::vector<std::int32_t> m(27 * 6, 0);
+    for (int t = 13 * 6; t < 14 * 6; ++t) m[t] = 2;  // The middle cell is bone.
+    return m;
+  }());
   Proxy proxy(space);
   EXPECT_EQ(proxy.reset({15, 15, 11}), StartKind::PushedOutOfRigid);
   EXPECT_EQ(proxy.place().state, ProxyState::Face);

@@ -105,8 +105,9 @@ def _places(setup: Setup, state: str):
         # The fan's axis (vertices 0 and 1) first: the 12-tet edge of Table 2.
         order = sorted(
             itertools.product(range(len(tets)), range(6)),
-            key=lambda te: 0 if {tets[te[0]][pairs[te[1]][0]], tets[te[0]][pairs[te[1]][1]]}
-            == {0, 1} else 1,
+            key=lambda te: (
+                0 if {tets[te[0]][pairs[te[1]][0]], tets[te[0]][pairs[te[1]][1]]} == {0, 1} else 1
+            ),
         )
         for t, e in order:
             a, b = (setup.vertices[tets[t][k]] for k in pairs[e])
@@ -168,8 +169,7 @@ def find_setup(cell: tuple[str, str, bool], setups: dict[str, Setup]):
                 r = _core.time_transition(space, state, tet, local, q, p, repeats=1, batches=1)
                 stays = from_state == to_state and not r["changed"] and from_state == "VERTEX"
                 if (r["changed"] or stays) and (
-                    r["to"].name == to_state
-                    and bool(r["to_neighbour"]) == neighbour
+                    r["to"].name == to_state and bool(r["to_neighbour"]) == neighbour
                 ):
                     return space, (state, tet, local, q), p
     return None
@@ -217,7 +217,14 @@ def render(rows: list[dict]) -> str:
             ]
         )
     headers = [
-        "from", "to", "set-up", "paper µs", "ours ns", "speed-up x", "target ns", "meets",
+        "from",
+        "to",
+        "set-up",
+        "paper µs",
+        "ours ns",
+        "speed-up x",
+        "target ns",
+        "meets",
     ]
     return format_table(headers, table)
 

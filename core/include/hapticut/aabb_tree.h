@@ -42,11 +42,13 @@ class AabbTree {
  private:
   struct Node {
     Aabb box;
-    std::int32_t first = 0;  // Leaf: first index in items_; inner: left child (right = first + 1... see build).
+    std::int32_t first =
+        0;  // Leaf: first index in items_; inner: left child (right = first + 1... see build).
     std::int32_t count = 0;  // Leaf: item count; inner: 0.
     std::int32_t right = 0;  // Inner: right child.
   };
-  std::int32_t build(const std::vector<Aabb>& boxes, std::vector<Vec3>& centres, int begin, int end, int depth);
+  std::int32_t build(const std::vector<Aabb>& boxes, std::vector<Vec3>& centres, int begin, int end,
+                     int depth);
 
   std::vector<Node> nodes_;
   std::vector<std::int32_t> items_;

@@ -26,8 +26,8 @@ struct Pose {
 };
 
 struct BladeTick {
-  Vec3 force_N;        // Sum of k (q_i - p_i).
-  Vec3 torque_N_mm;    // Sum of (p_i - origin) x f_i.
+  Vec3 force_N;      // Sum of k (q_i - p_i).
+  Vec3 torque_N_mm;  // Sum of (p_i - origin) x f_i.
   int capped_points = 0;
   int max_transitions = 0;
   bool rejected = false;  // Pose not finite: nothing moved, force zero.

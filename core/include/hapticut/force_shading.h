@@ -40,6 +40,7 @@ class ForceShading {
   // Angle-weighted unit normal of a mesh vertex out of the rigid region,
   // zero for a vertex not on the rigid surface.
   const Vec3& vertex_normal(std::int32_t v) const { return vertex_normals_[v]; }
+  std::int32_t vertex_count() const { return static_cast<std::int32_t>(vertex_normals_.size()); }
   bool is_surface_edge(std::int32_t e) const { return surface_edge_[e] != 0; }
   std::size_t memory_bytes() const;
 

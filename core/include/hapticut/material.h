@@ -12,9 +12,9 @@ namespace hapticut {
 // What a move may depend on besides p' and q; fixed for the whole tick so a
 // tick's transitions see one consistent material.
 struct MoveContext {
-  double stiffness_N_per_mm = 0.1;    // k, for the membrane's push k|p'-q|.
-  double target_speed_mm_per_s = 0.0; // Speed of the device point this tick (viscous).
-  double tolerance_mm = 1e-9;         // Repair 5: "not moved" means |p'-q| < D + eps.
+  double stiffness_N_per_mm = 0.1;     // k, for the membrane's push k|p'-q|.
+  double target_speed_mm_per_s = 0.0;  // Speed of the device point this tick (viscous).
+  double tolerance_mm = 1e-9;          // Repair 5: "not moved" means |p'-q| < D + eps.
 };
 
 struct MoveResult {

@@ -42,8 +42,8 @@ struct ProxyCounters {
   std::array<std::array<std::array<std::uint64_t, 2>, kProxyStateCount>, kProxyStateCount>
       transitions{};
   std::uint64_t ticks = 0;
-  std::uint64_t capped_ticks = 0;    // Ticks that hit max_transitions_per_tick.
-  std::uint64_t rejected_inputs = 0; // Ticks whose p was not finite (state kept).
+  std::uint64_t capped_ticks = 0;     // Ticks that hit max_transitions_per_tick.
+  std::uint64_t rejected_inputs = 0;  // Ticks whose p was not finite (state kept).
   std::uint32_t max_transitions_in_tick = 0;
   std::uint64_t total_transitions = 0;
 };
@@ -56,9 +56,9 @@ struct TickResult {
 
 // How a reset went: where the proxy started.
 enum class StartKind : std::uint8_t {
-  InsideTet,           // p located in a non-rigid tet: TET, q = p.
-  Outside,             // p outside the mesh: OUTSIDE, q = p.
-  PushedOutOfRigid,    // p inside rigid material: q on the nearest face out of it.
+  InsideTet,         // p located in a non-rigid tet: TET, q = p.
+  Outside,           // p outside the mesh: OUTSIDE, q = p.
+  PushedOutOfRigid,  // p inside rigid material: q on the nearest face out of it.
 };
 
 class Proxy {

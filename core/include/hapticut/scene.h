@@ -21,10 +21,10 @@ enum class MaterialModel : std::uint8_t { Free, Drag, Rigid, Viscous, Membrane }
 struct Material {
   std::string name;
   MaterialModel model = MaterialModel::Free;
-  double drag_distance_mm = 0.0;       // Drag: the proxy trails its target by at most this.
-  double viscosity_N_s_per_mm = 0.0;   // Viscous: resistance c in f = c v.
-  double max_lag_mm = 50.0;            // Viscous: cap on the speed-dependent lag.
-  double break_force_N = 0.0;          // Membrane: rigid until k|p'-q| exceeds this.
+  double drag_distance_mm = 0.0;      // Drag: the proxy trails its target by at most this.
+  double viscosity_N_s_per_mm = 0.0;  // Viscous: resistance c in f = c v.
+  double max_lag_mm = 50.0;           // Viscous: cap on the speed-dependent lag.
+  double break_force_N = 0.0;         // Membrane: rigid until k|p'-q| exceeds this.
 };
 
 struct BladeSpec {
@@ -35,18 +35,18 @@ struct BladeSpec {
 };
 
 struct SafetyLimits {
-  double max_force_N = 5.0;              // Clamp on the summed blade force.
-  double max_torque_N_mm = 500.0;        // Clamp on the torque about the tool origin.
-  double ramp_time_s = 0.5;              // Force ramp after start or after a fault.
-  int max_transitions_per_tick = 64;     // Cap per proxy per tick (ALGORITHM.md).
-  double capped_tick_force_N = 1.0;      // Per-point force limit on a capped tick.
+  double max_force_N = 5.0;           // Clamp on the summed blade force.
+  double max_torque_N_mm = 500.0;     // Clamp on the torque about the tool origin.
+  double ramp_time_s = 0.5;           // Force ramp after start or after a fault.
+  int max_transitions_per_tick = 64;  // Cap per proxy per tick (ALGORITHM.md).
+  double capped_tick_force_N = 1.0;   // Per-point force limit on a capped tick.
 };
 
 struct Scene {
   int version = kSceneFormatVersion;
   double stiffness_N_per_mm = 0.1;  // Coupling k in f = k (q - p), eq. (15).
   double servo_rate_Hz = 1000.0;
-  double tolerance_mm = 0.0;        // 0: derived from the mesh's size (see docs/decisions.md).
+  double tolerance_mm = 0.0;  // 0: derived from the mesh's size (see docs/decisions.md).
   std::vector<Material> materials;
   std::vector<Vec3> vertices_mm;
   std::vector<std::array<std::int32_t, 4>> tets;

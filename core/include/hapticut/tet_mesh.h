@@ -108,9 +108,13 @@ class TetMesh {
   const Plane& face_plane(std::int32_t t, int face) const { return planes_[4 * t + face]; }
   std::int32_t neighbour(std::int32_t t, int face) const { return neighbours_[4 * t + face]; }
   int neighbour_face(std::int32_t t, int face) const { return neighbour_faces_[4 * t + face]; }
-  std::int32_t edge_of(std::int32_t t, int local_edge) const { return tet_edges_[6 * t + local_edge]; }
+  std::int32_t edge_of(std::int32_t t, int local_edge) const {
+    return tet_edges_[6 * t + local_edge];
+  }
 
-  const std::array<std::int32_t, 2>& edge_vertices(std::int32_t e) const { return edge_vertices_[e]; }
+  const std::array<std::int32_t, 2>& edge_vertices(std::int32_t e) const {
+    return edge_vertices_[e];
+  }
   // Unit direction from edge_vertices(e)[0] to [1]: the inward direction at
   // end 0; its negation is the inward direction at end 1 (eq. 10).
   const Vec3& edge_direction(std::int32_t e) const { return edge_directions_[e]; }
@@ -157,10 +161,10 @@ class TetMesh {
   std::vector<std::int32_t> materials_;
   double tolerance_ = 0.0;
 
-  std::vector<Plane> planes_;                   // 4 per tet.
-  std::vector<std::int32_t> neighbours_;        // 4 per tet.
-  std::vector<std::int8_t> neighbour_faces_;    // 4 per tet.
-  std::vector<std::int32_t> tet_edges_;         // 6 per tet.
+  std::vector<Plane> planes_;                 // 4 per tet.
+  std::vector<std::int32_t> neighbours_;      // 4 per tet.
+  std::vector<std::int8_t> neighbour_faces_;  // 4 per tet.
+  std::vector<std::int32_t> tet_edges_;       // 6 per tet.
   std::vector<std::array<std::int32_t, 2>> edge_vertices_;
   std::vector<Vec3> edge_directions_;
   std::vector<std::int32_t> edge_fan_start_;

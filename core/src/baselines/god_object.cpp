@@ -5,13 +5,10 @@
 
 namespace hapticut::baselines {
 
-SurfaceGodObject::SurfaceGodObject(std::vector<Vec3> vertices_mm,
-                                   std::vector<std::array<std::int32_t, 3>> triangles,
-                                   double stiffness_N_per_mm, bool use_tree, double tolerance_mm)
-    : vertices_(std::move(vertices_mm)),
-      triangles_(std::move(triangles)),
-      use_tree_(use_tree),
-      stiffness_N_per_mm_(stiffness_N_per_mm) {
+TriangleSurface::TriangleSurface(std::vector<Vec3> vertices_mm,
+                                 std::vector<std::array<std::int32_t, 3>> triangles, bool use_tree,
+                                 double tolerance_mm)
+    : vertices_(std::move(vertices_mm)), triangles_(std::move(triangles)), use_tree_(use_tree) {
   Aabb all;
   std::vector<Aabb> boxes;
   boxes.reserve(triangles_.size());
@@ -50,6 +47,14 @@ SurfaceGodObject::SurfaceGodObject(std::vector<Vec3> vertices_mm,
   if (use_tree_) tree_ = AabbTree(boxes);
 }
 
+std::size_t TriangleSurface::memory_bytes() const {
+  return vertices_.capacity() * sizeof(Vec3) + triangles_.capacity() * sizeof(triangles_[0]) +
+         planes_.capacity() * sizeof(Triangle) + tree_.memory_bytes();
+}
+
+SurfaceGodObject::SurfaceGodObject(const TriangleSurface& surface, double stiffness_N_per_mm)
+    : surface_(&surface), stiffness_N_per_mm_(stiffness_N_per_mm) {}
+
 void SurfaceGodObject::reset(const Vec3& p) {
   q_ = p;
   last_p_ = p;
@@ -62,15 +67,16 @@ void SurfaceGodObject::consider(std::int32_t t, const Vec3& a, const Vec3& b, Hi
   for (int k = 0; k < active_count_; ++k) {
     if (active_[k] == t) return;
   }
-  const Triangle& tri = planes_[t];
+  const double tolerance = surface_->tolerance();
+  const TriangleSurface::Triangle& tri = surface_->triangle(t);
   const double d0 = dot(tri.normal, a) - tri.offset;
   const double d1 = dot(tri.normal, b) - tri.offset;
-  if (!(d0 >= -tolerance_ && d1 < -tolerance_ && d1 < d0)) return;
+  if (!(d0 >= -tolerance && d1 < -tolerance && d1 < d0)) return;
   const double s = d0 <= 0.0 ? 0.0 : d0 / (d0 - d1);
   if (s > best.parameter || (s == best.parameter && d1 >= best.target_depth)) return;
   const Vec3 c = a + (b - a) * s;
   for (int k = 0; k < 3; ++k) {
-    if (dot(tri.edge_normal[k], c) - tri.edge_offset[k] < -tolerance_) return;
+    if (dot(tri.edge_normal[k], c) - tri.edge_offset[k] < -tolerance) return;
   }
   best = {t, s, d1};
 }
@@ -82,7 +88,7 @@ Vec3 SurfaceGodObject::constrained_target(const Vec3& p) const {
   std::array<double, kMaxConstraints> r{};
   int m = 0;
   for (int k = 0; k < active_count_; ++k) {
-    const Triangle& tri = planes_[active_[k]];
+    const TriangleSurface::Triangle& tri = surface_->triangle(active_[k]);
     // A plane (nearly) parallel to one already kept adds nothing solvable.
     bool parallel = false;
     for (int j = 0; j < m; ++j) parallel = parallel || norm(cross(n[j], tri.normal)) < 1e-9;
@@ -117,20 +123,21 @@ int SurfaceGodObject::step(const Vec3& p) {
   Vec3 target = p;
   for (int pass = 0; pass <= kMaxConstraints; ++pass) {
     Hit best;
-    if (use_tree_) {
-      tree_.for_each_on_segment(q_, target, tolerance_, [&](std::int32_t t) {
+    if (surface_->uses_tree()) {
+      surface_->tree().for_each_on_segment(q_, target, surface_->tolerance(), [&](std::int32_t t) {
         ++tested;
         consider(t, q_, target, best);
       });
     } else {
-      for (std::int32_t t = 0; t < triangle_count(); ++t) consider(t, q_, target, best);
-      tested += triangle_count();
+      const std::int32_t count = surface_->triangle_count();
+      for (std::int32_t t = 0; t < count; ++t) consider(t, q_, target, best);
+      tested += count;
     }
     if (best.triangle < 0) {
       q_ = target;
       break;
     }
-    const Triangle& tri = planes_[best.triangle];
+    const TriangleSurface::Triangle& tri = surface_->triangle(best.triangle);
     Vec3 c = q_ + (target - q_) * best.parameter;
     // Exactly onto the plane it hit, never a rounding error behind it.
     const double d = dot(tri.normal, c) - tri.offset;
@@ -141,11 +148,6 @@ int SurfaceGodObject::step(const Vec3& p) {
     target = constrained_target(p);
   }
   return tested;
-}
-
-std::size_t SurfaceGodObject::memory_bytes() const {
-  return vertices_.capacity() * sizeof(Vec3) + triangles_.capacity() * sizeof(triangles_[0]) +
-         planes_.capacity() * sizeof(Triangle) + tree_.memory_bytes();
 }
 
 }  // namespace hapticut::baselines

@@ -1,0 +1,33 @@
+"""``hapticut bench transitions|blade``: the engine's benchmarks, beside their anchors."""
+
+from __future__ import annotations
+
+import argparse
+import platform
+
+NAME = "bench"
+HELP = "Print the engine's benchmark tables (Table 2 transitions, blade ticks)."
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("which", choices=["transitions", "blade"], help="which benchmark")
+    parser.add_argument("--repeats", type=int, default=20000, help="calls per timed batch")
+    parser.add_argument("--batches", type=int, default=15, help="batches (the median is shown)")
+    parser.add_argument(
+        "--no-max-points", action="store_true", help="blade: skip the points-in-100-µs search"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    print(
+        f"machine: {platform.processor() or platform.machine()}, python {platform.python_version()}"
+    )
+    if args.which == "transitions":
+        from hapticut.bench import transitions
+
+        print(transitions.run(args.repeats, args.batches))
+    else:
+        from hapticut.bench import blade
+
+        print(blade.run(find_max=not args.no_max_points))
+    return 0

@@ -1,0 +1,198 @@
+"""Meshes of the evaluation: icospheres in a cube (fTetWild), thin walls and
+the paper's fans (reference meshes), cached as .npz inside the output folder."""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.machinery
+import importlib.util
+import os
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from hapticut import _core
+
+SPHERE_RADIUS_MM = 30.0
+CUBE_HALF_MM = 45.0
+# Materials shared by every scene of the evaluation: 0 air, 1 drag (1 mm), 2 rigid.
+MATERIALS = [
+    {"name": "air", "model": "free"},
+    {"name": "flesh", "model": "drag", "drag_distance_mm": 1.0},
+    {"name": "bone", "model": "rigid"},
+]
+AIR, DRAG, RIGID = 0, 1, 2
+
+
+@dataclass
+class TetScene:
+    """A labelled tet mesh, and the exact surface of its solid when there is one."""
+
+    name: str
+    vertices: np.ndarray
+    tets: np.ndarray
+    labels: np.ndarray
+    build_s: float = 0.0
+    surface_vertices: np.ndarray | None = None
+    surface_triangles: np.ndarray | None = None
+
+    def space(self, material: int | None = None, stiffness_N_per_mm: float = 0.1) -> _core.Space:
+        """The Space, with every non-air tet given `material` when set."""
+        labels = self.labels
+        if material is not None:
+            labels = np.where(labels != AIR, material, AIR).astype(np.int32)
+        return _core.Space(
+            self.vertices, self.tets, np.ascontiguousarray(labels, np.int32), MATERIALS,
+            stiffness_N_per_mm=stiffness_N_per_mm,
+        )
+
+
+def icosphere(faces: int, radius_mm: float = SPHERE_RADIUS_MM) -> tuple[np.ndarray, np.ndarray]:
+    """An icosphere of 20 x 4^n faces (80, 320, 1280, 5120), vertices on the sphere,
+    triangles wound counter-clockwise seen from outside."""
+    levels = {20: 0, 80: 1, 320: 2, 1280: 3, 5120: 4, 20480: 5}
+    if faces not in levels:
+        raise ValueError(f"an icosphere has 20 x 4^n faces, not {faces}")
+    t = (1.0 + 5.0**0.5) / 2.0
+    verts = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t),
+             (0, -1, -t), (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    tris = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4),
+            (11, 10, 2), (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8),
+            (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    points = [np.array(v, float) / np.linalg.norm(v) for v in verts]
+    for _ in range(levels[faces]):
+        cache: dict[tuple[int, int], int] = {}
+
+        def middle(a: int, b: int, cache=cache) -> int:
+            key = (min(a, b), max(a, b))
+            if key not in cache:
+                m = points[a] + points[b]
+                points.append(m / np.linalg.norm(m))
+                cache[key] = len(points) - 1
+            return cache[key]
+
+        new = []
+        for a, b, c in tris:
+            ab, bc, ca = middle(a, b), middle(b, c), middle(c, a)
+            new += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        tris = new
+    vertices = np.array(points) * radius_mm
+    triangles = np.array(tris, np.int32)
+    # Wind outward.
+    a, b, c = (vertices[triangles[:, k]] for k in range(3))
+    flip = np.einsum("ij,ij->i", np.cross(b - a, c - a), a) < 0
+    triangles[flip] = triangles[flip][:, [0, 2, 1]]
+    return vertices, triangles
+
+
+def cube_surface(half_mm: float) -> tuple[np.ndarray, np.ndarray]:
+    """The 12 triangles of an axis-aligned cube centred at the origin, wound outward."""
+    v = np.array([[x, y, z] for z in (-1, 1) for y in (-1, 1) for x in (-1, 1)], float) * half_mm
+    quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+    tris = []
+    for a, b, c, d in quads:
+        tris += [(a, b, c), (a, c, d)]
+    triangles = np.array(tris, np.int32)
+    a, b, c = (v[triangles[:, k]] for k in range(3))
+    centre = (a + b + c) / 3
+    flip = np.einsum("ij,ij->i", np.cross(b - a, c - a), centre) < 0
+    triangles[flip] = triangles[flip][:, [0, 2, 1]]
+    return v, triangles
+
+
+def _tetwild_module():
+    """pytetwild's native wrapper without its package __init__ (which imports pyvista)."""
+    spec = importlib.util.find_spec("pytetwild")
+    if spec is None or not spec.submodule_search_locations:
+        raise RuntimeError("pytetwild is not installed (pip install 'hapticut[build]')")
+    folder = Path(next(iter(spec.submodule_search_locations)))
+    library = next(folder.glob("PyfTetWildWrapper*.so"), None) or next(
+        folder.glob("PyfTetWildWrapper*.pyd"), None
+    )
+    if library is None:
+        raise RuntimeError(f"pytetwild's native wrapper not found in {folder}")
+    loader = importlib.machinery.ExtensionFileLoader("PyfTetWildWrapper", str(library))
+    module_spec = importlib.util.spec_from_loader("PyfTetWildWrapper", loader)
+    module = importlib.util.module_from_spec(module_spec)
+    loader.exec_module(module)
+    return module
+
+
+def tetrahedralize(vertices: np.ndarray, triangles: np.ndarray, *, edge_length_mm: float,
+                   epsilon: float = 2e-4, bg: tuple | None = None,
+                   threads: int = 2) -> tuple[np.ndarray, np.ndarray]:
+    """fTetWild on a surface (the union of closed shells); returns vertices and tets.
+    bg = (vertices, tets, edge lengths) gives a sizing field (adaptive sizing)."""
+    wrapper = _tetwild_module()
+    bg_v, bg_t, bg_s = bg if bg is not None else (
+        np.zeros((0, 3)), np.zeros((0, 4), np.int32), np.zeros(0))
+    with tempfile.TemporaryDirectory() as folder, contextlib.chdir(folder):
+        out_v, out_t = wrapper.tetrahedralize_mesh(
+            np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(triangles, np.uint32),
+            True, True, 0.05, float(edge_length_mm), float(epsilon), 10.0, False, threads, 80,
+            6, True, False, False,
+            np.ascontiguousarray(bg_v, np.float64), np.ascontiguousarray(bg_t, np.int32),
+            np.ascontiguousarray(bg_s, np.float64),
+        )
+    return np.ascontiguousarray(out_v, np.float64), np.ascontiguousarray(out_t, np.int32)
+
+
+def inside_convex(points: np.ndarray, vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Which points lie inside a convex closed surface wound outward."""
+    a, b, c = (vertices[triangles[:, k]] for k in range(3))
+    n = np.cross(b - a, c - a)
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    d = np.einsum("ij,ij->i", n, a)
+    return np.all(points @ n.T - d < 0, axis=1)
+
+
+def sphere_in_cube(faces: int, cache: Path | None, *, edge_length_mm: float = 6.0,
+                   bg: tuple | None = None, tag: str = "") -> TetScene:
+    """The paper's set-up: an icosphere of radius 30 mm (rigid by default) in a
+    tetrahedralized cube of air. Cached under `cache` (fTetWild varies by run)."""
+    sv, st = icosphere(faces)
+    name = f"sphere{faces}{tag}"
+    file = cache / f"{name}.npz" if cache is not None else None
+    if file is not None and file.exists():
+        data = np.load(file)
+        return TetScene(name, data["vertices"], data["tets"], data["labels"],
+                        float(data["build_s"]), sv, st)
+    cv, ct = cube_surface(CUBE_HALF_MM)
+    vertices = np.vstack([sv, cv])
+    triangles = np.vstack([st, ct + len(sv)])
+    start = time.perf_counter()
+    tv, tt = tetrahedralize(vertices, triangles, edge_length_mm=edge_length_mm, bg=bg)
+    build_s = time.perf_counter() - start
+    centroids = tv[tt].mean(axis=1)
+    labels = np.where(inside_convex(centroids, sv, st), RIGID, AIR).astype(np.int32)
+    if file is not None:
+        file.parent.mkdir(parents=True, exist_ok=True)
+        np.savez_compressed(file, vertices=tv, tets=tt, labels=labels, build_s=build_s)
+    return TetScene(name, tv, tt, labels, build_s, sv, st)
+
+
+def grid_scene(name: str, xs, ys, zs, solid_box, *, jitter: float = 0.0,
+               seed: int = 1) -> TetScene:
+    """A Kuhn-grid box (reference mesh) whose tets with centroid inside the
+    axis-aligned solid_box ((lo), (hi)) are rigid."""
+    v, t = _core.grid_mesh(list(xs), list(ys), list(zs), jitter, seed)
+    c = v[t].mean(axis=1)
+    lo, hi = (np.asarray(x, float) for x in solid_box)
+    inside = np.all((c > lo) & (c < hi), axis=1)
+    labels = np.where(inside, RIGID, AIR).astype(np.int32)
+    return TetScene(name, v, t, labels)
+
+
+def fan_scene(name: str, mesh: tuple[np.ndarray, np.ndarray]) -> TetScene:
+    """The paper's fan set-ups with every other tet rigid: the centre edge or
+    vertex touches rigid and free material alternately."""
+    v, t = mesh
+    labels = np.where(np.arange(len(t)) % 2 == 0, RIGID, AIR).astype(np.int32)
+    return TetScene(name, np.asarray(v, float), np.asarray(t, np.int32), labels)
+
+
+def env_threads() -> int:
+    return max(1, min(2, os.cpu_count() or 1))

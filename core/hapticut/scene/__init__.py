@@ -1,0 +1,43 @@
+"""Scenes: the file format (format.py) and, later, building scenes from surface meshes."""
+
+from .format import (
+    FORMAT_NAME,
+    FORMAT_VERSION,
+    JSON,
+    MATERIAL_MODELS,
+    MSGPACK,
+    SCHEMA_PATH,
+    BladeSpec,
+    Material,
+    Safety,
+    Scene,
+    SceneError,
+    encoding_for_path,
+    load_scene,
+    parse_scene,
+    save_scene,
+    scene_from_dict,
+    scene_to_dict,
+    serialize_scene,
+)
+
+__all__ = [
+    "FORMAT_NAME",
+    "FORMAT_VERSION",
+    "JSON",
+    "MATERIAL_MODELS",
+    "MSGPACK",
+    "SCHEMA_PATH",
+    "BladeSpec",
+    "Material",
+    "Safety",
+    "Scene",
+    "SceneError",
+    "encoding_for_path",
+    "load_scene",
+    "parse_scene",
+    "save_scene",
+    "scene_from_dict",
+    "scene_to_dict",
+    "serialize_scene",
+]

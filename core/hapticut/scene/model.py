@@ -1,0 +1,132 @@
+"""The in-memory scene of format version 1, and the error every scene check raises.
+
+Units: lengths in mm, forces in N, time in s (the C++ twin is core/include/hapticut/scene.h).
+"""
+
+# Field names carry their units (STYLE.md: `_N`, `_Hz`), which N815 reads as mixedCase.
+# ruff: noqa: N815
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field, fields
+from typing import Any
+
+import numpy as np
+
+FORMAT_NAME = "hapticut.scene"
+FORMAT_VERSION = 1
+UNITS = {"length": "mm", "force": "N", "time": "s"}
+MATERIAL_MODELS = ("free", "drag", "rigid", "viscous", "membrane")
+# The parameters each model takes (True: required, False: optional); all must be finite and > 0.
+MODEL_PARAMETERS: dict[str, dict[str, bool]] = {
+    "free": {},
+    "drag": {"drag_distance_mm": True},
+    "rigid": {},
+    "viscous": {"viscosity_N_s_per_mm": True, "max_lag_mm": False},
+    "membrane": {"break_force_N": True},
+}
+MATERIAL_PARAMETERS = ("drag_distance_mm", "viscosity_N_s_per_mm", "max_lag_mm", "break_force_N")
+
+
+class SceneError(ValueError):
+    """A scene the format does not allow.
+
+    ``field`` is the JSON pointer of the offending field (``"/mesh/tets/17/2"``; ``"(root)"`` for
+    the whole document), ``reason`` says what is wrong; the message is ``"<field>: <reason>"``.
+    """
+
+    def __init__(self, field: str, reason: str) -> None:
+        super().__init__(f"{field}: {reason}")
+        self.field = field
+        self.reason = reason
+
+    def __reduce__(self):
+        return (type(self), (self.field, self.reason))
+
+
+@dataclass(frozen=True)
+class Material:
+    """One material; only the parameters of its ``model`` are written to a file."""
+
+    name: str
+    model: str  # One of MATERIAL_MODELS.
+    drag_distance_mm: float = 0.0  # drag: the proxy trails its target by at most this.
+    viscosity_N_s_per_mm: float = 0.0  # viscous: resistance c in f = c v.
+    max_lag_mm: float = 50.0  # viscous: cap on the speed-dependent lag.
+    break_force_N: float = 0.0  # membrane: rigid until k |p' - q| exceeds this.
+
+
+@dataclass(frozen=True)
+class BladeSpec:
+    """A blade edge in the tool frame, sampled by ``points`` proxies (ends included)."""
+
+    name: str
+    start_mm: tuple[float, float, float]
+    end_mm: tuple[float, float, float]
+    points: int = 50
+
+
+@dataclass(frozen=True)
+class Safety:
+    """Limits the servo's safety layer applies between the engine and the device."""
+
+    max_force_N: float = 5.0
+    max_torque_N_mm: float = 500.0
+    ramp_time_s: float = 0.5
+    max_transitions_per_tick: int = 64
+    capped_tick_force_N: float = 1.0
+
+
+@dataclass(eq=False)
+class Scene:
+    """A scene as read from a file: materials, the labelled tet mesh, blades and settings.
+
+    vertices: (n, 3) float64 in mm; tets: (m, 4) int32 vertex indices, positively oriented after
+    reading; tet_materials: (m,) int32 indices into ``materials``.
+    """
+
+    materials: list[Material]
+    vertices: np.ndarray
+    tets: np.ndarray
+    tet_materials: np.ndarray
+    blades: list[BladeSpec] = field(default_factory=list)
+    stiffness_N_per_mm: float = 0.1
+    servo_rate_Hz: float = 1000.0
+    tolerance_mm: float = 0.0  # 0: derived from the mesh's size by the engine.
+    safety: Safety = field(default_factory=Safety)
+    metadata: dict[str, Any] = field(default_factory=dict)
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Scene):
+            return NotImplemented
+        return all(_equal(getattr(self, f.name), getattr(other, f.name)) for f in fields(self))
+
+
+def _equal(a: Any, b: Any) -> bool:
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return np.array_equal(np.asarray(a), np.asarray(b))
+    return bool(a == b)
+
+
+def scene_to_dict(scene: Scene) -> dict[str, Any]:
+    """The scene as plain values and numpy arrays (the shape hapticut._core exchanges)."""
+    out = {f.name: getattr(scene, f.name) for f in fields(scene)}
+    out["materials"] = [asdict(material) for material in scene.materials]
+    out["blades"] = [asdict(blade) for blade in scene.blades]
+    out["safety"] = asdict(scene.safety)
+    return out
+
+
+def scene_from_dict(data: dict[str, Any]) -> Scene:
+    """The inverse of scene_to_dict (missing optional entries take their defaults)."""
+    kwargs = dict(data)
+    kwargs["materials"] = [Material(**item) for item in data["materials"]]
+    kwargs["vertices"] = np.asarray(data["vertices"], dtype=np.float64).reshape(-1, 3)
+    kwargs["tets"] = np.asarray(data["tets"], dtype=np.int32).reshape(-1, 4)
+    kwargs["tet_materials"] = np.asarray(data["tet_materials"], dtype=np.int32).reshape(-1)
+    kwargs["blades"] = [
+        BladeSpec(**{**item, "start_mm": tuple(item["start_mm"]), "end_mm": tuple(item["end_mm"])})
+        for item in data.get("blades", [])
+    ]
+    kwargs["safety"] = Safety(**data.get("safety", {}))
+    return Scene(**kwargs)

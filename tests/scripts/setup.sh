@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Installs everything the tests, the benchmarks and the demo need on a fresh
+# Debian machine (apt packages when run as root, PyPI packages), then builds:
+# the Python package with its C++ module (pip) and the C++ test binary (CMake).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+
+apt_packages=(cmake ninja-build g++ nlohmann-json3-dev libgtest-dev clang-format clang-tidy)
+missing=()
+for package in "${apt_packages[@]}"; do
+  dpkg -s "$package" >/dev/null 2>&1 || missing+=("$package")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  if [ "$(id -u)" -ne 0 ]; then
+    echo "setup: missing Debian packages (${missing[*]}); run as root or install them" >&2
+    exit 1
+  fi
+  echo "setup: apt-get install ${missing[*]}"
+  apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" >/dev/null
+fi
+
+python3 -m pip install -q --disable-pip-version-check "numpy>=1.26,<2" "scikit-build-core>=0.10" "nanobind>=2.4"
+echo "setup: pip install .[build,test,charts] (builds hapticut._core)"
+python3 -m pip install -q --disable-pip-version-check ".[build,test,charts]"
+
+echo "setup: building the C++ tests"
+cmake -S . -B build/tests -G Ninja -DCMAKE_BUILD_TYPE=Release -DHAPTICUT_BUILD_TESTS=ON \
+  -DHAPTICUT_BUILD_PYTHON=OFF >/dev/null
+cmake --build build/tests
