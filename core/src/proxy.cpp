@@ -392,23 +392,42 @@ Transition Proxy::step_outside(const Vec3& p) {
   const double eps = space_->tolerance();
   double best_parameter = 2.0;
   FaceRef best_face;
+  // Repair 4: a path exactly through a boundary edge or vertex meets the
+  // triangles there only on their rims, heading away from their own tets. The
+  // nearest such rim hit is kept and resolved below against the whole fan.
+  double rim_parameter = 2.0;
+  FaceRef rim_face;
+  std::array<int, 2> rim_sides{-1, -1};
   const auto& faces = mesh.boundary_faces();
   auto try_face = [&](std::int32_t k) {
     const Plane& plane = mesh.boundary_plane(static_cast<std::size_t>(k));
     const double s =
         segment_entry_parameter(plane.signed_distance(q), plane.signed_distance(p), eps);
-    if (s < 0.0 || s >= best_parameter) return;
+    if (s < 0.0 || (s >= best_parameter && s >= rim_parameter)) return;
     const FaceRef& face = faces[k];
     const Vec3 c = q + d * s;
+    std::array<int, 2> on_rim{-1, -1};
+    bool heading_away = false;
     for (int f = 0; f < 4; ++f) {
       if (f == face.face) continue;
       const Plane& side = mesh.face_plane(face.tet, f);
       const double distance = side.signed_distance(c);
-      if (distance > eps) return;  // Outside the triangle (eq. 14, "<= eps": repair 4).
-      if (distance >= -eps && dot(d, side.normal) > eps) return;  // On its rim, heading away.
+      if (distance > eps) return;  // Outside the triangle (eq. 14, "<= eps").
+      if (distance >= -eps) {
+        on_rim[on_rim[0] < 0 ? 0 : 1] = f;
+        heading_away = heading_away || dot(d, side.normal) > eps;
+      }
     }
-    best_parameter = s;
-    best_face = face;
+    if (!heading_away) {
+      if (s < best_parameter) {
+        best_parameter = s;
+        best_face = face;
+      }
+    } else if (s < rim_parameter) {
+      rim_parameter = s;
+      rim_face = face;
+      rim_sides = on_rim;
+    }
   };
   // A handful of boundary faces (the paper's cube has 12) is scanned faster
   // than the tree is walked; above that the tree keeps entry logarithmic.
@@ -430,10 +449,47 @@ Transition Proxy::step_outside(const Vec3& p) {
   } else {
     mesh.boundary_tree().for_each_on_segment(q, p, eps, try_face);
   }
+  if (rim_face.tet != kNoTet && rim_parameter < best_parameter) {
+    const Transition entered = enter_through_rim(rim_face, rim_sides, q + d * rim_parameter, d);
+    if (entered.changed) return entered;
+  }
   if (best_face.tet != kNoTet) {
     return go(ProxyState::Face, best_face.tet, best_face.face, q + d * best_parameter);
   }
   return go(ProxyState::Outside, kNoTet, 0, p);
+}
+
+// The segment meets boundary face `face` at c on its rim (one side: an edge;
+// two: a vertex). It enters the mesh there only if some tet around that edge
+// (eq. 7) or vertex (eq. 11) lies toward p; then the proxy lands on the edge
+// or vertex, whose own step takes it into that tet.
+Transition Proxy::enter_through_rim(const FaceRef& face, const std::array<int, 2>& sides,
+                                    const Vec3& c, const Vec3& d) {
+  const TetMesh& mesh = space_->mesh();
+  const double eps = space_->tolerance();
+  if (sides[1] >= 0) {
+    const int corner = 6 - face.face - sides[0] - sides[1];
+    const std::int32_t vertex = mesh.tet(face.tet)[corner];
+    for (const VertexFanEntry& entry : mesh.vertex_fan(vertex)) {
+      bool toward = true;
+      for (int f = 0; f < 4 && toward; ++f) {
+        if (f != entry.local_vertex) toward = dot(d, mesh.face_plane(entry.tet, f).normal) < -eps;
+      }
+      if (toward) return go(ProxyState::Vertex, face.tet, corner, mesh.vertex(vertex));
+    }
+    return stay();
+  }
+  const int local_edge = kEdgeOfFaces[face.face][sides[0]];
+  const std::int32_t e = mesh.edge_of(face.tet, local_edge);
+  for (const EdgeFanEntry& entry : mesh.edge_fan(e)) {
+    if (dot(d, mesh.face_plane(entry.tet, entry.faces[0]).normal) < -eps &&
+        dot(d, mesh.face_plane(entry.tet, entry.faces[1]).normal) < -eps) {
+      const Vec3& o0 = mesh.vertex(mesh.edge_vertices(e)[0]);
+      return go(ProxyState::Edge, face.tet, local_edge,
+                project_to_line(c, o0, mesh.edge_direction(e)));
+    }
+  }
+  return stay();
 }
 
 std::string Proxy::check_invariants(double tolerance_factor) const {

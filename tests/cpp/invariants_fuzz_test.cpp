@@ -1,5 +1,6 @@
 // Invariant and fuzz tests (issue: engine, item 7): random meshes with
 // slivers and large fans, random trajectories with jumps across many tets.
+// Device points also land exactly on vertices, edges and faces.
 // After every tick: q finite, the state agrees with q, q outside every rigid
 // tet; rigid layers one tet thick are never crossed. At least 10^6 steps run
 // here; HAPTICUT_FUZZ_STEPS raises it (tests/run_long_fuzz.sh).
@@ -73,6 +74,14 @@ std::int64_t run_walk(const Space& space, const MeshData& mesh, std::int64_t ste
     const double kind = unit(rng);
     if (kind < 0.02) {
       points[i] = anywhere();  // A jump across many tets in one tick.
+    } else if (kind < 0.04) {
+      // Exactly on a vertex, an edge or a face: where strict tests go wrong.
+      const auto& tet = mesh.tets[rng() % mesh.tets.size()];
+      const Vec3& a = mesh.vertices_mm[tet[0]];
+      const Vec3& b = mesh.vertices_mm[tet[1]];
+      const Vec3& c = mesh.vertices_mm[tet[2]];
+      const int which = static_cast<int>(rng() % 3);
+      points[i] = which == 0 ? a : (which == 1 ? (a + b) * 0.5 : (a + b + c) / 3.0);
     } else {
       const double step = kind < 0.5 ? 1e-3 * scale : 2e-2 * scale;
       points[i] += Vec3{gauss(rng), gauss(rng), gauss(rng)} * step;

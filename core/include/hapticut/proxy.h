@@ -93,6 +93,8 @@ class Proxy {
   Transition step_edge(const Vec3& p, const MoveContext& context);
   Transition step_vertex(const Vec3& p, const MoveContext& context);
   Transition step_outside(const Vec3& p);
+  Transition enter_through_rim(const FaceRef& face, const std::array<int, 2>& sides, const Vec3& c,
+                               const Vec3& d);
   Transition go(ProxyState to, std::int32_t tet, int local, const Vec3& q);
   Transition stay() const;
   StartKind push_out_of_rigid(std::int32_t start_tet, const Vec3& p);
