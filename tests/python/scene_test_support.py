@@ -9,7 +9,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
 from hapticut.scene import Material, Scene
 from hapticut.scene.mesh_checks import signed_volumes6
 

@@ -9,8 +9,6 @@ import math
 import msgpack
 import numpy as np
 import pytest
-from scene_test_support import ERROR_CASES, EXAMPLE_PATH, apply_patch, example_tree, grid_scene
-
 from hapticut import _core
 from hapticut.scene import (
     JSON,
@@ -25,6 +23,7 @@ from hapticut.scene import (
     scene_to_dict,
     serialize_scene,
 )
+from scene_test_support import ERROR_CASES, EXAMPLE_PATH, apply_patch, example_tree, grid_scene
 
 ENCODINGS = [JSON, MSGPACK]
 SUFFIX = {JSON: ".hapticut.json", MSGPACK: ".hapticut.msgpack"}

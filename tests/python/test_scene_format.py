@@ -12,14 +12,6 @@ import jsonschema
 import msgpack
 import numpy as np
 import pytest
-from scene_test_support import (
-    ERROR_CASES,
-    EXAMPLE_PATH,
-    apply_patch,
-    example_tree,
-    grid_scene,
-)
-
 from hapticut.scene import (
     JSON,
     MSGPACK,
@@ -36,6 +28,13 @@ from hapticut.scene import (
     scene_from_dict,
     scene_to_dict,
     serialize_scene,
+)
+from scene_test_support import (
+    ERROR_CASES,
+    EXAMPLE_PATH,
+    apply_patch,
+    example_tree,
+    grid_scene,
 )
 
 
@@ -316,5 +315,6 @@ def test_hundred_thousand_tets(encoding):
     start = time.perf_counter()
     again = parse_scene(data, encoding)
     seconds = time.perf_counter() - start
-    print(f"\nparse {len(scene.tets)} tets from {len(data) / 1e6:.1f} MB {encoding}: {seconds:.3f} s")
+    megabytes = len(data) / 1e6
+    print(f"\nparse {len(scene.tets)} tets, {megabytes:.1f} MB {encoding}: {seconds:.3f} s")
     assert again == scene
