@@ -127,6 +127,25 @@ TEST(Proxy, RigidCubeStopsAnOutsideProxyOnItsSurface) {
   EXPECT_EQ(corner.check_invariants(), "");
 }
 
+// Repair 4: a path exactly through a boundary vertex or edge meets triangles
+// only on their rims; it must still enter (the Kuhn cube's corner at the
+// origin belongs to one tet whose faces there are interior and boundary mixed).
+TEST(Proxy, EntersExactlyThroughABoundaryVertexOrEdge) {
+  const Space space = make_space(grid_mesh({0, 5, 10}, {0, 5, 10}, {0, 5, 10}), 0);
+  for (const auto& [from, to] : std::vector<std::pair<Vec3, Vec3>>{
+           {{-1, -1, -1}, {3, 3, 3}},       // Through the corner vertex.
+           {{-1, -1, 2.5}, {3, 3, 2.5}},    // Through the edge x = y = 0.
+           {{-1, 5, 5}, {3, 5, 5}},         // Through a boundary vertex on a face.
+           {{-1, 5, 2.5}, {3, 5, 2.5}}}) {  // Through a boundary edge on a face.
+    Proxy proxy(space);
+    EXPECT_EQ(proxy.reset(from), StartKind::Outside);
+    proxy.step(to, kDt);
+    EXPECT_EQ(proxy.place().state, ProxyState::Tet);
+    EXPECT_EQ(proxy.q(), to);
+    EXPECT_EQ(proxy.check_invariants(), "");
+  }
+}
+
 TEST(Proxy, EdgeFanPicksTheTetTowardP) {
   const MeshData mesh = edge_fan_mesh(12);
   const Space space = make_space(mesh, 0);
