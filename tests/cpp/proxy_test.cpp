@@ -127,23 +127,39 @@ TEST(Proxy, RigidCubeStopsAnOutsideProxyOnItsSurface) {
   EXPECT_EQ(corner.check_invariants(), "");
 }
 
-// Repair 4: a path exactly through a boundary vertex or edge meets triangles
-// only on their rims; it must still enter (the Kuhn cube's corner at the
-// origin belongs to one tet whose faces there are interior and boundary mixed).
-TEST(Proxy, EntersExactlyThroughABoundaryVertexOrEdge) {
-  const Space space = make_space(grid_mesh({0, 5, 10}, {0, 5, 10}, {0, 5, 10}), 0);
-  for (const auto& [from, to] : std::vector<std::pair<Vec3, Vec3>>{
-           {{-1, -1, -1}, {3, 3, 3}},       // Through the corner vertex.
-           {{-1, -1, 2.5}, {3, 3, 2.5}},    // Through the edge x = y = 0.
-           {{-1, 5, 5}, {3, 5, 5}},         // Through a boundary vertex on a face.
-           {{-1, 5, 2.5}, {3, 5, 2.5}}}) {  // Through a boundary edge on a face.
-    Proxy proxy(space);
-    EXPECT_EQ(proxy.reset(from), StartKind::Outside);
-    proxy.step(to, kDt);
-    EXPECT_EQ(proxy.place().state, ProxyState::Tet);
-    EXPECT_EQ(proxy.q(), to);
-    EXPECT_EQ(proxy.check_invariants(), "");
+// Repair 4: a path exactly through a boundary vertex meets the triangles there
+// only on their rims. Aimed into a tet that has no boundary face at that
+// vertex, it used to miss them all and pass into the mesh as OUTSIDE.
+TEST(Proxy, EntersExactlyThroughABoundaryVertexIntoAnInnerTet) {
+  const Space space =
+      make_space(grid_mesh({0, 5, 10}, {0, 5, 10}, {0, 5, 10}, 0.3, 21), std::int32_t{0});
+  const TetMesh& mesh = space.mesh();
+  int checked = 0;
+  for (std::int32_t v = 0; v < mesh.vertex_count(); ++v) {
+    if (!mesh.is_boundary_vertex(v)) continue;
+    for (const VertexFanEntry& entry : mesh.vertex_fan(v)) {
+      bool touches_boundary = false;
+      for (int f = 0; f < 4; ++f) {
+        touches_boundary =
+            touches_boundary || (f != entry.local_vertex && mesh.neighbour(entry.tet, f) == kNoTet);
+      }
+      if (touches_boundary) continue;
+      Vec3 centroid;
+      for (std::int32_t w : mesh.tet(entry.tet)) centroid += mesh.vertex(w) * 0.25;
+      const Vec3 d = centroid - mesh.vertex(v);
+      const Vec3 from = mesh.vertex(v) - d * 0.5;
+      if (mesh.locate(from) != kNoTet) continue;  // Behind the vertex is still mesh.
+      const Vec3 to = mesh.vertex(v) + d * 0.5;
+      Proxy proxy(space);
+      proxy.reset(from);
+      proxy.step(to, kDt);
+      EXPECT_EQ(proxy.place().state, ProxyState::Tet) << "vertex " << v;
+      EXPECT_EQ(proxy.q(), to);
+      EXPECT_EQ(proxy.check_invariants(), "");
+      ++checked;
+    }
   }
+  EXPECT_GT(checked, 0) << "the grid should have inner tets at boundary vertices";
 }
 
 TEST(Proxy, EdgeFanPicksTheTetTowardP) {
