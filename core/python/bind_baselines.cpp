@@ -241,6 +241,15 @@ void bind_baselines_impl(nb::module_& m) {
   nb::class_<ForceShading>(m, "ForceShading",
                            "Per-vertex normals of a Space's rigid surface, for force shading.")
       .def(nb::init<const Space&>(), nb::arg("space"), nb::keep_alive<1, 2>())
+      .def(
+          "__init__",
+          [](ForceShading* self, const Space& space, const PointsIn& vertices,
+             const TrianglesIn& triangles) {
+            new (self) ForceShading(space, to_points(vertices), to_triangles(triangles));
+          },
+          nb::arg("space"), nb::arg("source_vertices"), nb::arg("source_triangles"),
+          nb::keep_alive<1, 2>(),
+          "Vertex normals taken from the source surface the scene was built from.")
       .def_prop_ro(
           "vertex_normals",
           [](const ForceShading& s) {

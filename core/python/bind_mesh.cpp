@@ -117,11 +117,16 @@ void bind_mesh(nb::module_& m) {
       .def_prop_ro(
           "tets",
           [](const Space& s) {
-            MeshData d;
-            d.tets = s.mesh().tets();
-            return nb::cast<nb::tuple>(mesh_to_arrays(d))[1];
+            const auto& tets = s.mesh().tets();
+            auto out = new_array<std::int32_t>({tets.size(), 4});
+            for (std::size_t t = 0; t < tets.size(); ++t) {
+              std::copy(tets[t].begin(), tets[t].end(), out.data() + 4 * t);
+            }
+            return out;
           },
-          nb::rv_policy::move)
+          nb::rv_policy::move,
+          "The tets as stored: positively oriented (an inverted input tet has its last two "
+          "vertices swapped). ProxySet.local indexes these.")
       .def_prop_ro(
           "tet_materials",
           [](const Space& s) {

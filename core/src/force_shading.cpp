@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "hapticut/geometry.h"
+
 namespace hapticut {
 
 namespace {
@@ -21,6 +23,9 @@ bool is_rigid_surface_face(const Space& space, std::int32_t t, int f) {
   const std::int32_t u = space.mesh().neighbour(t, f);
   return u == kNoTet || !space.tet_is_rigid(u);
 }
+
+// Fixed-point iterations locating the shaded contact point on a face.
+constexpr int kContactIterations = 2;
 
 Vec3 normalized_or_zero(const Vec3& v) {
   const double n = norm(v);
@@ -92,16 +97,125 @@ ForceShading::ForceShading(const Space& space) : space_(&space) {
   for (Vec3& n : vertex_normals_) n = normalized_or_zero(n);
 }
 
+ForceShading::ForceShading(const Space& space, const std::vector<Vec3>& source_vertices_mm,
+                           const std::vector<std::array<std::int32_t, 3>>& source_triangles)
+    : ForceShading(space) {
+  // Angle-weighted vertex normals of the source.
+  std::vector<Vec3> source_normals(source_vertices_mm.size());
+  std::vector<Aabb> boxes;
+  Aabb all;
+  for (const auto& tri : source_triangles) {
+    const std::array<Vec3, 3> x{source_vertices_mm.at(tri[0]), source_vertices_mm.at(tri[1]),
+                                source_vertices_mm.at(tri[2])};
+    const Vec3 n = normalized_or_zero(cross(x[1] - x[0], x[2] - x[0]));
+    Aabb box;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 e1 = normalized_or_zero(x[(k + 1) % 3] - x[k]);
+      const Vec3 e2 = normalized_or_zero(x[(k + 2) % 3] - x[k]);
+      source_normals[tri[k]] += n * std::acos(std::clamp(dot(e1, e2), -1.0, 1.0));
+      box.grow(x[k]);
+    }
+    boxes.push_back(box);
+    all.grow(box);
+  }
+  if (boxes.empty()) return;
+  for (Vec3& n : source_normals) n = normalized_or_zero(n);
+  const AabbTree tree(boxes);
+  const double diagonal = norm(all.hi - all.lo);
+  for (std::int32_t v = 0; v < vertex_count(); ++v) {
+    if (vertex_normals_[v] == Vec3{}) continue;
+    const Vec3& x = space.mesh().vertex(v);
+    // Nearest source triangle: search boxes within a growing pad.
+    double best = 1e300;
+    Vec3 best_normal;
+    for (double pad = 1e-4 * diagonal; best == 1e300 && pad < 4.0 * diagonal; pad *= 4.0) {
+      tree.for_each_containing(x, pad, [&](std::int32_t t) {
+        const auto& tri = source_triangles[t];
+        const Vec3& a = source_vertices_mm[tri[0]];
+        const Vec3& b = source_vertices_mm[tri[1]];
+        const Vec3& c = source_vertices_mm[tri[2]];
+        const Vec3 y = closest_point_on_triangle(x, a, b, c);
+        const double d = norm(y - x);
+        if (d >= best) return;
+        best = d;
+        // Barycentric weights of y in abc.
+        const Vec3 n = cross(b - a, c - a);
+        const double area = dot(n, n);
+        const double wa = dot(cross(b - y, c - y), n) / area;
+        const double wb = dot(cross(c - y, a - y), n) / area;
+        const double wc = 1.0 - wa - wb;
+        best_normal =
+            source_normals[tri[0]] * wa + source_normals[tri[1]] * wb + source_normals[tri[2]] * wc;
+      });
+    }
+    const Vec3 n = normalized_or_zero(best_normal);
+    if (n != Vec3{}) vertex_normals_[v] = n;
+  }
+}
+
+Vec3 ForceShading::edge_normal(std::int32_t e, const Vec3& q) const {
+  const TetMesh& mesh = space_->mesh();
+  const auto& ends = mesh.edge_vertices(e);
+  const Vec3& a = mesh.vertex(ends[0]);
+  const Vec3& b = mesh.vertex(ends[1]);
+  const double length2 = squared_norm(b - a);
+  const double s = length2 > 0.0 ? std::clamp(dot(q - a, b - a) / length2, 0.0, 1.0) : 0.5;
+  return normalized_or_zero(vertex_normals_[ends[0]] * (1.0 - s) + vertex_normals_[ends[1]] * s);
+}
+
+// The shading normal where the proxy touches the rigid surface at a feature
+// its state does not name: a FACE or EDGE whose own plane or line is not on
+// the surface, with q on one of its surface edges or vertices (a proxy held
+// on a surface edge may be owned by any face through that edge). Zero when q
+// touches no surface edge or vertex of the element.
+Vec3 ForceShading::touching_normal(const ProxyPlace& place) const {
+  const TetMesh& mesh = space_->mesh();
+  const std::int32_t t = place.tet;
+  const double near = 100.0 * space_->tolerance();
+  std::array<int, 3> vertices{};
+  int vertex_count = 0;
+  if (place.state == ProxyState::Face) {
+    for (int v = 0; v < 4; ++v) {
+      if (v != place.local) vertices[vertex_count++] = v;
+    }
+  } else {
+    vertices[0] = kEdgeVertices[place.local][0];
+    vertices[1] = kEdgeVertices[place.local][1];
+    vertex_count = 2;
+  }
+  for (int i = 0; i < vertex_count; ++i) {
+    const std::int32_t v = mesh.tet(t)[vertices[i]];
+    if (vertex_normals_[v] != Vec3{} && squared_norm(place.q - mesh.vertex(v)) <= near * near) {
+      return vertex_normals_[v];
+    }
+  }
+  if (place.state != ProxyState::Face) return {};
+  for (int i = 0; i < 3; ++i) {
+    const int e = kEdgeOfVertices[vertices[i]][vertices[(i + 1) % 3]];
+    const std::int32_t edge = mesh.edge_of(t, e);
+    if (!is_surface_edge(edge)) continue;
+    const auto& ends = mesh.edge_vertices(edge);
+    const Vec3& a = mesh.vertex(ends[0]);
+    const Vec3& b = mesh.vertex(ends[1]);
+    const double s = std::clamp(dot(place.q - a, b - a) / squared_norm(b - a), 0.0, 1.0);
+    if (squared_norm(place.q - (a + (b - a) * s)) <= near * near) return edge_normal(edge, place.q);
+  }
+  return {};
+}
+
 Vec3 ForceShading::shade(const ProxyPlace& place, const Vec3& raw_force_N) const {
   const TetMesh& mesh = space_->mesh();
   const std::int32_t t = place.tet;
-  if (t == kNoTet) return raw_force_N;
+  if (t == kNoTet || space_->tet_is_rigid(t)) return raw_force_N;
   Vec3 shaded_normal;
   switch (place.state) {
     case ProxyState::Face: {
       const int f = place.local;
       const std::int32_t u = mesh.neighbour(t, f);
-      if (u == kNoTet || !space_->tet_is_rigid(u) || space_->tet_is_rigid(t)) return raw_force_N;
+      if (u == kNoTet || !space_->tet_is_rigid(u)) {
+        shaded_normal = touching_normal(place);
+        break;
+      }
       // Out of the rigid region = into the owner.
       const Vec3 face_normal = -mesh.face_plane(t, f).normal;
       const double normal_part = dot(raw_force_N, face_normal);
@@ -114,33 +228,43 @@ Vec3 ForceShading::shade(const ProxyPlace& place, const Vec3& raw_force_N) const
         vertex[count] = mesh.tet(t)[v];
         corner[count++] = mesh.vertex(mesh.tet(t)[v]);
       }
-      // Barycentric weights from sub-triangle areas along the face normal.
-      const Vec3& q = place.q;
-      std::array<double, 3> weight{};
-      double total = 0.0;
-      for (int k = 0; k < 3; ++k) {
-        const Vec3& b = corner[(k + 1) % 3];
-        const Vec3& c = corner[(k + 2) % 3];
-        weight[k] = std::max(0.0, dot(cross(b - q, c - q), face_normal));
-        total += weight[k];
+      // The shaded normal at a point x of the face plane: barycentric
+      // weights from signed sub-triangle areas (linear, so it extrapolates a
+      // little past the face's edges), normals interpolated and normalised.
+      const Vec3 area_normal = cross(corner[1] - corner[0], corner[2] - corner[0]);
+      const double area = dot(area_normal, face_normal);
+      if (area == 0.0 || !std::isfinite(area)) return raw_force_N;
+      auto normal_at = [&](const Vec3& x) {
+        Vec3 n;
+        for (int k = 0; k < 3; ++k) {
+          const double w =
+              dot(cross(corner[(k + 1) % 3] - x, corner[(k + 2) % 3] - x), face_normal) / area;
+          n += vertex_normals_[vertex[k]] * w;
+        }
+        return normalized_or_zero(n);
+      };
+      // The contact point of the smooth surface the normals describe: where
+      // the line from p along the shaded normal meets the face plane (q is
+      // where the line along the facet normal meets it). A fixed point,
+      // two iterations from q (Morgenbesser and Srinivasan's second pass).
+      const Vec3 p = place.q - raw_force_N / space_->settings().stiffness_N_per_mm;
+      const double p_height = dot(p - place.q, face_normal);
+      Vec3 x = place.q;
+      shaded_normal = normal_at(x);
+      for (int iteration = 0; iteration < kContactIterations; ++iteration) {
+        const double along = dot(shaded_normal, face_normal);
+        if (!(along > 0.5)) break;
+        x = p - shaded_normal * (p_height / along);
+        const Vec3 n = normal_at(x);
+        if (n == Vec3{}) break;
+        shaded_normal = n;
       }
-      if (!(total > 0.0)) return raw_force_N;
-      for (int k = 0; k < 3; ++k) shaded_normal += vertex_normals_[vertex[k]] * (weight[k] / total);
-      shaded_normal = normalized_or_zero(shaded_normal);
       if (shaded_normal == Vec3{}) return raw_force_N;
       return raw_force_N - face_normal * normal_part + shaded_normal * normal_part;
     }
     case ProxyState::Edge: {
       const std::int32_t e = mesh.edge_of(t, place.local);
-      if (!is_surface_edge(e)) return raw_force_N;
-      const auto& ends = mesh.edge_vertices(e);
-      const Vec3& a = mesh.vertex(ends[0]);
-      const Vec3& b = mesh.vertex(ends[1]);
-      const double length = norm(b - a);
-      const double s =
-          length > 0.0 ? std::clamp(dot(place.q - a, b - a) / (length * length), 0.0, 1.0) : 0.5;
-      shaded_normal =
-          normalized_or_zero(vertex_normals_[ends[0]] * (1.0 - s) + vertex_normals_[ends[1]] * s);
+      shaded_normal = is_surface_edge(e) ? edge_normal(e, place.q) : touching_normal(place);
       break;
     }
     case ProxyState::Vertex:

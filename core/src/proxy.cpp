@@ -34,6 +34,15 @@ Exit find_exit(const TetMesh& mesh, std::int32_t t, const Vec3& q, const Vec3& q
 // Up to this many boundary faces, OUTSIDE scans them all instead of walking the tree.
 constexpr std::size_t kLinearEntryScanMax = 32;
 
+// (b-2) of TET and FACE: q moved within its tet or face and stopped where
+// the material put it. Called again, the material (same target, q now at
+// its answer) holds q, and FACE's (a) tests see the same n . (p - q), since
+// q moved in the plane: nothing would change.
+Transition settle(Transition t) {
+  t.settled = true;
+  return t;
+}
+
 int local_index_of(const std::array<std::int32_t, 4>& tet, std::int32_t vertex) {
   for (int k = 0; k < 4; ++k) {
     if (tet[k] == vertex) return k;
@@ -167,6 +176,7 @@ TickResult Proxy::step(const Vec3& p, double dt_s) {
     if (!t.changed) break;
     ++result.transitions;
     ++counters_.transitions[static_cast<int>(t.from)][static_cast<int>(t.to)][t.to_neighbour];
+    if (t.settled) break;
   }
   counters_.total_transitions += static_cast<std::uint64_t>(result.transitions);
   counters_.max_transitions_in_tick =
@@ -211,7 +221,7 @@ Transition Proxy::step_tet(const Vec3& p, const MoveContext& context) {
   const MoveResult moved = move(space_->material_of_tet(t), p, q, context);
   if (!moved.moved) return stay();
   const Exit exit = find_exit(mesh, t, q, moved.q, -1, context.tolerance_mm);
-  if (exit.face < 0) return go(ProxyState::Tet, t, 0, moved.q);
+  if (exit.face < 0) return settle(go(ProxyState::Tet, t, 0, moved.q));
   return go(ProxyState::Face, t, exit.face, q + (moved.q - q) * exit.parameter);
 }
 
@@ -235,7 +245,7 @@ Transition Proxy::step_face(const Vec3& p, const MoveContext& context) {
   const MoveResult moved = move(space_->material_of_tet(t), project_to_plane(p, plane), q, context);
   if (!moved.moved) return stay();
   const Exit exit = find_exit(mesh, t, q, moved.q, face, eps);
-  if (exit.face < 0) return go(ProxyState::Face, t, face, moved.q);
+  if (exit.face < 0) return settle(go(ProxyState::Face, t, face, moved.q));
   return go(ProxyState::Edge, t, kEdgeOfFaces[face][exit.face], q + (moved.q - q) * exit.parameter);
 }
 

@@ -56,6 +56,23 @@ def test_drag_lag_is_d_along_a_stroke():
     np.testing.assert_allclose(lag, 1.0, atol=1e-9)
 
 
+def test_space_returns_its_mesh_as_stored():
+    vertices, tets = _core.two_tets_mesh(10.0)
+    inverted = tets.copy()
+    inverted[:, [0, 1]] = inverted[:, [1, 0]]  # both tets now negatively oriented
+    space = _core.Space(vertices, inverted, np.array([0, 1], np.int32), [FREE, DRAG])
+    stored = space.tets
+    assert stored.shape == (2, 4) and stored.dtype == np.int32
+    assert space.stats["reoriented_tets"] == 2
+    for original, kept in zip(inverted, stored, strict=True):
+        assert sorted(original) == sorted(kept)
+        a, b, c, d = vertices[kept]
+        assert np.dot(b - a, np.cross(c - a, d - a)) > 0  # positively oriented
+    np.testing.assert_array_equal(space.vertices, vertices)
+    np.testing.assert_array_equal(space.tet_materials, [0, 1])
+    assert space.material_names == ["air", "flesh"]
+
+
 def test_bad_meshes_name_the_offending_index():
     vertices, tets = _core.two_tets_mesh(10.0)
     broken = vertices.copy()

@@ -45,7 +45,10 @@ class TetScene:
         if material is not None:
             labels = np.where(labels != AIR, material, AIR).astype(np.int32)
         return _core.Space(
-            self.vertices, self.tets, np.ascontiguousarray(labels, np.int32), MATERIALS,
+            self.vertices,
+            self.tets,
+            np.ascontiguousarray(labels, np.int32),
+            MATERIALS,
             stiffness_N_per_mm=stiffness_N_per_mm,
         )
 
@@ -57,11 +60,42 @@ def icosphere(faces: int, radius_mm: float = SPHERE_RADIUS_MM) -> tuple[np.ndarr
     if faces not in levels:
         raise ValueError(f"an icosphere has 20 x 4^n faces, not {faces}")
     t = (1.0 + 5.0**0.5) / 2.0
-    verts = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t),
-             (0, -1, -t), (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
-    tris = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4),
-            (11, 10, 2), (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8),
-            (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    verts = [
+        (-1, t, 0),
+        (1, t, 0),
+        (-1, -t, 0),
+        (1, -t, 0),
+        (0, -1, t),
+        (0, 1, t),
+        (0, -1, -t),
+        (0, 1, -t),
+        (t, 0, -1),
+        (t, 0, 1),
+        (-t, 0, -1),
+        (-t, 0, 1),
+    ]
+    tris = [
+        (0, 11, 5),
+        (0, 5, 1),
+        (0, 1, 7),
+        (0, 7, 10),
+        (0, 10, 11),
+        (1, 5, 9),
+        (5, 11, 4),
+        (11, 10, 2),
+        (10, 7, 6),
+        (7, 1, 8),
+        (3, 9, 4),
+        (3, 4, 2),
+        (3, 2, 6),
+        (3, 6, 8),
+        (3, 8, 9),
+        (4, 9, 5),
+        (2, 4, 11),
+        (6, 2, 10),
+        (8, 6, 7),
+        (9, 8, 1),
+    ]
     points = [np.array(v, float) / np.linalg.norm(v) for v in verts]
     for _ in range(levels[faces]):
         cache: dict[tuple[int, int], int] = {}
@@ -121,20 +155,40 @@ def _tetwild_module():
     return module
 
 
-def tetrahedralize(vertices: np.ndarray, triangles: np.ndarray, *, edge_length_mm: float,
-                   epsilon: float = 2e-4, bg: tuple | None = None,
-                   threads: int = 2) -> tuple[np.ndarray, np.ndarray]:
+def tetrahedralize(
+    vertices: np.ndarray,
+    triangles: np.ndarray,
+    *,
+    edge_length_mm: float,
+    epsilon: float = 2e-4,
+    bg: tuple | None = None,
+    threads: int = 2,
+) -> tuple[np.ndarray, np.ndarray]:
     """fTetWild on a surface (the union of closed shells); returns vertices and tets.
     bg = (vertices, tets, edge lengths) gives a sizing field (adaptive sizing)."""
     wrapper = _tetwild_module()
-    bg_v, bg_t, bg_s = bg if bg is not None else (
-        np.zeros((0, 3)), np.zeros((0, 4), np.int32), np.zeros(0))
+    bg_v, bg_t, bg_s = (
+        bg if bg is not None else (np.zeros((0, 3)), np.zeros((0, 4), np.int32), np.zeros(0))
+    )
     with tempfile.TemporaryDirectory() as folder, contextlib.chdir(folder):
         out_v, out_t = wrapper.tetrahedralize_mesh(
-            np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(triangles, np.uint32),
-            True, True, 0.05, float(edge_length_mm), float(epsilon), 10.0, False, threads, 80,
-            6, True, False, False,
-            np.ascontiguousarray(bg_v, np.float64), np.ascontiguousarray(bg_t, np.int32),
+            np.ascontiguousarray(vertices, np.float64),
+            np.ascontiguousarray(triangles, np.uint32),
+            True,
+            True,
+            0.05,
+            float(edge_length_mm),
+            float(epsilon),
+            10.0,
+            False,
+            threads,
+            80,
+            6,
+            True,
+            False,
+            False,
+            np.ascontiguousarray(bg_v, np.float64),
+            np.ascontiguousarray(bg_t, np.int32),
             np.ascontiguousarray(bg_s, np.float64),
         )
     return np.ascontiguousarray(out_v, np.float64), np.ascontiguousarray(out_t, np.int32)
@@ -149,8 +203,14 @@ def inside_convex(points: np.ndarray, vertices: np.ndarray, triangles: np.ndarra
     return np.all(points @ n.T - d < 0, axis=1)
 
 
-def sphere_in_cube(faces: int, cache: Path | None, *, edge_length_mm: float = 6.0,
-                   bg: tuple | None = None, tag: str = "") -> TetScene:
+def sphere_in_cube(
+    faces: int,
+    cache: Path | None,
+    *,
+    edge_length_mm: float = 6.0,
+    bg: tuple | None = None,
+    tag: str = "",
+) -> TetScene:
     """The paper's set-up: an icosphere of radius 30 mm (rigid by default) in a
     tetrahedralized cube of air. Cached under `cache` (fTetWild varies by run)."""
     sv, st = icosphere(faces)
@@ -158,8 +218,9 @@ def sphere_in_cube(faces: int, cache: Path | None, *, edge_length_mm: float = 6.
     file = cache / f"{name}.npz" if cache is not None else None
     if file is not None and file.exists():
         data = np.load(file)
-        return TetScene(name, data["vertices"], data["tets"], data["labels"],
-                        float(data["build_s"]), sv, st)
+        return TetScene(
+            name, data["vertices"], data["tets"], data["labels"], float(data["build_s"]), sv, st
+        )
     cv, ct = cube_surface(CUBE_HALF_MM)
     vertices = np.vstack([sv, cv])
     triangles = np.vstack([st, ct + len(sv)])
@@ -174,8 +235,7 @@ def sphere_in_cube(faces: int, cache: Path | None, *, edge_length_mm: float = 6.
     return TetScene(name, tv, tt, labels, build_s, sv, st)
 
 
-def grid_scene(name: str, xs, ys, zs, solid_box, *, jitter: float = 0.0,
-               seed: int = 1) -> TetScene:
+def grid_scene(name: str, xs, ys, zs, solid_box, *, jitter: float = 0.0, seed: int = 1) -> TetScene:
     """A Kuhn-grid box (reference mesh) whose tets with centroid inside the
     axis-aligned solid_box ((lo), (hi)) are rigid."""
     v, t = _core.grid_mesh(list(xs), list(ys), list(zs), jitter, seed)

@@ -26,15 +26,25 @@ RigidSurface extract_rigid_surface(const Space& space);
 
 class ForceShading {
  public:
+  // Vertex normals from the rigid surface of the tet mesh itself (angle-weighted).
   explicit ForceShading(const Space& space);
+  // Vertex normals from the surface the scene was built from (#T by 3
+  // triangles wound outward): each rigid-surface vertex takes the source's
+  // angle-weighted vertex normals interpolated at its nearest source point.
+  // Tetrahedralization splits the source's facets; normals of the split
+  // pieces' new vertices then follow the source's smooth field instead of
+  // repeating the facet normal.
+  ForceShading(const Space& space, const std::vector<Vec3>& source_vertices_mm,
+               const std::vector<std::array<std::int32_t, 3>>& source_triangles);
 
   // The shaded force for a proxy at `place` whose raw force is k (q - p), eq. (15).
   // FACE on the rigid surface: the normal component keeps its size and takes
   // the direction interpolated (barycentric) from the face's vertex normals;
   // the tangential component is kept. EDGE or VERTEX on the rigid surface:
   // the whole force (which lies in the feature's normal cone) takes the
-  // interpolated direction. Anywhere else, or a force pulling into the
-  // surface: the raw force.
+  // interpolated direction; so does a FACE or EDGE not on the surface whose
+  // q sits on a surface edge or vertex (within 100 x the mesh tolerance).
+  // Anywhere else, or a force pulling into the surface: the raw force.
   Vec3 shade(const ProxyPlace& place, const Vec3& raw_force_N) const;
 
   // Angle-weighted unit normal of a mesh vertex out of the rigid region,
@@ -45,6 +55,9 @@ class ForceShading {
   std::size_t memory_bytes() const;
 
  private:
+  Vec3 edge_normal(std::int32_t e, const Vec3& q) const;
+  Vec3 touching_normal(const ProxyPlace& place) const;
+
   const Space* space_;
   std::vector<Vec3> vertex_normals_;
   std::vector<std::uint8_t> surface_edge_;

@@ -35,6 +35,9 @@ struct Transition {
   ProxyState to = ProxyState::Outside;
   bool to_neighbour = false;
   bool changed = false;
+  // The move stayed inside its tet or face: the next call in this tick would
+  // change nothing (see docs/decisions.md, "Ending a tick"), so the tick ends.
+  bool settled = false;
 };
 
 struct ProxyCounters {

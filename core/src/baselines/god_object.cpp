@@ -112,7 +112,8 @@ Vec3 SurfaceGodObject::constrained_target(const Vec3& p) const {
   const Vec3 c20 = cross(n[2], n[0]);
   const Vec3 c01 = cross(n[0], n[1]);
   const double det = dot(n[0], c12);
-  const std::array<double, 3> offsets{dot(n[0], p) - r[0], dot(n[1], p) - r[1], dot(n[2], p) - r[2]};
+  const std::array<double, 3> offsets{dot(n[0], p) - r[0], dot(n[1], p) - r[1],
+                                      dot(n[2], p) - r[2]};
   return (c12 * offsets[0] + c20 * offsets[1] + c01 * offsets[2]) / det;
 }
 

@@ -22,7 +22,8 @@ VoxelGrid::VoxelGrid(const Vec3& origin_mm, double cell_mm, std::array<std::int3
     : origin_(origin_mm), cell_mm_(cell_mm), dims_(dims), solid_(std::move(solid)) {
   if (!(cell_mm > 0.0)) throw std::invalid_argument("voxel cell size must be positive");
   const std::int64_t count = static_cast<std::int64_t>(dims[0]) * dims[1] * dims[2];
-  if (dims[0] < 1 || dims[1] < 1 || dims[2] < 1 || static_cast<std::int64_t>(solid_.size()) != count) {
+  if (dims[0] < 1 || dims[1] < 1 || dims[2] < 1 ||
+      static_cast<std::int64_t>(solid_.size()) != count) {
     throw std::invalid_argument("voxel grid: solid flags do not match the dimensions");
   }
 }
@@ -62,7 +63,8 @@ void VoxelProxy::reset(const Vec3& p) {
   active_constraints_ = 0;
   while (grid_->is_solid(cell_[0], cell_[1], cell_[2])) {
     ++cell_[2];
-    q_ = grid_->origin() + Vec3{(cell_[0] + 0.5), (cell_[1] + 0.5), (cell_[2] + 0.5)} * grid_->cell_mm();
+    q_ = grid_->origin() +
+         Vec3{(cell_[0] + 0.5), (cell_[1] + 0.5), (cell_[2] + 0.5)} * grid_->cell_mm();
   }
 }
 
@@ -123,8 +125,9 @@ int VoxelProxy::step(const Vec3& p) {
       break;
     }
     // Stop on the blocked face, exactly on its coordinate (no rounding into the solid cell).
-    const double face = coordinate(grid_->origin(), blocked_axis) +
-                        (step[blocked_axis] > 0 ? cell_[blocked_axis] + 1 : cell_[blocked_axis]) * h;
+    const double face =
+        coordinate(grid_->origin(), blocked_axis) +
+        (step[blocked_axis] > 0 ? cell_[blocked_axis] + 1 : cell_[blocked_axis]) * h;
     Vec3 hit = q_ + d * blocked_t;
     set_coordinate(hit, blocked_axis, face);
     // Keep the hit inside the current cell's closed box on the other axes.

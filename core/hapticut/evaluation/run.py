@@ -1,0 +1,60 @@
+"""Run the whole evaluation and write it to a folder."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from hapticut.evaluation import accuracy, economy, report, stability
+
+
+def run_stability(cache: Path, *, quick: bool, families=None, log=print) -> list[dict]:
+    rows = []
+    for scenario in stability.stability_scenarios(cache, quick=quick):
+        for row in stability.evaluate_scenario(scenario, families):
+            rows.append(row)
+            log(f"  {row['scenario'][:40]:40s} {row['method']:30s} {row['verdict']}")
+    return rows
+
+
+def run_all(out: Path, *, quick: bool = False, log=print) -> dict:
+    start = time.perf_counter()
+    out.mkdir(parents=True, exist_ok=True)
+    cache = out / "cache"
+    log("accuracy and speed")
+    faces = (80, 320) if quick else accuracy.SPHERE_FACES
+    voxel_sizes = (4.0, 1.0) if quick else None
+    accuracy_rows = accuracy.run_accuracy(
+        cache, faces=faces, log=log, **({"voxel_sizes": voxel_sizes} if voxel_sizes else {})
+    )
+    drag_rows = accuracy.run_drag_lag(cache, faces=80 if quick else 320)
+    log("stability")
+    stability_rows = run_stability(cache, quick=quick, log=log)
+    log("closed loop")
+    loop_rows = stability.run_closed_loop(cache, quick=quick)
+    log("mesh economy")
+    valence_rows = economy.valence_timing()
+    economy_rows = economy.sizing_economy(cache, quick=quick, log=log)
+    for name, rows in [
+        ("accuracy", accuracy_rows),
+        ("drag_lag", drag_rows),
+        ("stability", stability_rows),
+        ("closed_loop", loop_rows),
+        ("valence", valence_rows),
+        ("mesh_economy", economy_rows),
+    ]:
+        report.write_csv(out / f"{name}.csv", rows)
+    report.chart(accuracy_rows, out / "speed_vs_error.png")
+    report.write_page(
+        out,
+        accuracy_rows=accuracy_rows,
+        drag_rows=drag_rows,
+        stability_rows=stability_rows,
+        loop_rows=loop_rows,
+        valence_rows=valence_rows,
+        economy_rows=economy_rows,
+        quick=quick,
+        elapsed_s=time.perf_counter() - start,
+    )
+    log(f"wrote {out} in {time.perf_counter() - start:.0f} s")
+    return {"accuracy": accuracy_rows, "stability": stability_rows, "closed_loop": loop_rows}
