@@ -165,8 +165,9 @@ TickResult Proxy::step(const Vec3& p, double dt_s) {
   MoveContext context;
   context.stiffness_N_per_mm = settings.stiffness_N_per_mm;
   context.tolerance_mm = space_->tolerance();
-  context.target_speed_mm_per_s =
-      has_last_p_ && dt_s > 0.0 && std::isfinite(dt_s) ? norm(p - last_p_) / dt_s : 0.0;
+  if (space_->uses_speed() && has_last_p_ && dt_s > 0.0 && std::isfinite(dt_s)) {
+    context.target_speed_mm_per_s = norm(p - last_p_) / dt_s;
+  }
   for (;;) {
     if (result.transitions == settings.max_transitions_per_tick) {
       result.capped = true;

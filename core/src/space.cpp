@@ -19,6 +19,8 @@ Space::Space(TetMesh mesh, std::vector<Material> materials, EngineSettings setti
     }
     rigid_[t] = is_rigid(materials_[mesh_.material(t)]) ? 1 : 0;
   }
+  for (const Material& m : materials_)
+    uses_speed_ = uses_speed_ || m.model == MaterialModel::Viscous;
   if (settings_.max_transitions_per_tick < 1) settings_.max_transitions_per_tick = 1;
 }
 

@@ -27,6 +27,8 @@ class Space {
   const std::vector<Material>& materials() const { return materials_; }
   const Material& material_of_tet(std::int32_t t) const { return materials_[mesh_.material(t)]; }
   bool tet_is_rigid(std::int32_t t) const { return rigid_[t] != 0; }
+  // Whether any material needs the device point's speed (viscous).
+  bool uses_speed() const { return uses_speed_; }
   const EngineSettings& settings() const { return settings_; }
   double tolerance() const { return mesh_.tolerance(); }
 
@@ -34,6 +36,7 @@ class Space {
   TetMesh mesh_;
   std::vector<Material> materials_;
   std::vector<std::uint8_t> rigid_;
+  bool uses_speed_ = false;
   EngineSettings settings_;
 };
 
