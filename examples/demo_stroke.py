@@ -39,9 +39,9 @@ def main() -> int:
     lo, hi = space.vertices.min(axis=0), space.vertices.max(axis=0)
     centre = (lo + hi) / 2
     reach = 0.45 * (hi - lo)[1]
-    # Down through the sphere's top, then across it, at 100 mm/s, 1 kHz.
-    down = engine.straight_stroke(centre + [0, 0, reach], centre + [0, 0, 10], 100)
-    across = engine.straight_stroke(centre + [0, 0, 10], centre + [0, reach, 10], 100)
+    # Down onto the sphere (radius 30 mm) until 5 mm in, then across it, at 100 mm/s, 1 kHz.
+    down = engine.straight_stroke(centre + [0, 0, reach], centre + [0, 0, 25], 100)
+    across = engine.straight_stroke(centre + [0, 0, 25], centre + [0, reach, 25], 100)
     poses = np.vstack([down, across[1:]])
     blade.reset(poses[0])
     print(
