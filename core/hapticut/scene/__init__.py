@@ -1,5 +1,6 @@
-"""Scenes: the file format (format.py) and, later, building scenes from surface meshes."""
+"""Scenes: the file format (format.py) and building scenes from surface meshes (builder.py)."""
 
+from .builder import BuildCancelled, BuildError, BuildSettings, RefineZone, Region, build
 from .format import (
     FORMAT_NAME,
     FORMAT_VERSION,
@@ -22,6 +23,12 @@ from .format import (
 )
 
 __all__ = [
+    "BuildCancelled",
+    "BuildError",
+    "BuildSettings",
+    "RefineZone",
+    "Region",
+    "build",
     "FORMAT_NAME",
     "FORMAT_VERSION",
     "JSON",

@@ -1,0 +1,223 @@
+"""fTetWild through pytetwild's compiled wrapper, without pytetwild's Python package.
+
+pytetwild 0.4 imports pyvista (and so vtk, about 565 MB) when its package is imported, although
+its metadata calls pyvista optional; the Blender extension bundles our wheels and cannot carry
+that. Its compiled module needs only numpy, so it is loaded here from the installed
+distribution's files (docs/decisions.md, "pytetwild version").
+
+fTetWild holds the GIL for the whole run and cannot be interrupted, so a run that must stay
+cancellable (a progress bar, Ctrl-C, the add-on's UI thread) goes to a child process that is
+killed on cancel. This file is also that child's program: it imports nothing from hapticut.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.metadata
+import importlib.util
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+DISTRIBUTION = "pytetwild"
+_WRAPPER_NAME = "PyfTetWildWrapper"
+# fTetWild writes this into the current directory; every run happens in a temporary directory.
+_TRACKED_SURFACE_FILE = "__tracked_surface.stl"
+_POLL_INTERVAL_S = 0.05
+
+_wrapper = None
+
+
+@dataclass(frozen=True)
+class TetWildParams:
+    """The fTetWild settings the builder uses (absolute lengths in mm)."""
+
+    edge_length_mm: float  # Target edge length where no sizing field covers.
+    envelope_mm: float  # The output surface stays within this distance of the input.
+    optimize: bool = True  # Required for a sizing field to act.
+    simplify: bool = True  # Let fTetWild simplify the input surface inside the envelope.
+    coarsen: bool = False  # Coarsen the output as far as quality allows.
+    stop_energy: float = 10.0  # Optimization stops at this conformal AMIPS energy.
+    max_opt_iterations: int = 80
+    threads: int = 0  # 0: all cores.
+
+
+def version() -> str:
+    """The installed pytetwild version ("" when it is missing)."""
+    try:
+        return importlib.metadata.version(DISTRIBUTION)
+    except importlib.metadata.PackageNotFoundError:
+        return ""
+
+
+def load_wrapper():
+    """pytetwild's compiled module, loaded from its file (cached)."""
+    global _wrapper
+    if _wrapper is not None:
+        return _wrapper
+    try:
+        dist = importlib.metadata.distribution(DISTRIBUTION)
+    except importlib.metadata.PackageNotFoundError:
+        raise ImportError(
+            "scene building needs pytetwild>=0.4,<0.5: pip install 'hapticut[build]'"
+        ) from None
+    library = next(
+        (
+            f
+            for f in dist.files or ()
+            if _WRAPPER_NAME in str(f) and str(f).endswith((".so", ".pyd"))
+        ),
+        None,
+    )
+    if library is None:
+        raise ImportError(f"pytetwild {dist.version} has no compiled {_WRAPPER_NAME} module")
+    spec = importlib.util.spec_from_file_location(
+        f"{DISTRIBUTION}.{_WRAPPER_NAME}", dist.locate_file(library)
+    )
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    _wrapper = module
+    return module
+
+
+def _empty_sizing():
+    return (np.zeros((0, 3)), np.zeros((0, 4), np.int32), np.zeros(0))
+
+
+def _run_in_process(vertices, faces, params: TetWildParams, sizing, scratch: str | None = None):
+    """fTetWild in this process, inside a scratch directory (it writes a file into cwd):
+    ``scratch``, or a temporary directory made and removed here."""
+    if scratch is None:
+        with tempfile.TemporaryDirectory(prefix="hapticut-tetwild-") as scratch:
+            return _run_in_process(vertices, faces, params, sizing, scratch)
+    wrapper = load_wrapper()
+    bg_vertices, bg_tets, bg_values = sizing if sizing is not None else _empty_sizing()
+    diagonal = float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0)))
+    previous = os.getcwd()
+    os.chdir(scratch)
+    try:
+        out_vertices, out_tets = wrapper.tetrahedralize_mesh(
+            np.ascontiguousarray(vertices, dtype=np.float64),
+            np.ascontiguousarray(faces, dtype=np.uint32),
+            params.optimize,
+            not params.simplify,
+            0.05,  # Relative edge length; unused, edge_length_abs wins.
+            float(params.edge_length_mm),
+            float(params.envelope_mm) / diagonal,  # fTetWild's epsilon is relative.
+            float(params.stop_energy),
+            params.coarsen,
+            int(params.threads),
+            int(params.max_opt_iterations),
+            6,  # Log level: minimal.
+            True,  # Quiet.
+            False,  # fTetWild's own tet ordering; the scene reader orients tets.
+            False,  # Filtering on: only the inside of the outer surface (the enclosure).
+            np.ascontiguousarray(bg_vertices, dtype=np.float64),
+            np.ascontiguousarray(bg_tets, dtype=np.int32),
+            np.ascontiguousarray(bg_values, dtype=np.float64),
+        )
+    finally:
+        os.chdir(previous)
+    return np.asarray(out_vertices, dtype=np.float64), np.asarray(out_tets, dtype=np.int32)
+
+
+def tetrahedralize(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    params: TetWildParams,
+    sizing: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    *,
+    poll: Callable[[float], None] | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Tets filling the closed surfaces ``faces`` (the enclosure outermost), conforming to all.
+
+    vertices: (n, 3) float, faces: (f, 3) int triangles; sizing: (background vertices (b, 3),
+    background tets (c, 4), target edge length per background vertex (b,)) or None.
+    Returns (vertices (n', 3) float64, tets (m, 4) int32).
+    With ``poll``, the run happens in a child process and poll(elapsed_s) is called about every
+    50 ms; an exception it raises (a cancel) kills the child and propagates.
+    """
+    vertices = np.ascontiguousarray(vertices, dtype=np.float64)
+    faces = np.ascontiguousarray(faces, dtype=np.uint32)
+    if poll is None:
+        return _run_in_process(vertices, faces, params, sizing)
+    return _run_in_child(vertices, faces, params, sizing, poll)
+
+
+def _run_in_child(vertices, faces, params, sizing, poll):
+    bg_vertices, bg_tets, bg_values = sizing if sizing is not None else _empty_sizing()
+    with tempfile.TemporaryDirectory(prefix="hapticut-tetwild-") as scratch:
+        request = os.path.join(scratch, "request.npz")
+        result = os.path.join(scratch, "result.npz")
+        log = os.path.join(scratch, "child.log")
+        np.savez(
+            request,
+            vertices=vertices,
+            faces=faces,
+            bg_vertices=bg_vertices,
+            bg_tets=bg_tets,
+            bg_values=bg_values,
+            params=np.array(json.dumps(asdict(params))),
+        )
+        start = time.perf_counter()
+        with open(log, "wb") as log_file:
+            child = subprocess.Popen(
+                [sys.executable, os.path.abspath(__file__), request, result],
+                cwd=scratch,
+                stdin=subprocess.DEVNULL,
+                stdout=log_file,
+                stderr=subprocess.STDOUT,
+            )
+            try:
+                while child.poll() is None:
+                    poll(time.perf_counter() - start)
+                    with contextlib.suppress(subprocess.TimeoutExpired):
+                        child.wait(_POLL_INTERVAL_S)
+            finally:
+                if child.poll() is None:
+                    child.kill()
+                    child.wait()
+        if child.returncode != 0 or not os.path.exists(result):
+            with open(log, "rb") as log_file:
+                tail = log_file.read()[-2000:].decode("utf-8", "replace").strip()
+            raise RuntimeError(f"fTetWild failed (exit code {child.returncode}): {tail}")
+        with np.load(result) as data:
+            return data["vertices"].astype(np.float64), data["tets"].astype(np.int32)
+
+
+def _die_with_parent() -> None:
+    """Linux: have the kernel kill this child when the parent dies (best effort)."""
+    if not sys.platform.startswith("linux"):
+        return
+    with contextlib.suppress(OSError, AttributeError):
+        import ctypes
+        import signal
+
+        pr_set_pdeathsig = 1
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(pr_set_pdeathsig, signal.SIGKILL)
+
+
+def _child_main(request: str, result: str) -> int:
+    _die_with_parent()
+    with np.load(request) as data:
+        params = TetWildParams(**json.loads(str(data["params"])))
+        sizing = (data["bg_vertices"], data["bg_tets"], data["bg_values"])
+        # The parent made this directory the child's cwd and removes it, even after a kill.
+        out_vertices, out_tets = _run_in_process(
+            data["vertices"], data["faces"], params, sizing, os.getcwd()
+        )
+    partial = result + ".partial.npz"
+    np.savez(partial, vertices=out_vertices, tets=out_tets)
+    os.replace(partial, result)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(_child_main(sys.argv[1], sys.argv[2]))

@@ -1,0 +1,57 @@
+"""Shared by the scene-building tests: small meshes and a point-to-material lookup."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[2]
+EXAMPLES = REPO / "examples"
+
+
+def icosphere(radius_mm: float, subdivisions: int = 1, centre=(0.0, 0.0, 0.0)):
+    """(vertices, faces) of a subdivided icosahedron: 80 faces at 1, 320 at 2."""
+    import pymeshlab
+
+    meshes = pymeshlab.MeshSet()
+    meshes.create_sphere(radius=radius_mm, subdiv=subdivisions)
+    mesh = meshes.current_mesh()
+    return mesh.vertex_matrix() + np.asarray(centre), mesh.face_matrix()
+
+
+def bunny_path() -> Path:
+    import pymeshlab
+
+    return Path(pymeshlab.__file__).parent / "tests" / "sample_meshes" / "bunny10k_textured.obj"
+
+
+def write_obj(path: Path, vertices, faces) -> Path:
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in np.asarray(vertices, dtype=float)]
+    lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in np.asarray(faces)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def containing_tets(vertices, tets, points, tolerance=1e-9) -> np.ndarray:
+    """(p,) index of a tet holding each point (barycentric test, brute force), -1 if none."""
+    vertices, tets, points = (np.asarray(a, dtype=float) for a in (vertices, tets, points))
+    tets = tets.astype(int)
+    a = vertices[tets[:, 0]]
+    frame = np.stack([vertices[tets[:, i]] - a for i in (1, 2, 3)], axis=2)  # (m, 3, 3)
+    inverse = np.linalg.inv(frame)
+    found = np.full(len(points), -1)
+    for i, point in enumerate(points):
+        local = np.einsum("mij,mj->mi", inverse, point - a)
+        inside = np.all(local >= -tolerance, axis=1) & (local.sum(axis=1) <= 1 + tolerance)
+        hits = np.flatnonzero(inside)
+        if len(hits):
+            found[i] = hits[0]
+    return found
+
+
+def materials_at(scene, points) -> list[str]:
+    """The material name at each point ("outside" beyond the mesh)."""
+    tets = containing_tets(scene.vertices, scene.tets, points)
+    names = [m.name for m in scene.materials]
+    return [names[scene.tet_materials[t]] if t >= 0 else "outside" for t in tets]

@@ -1,0 +1,80 @@
+"""`hapticut mesh` and `hapticut info` as a user runs them."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+from build_test_support import EXAMPLES, icosphere, materials_at, write_obj
+from hapticut.commands.mesh import parse_material
+from hapticut.scene import Material, load_scene
+
+
+def run_cli(*args, cwd=None):
+    return subprocess.run(
+        [sys.executable, "-m", "hapticut.cli", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=cwd,
+    )
+
+
+def test_mesh_then_info_on_two_nested_spheres(tmp_path):
+    flesh = write_obj(tmp_path / "flesh.obj", *icosphere(20.0, 2))
+    bone = write_obj(tmp_path / "bone.obj", *icosphere(8.0, 1))
+    out = tmp_path / "scene.hapticut.json"
+    result = run_cli(
+        "mesh", flesh, bone, "--material", "flesh=drag,drag_distance_mm=0.5",
+        "--material", "bone=rigid", "-o", out, "--vtu", tmp_path / "scene.vtu",
+        "--enclosure", "cube", "--accuracy", "0.3",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert "tetrahedralizing" in result.stderr  # the progress bar (a line per step off a tty)
+    scene = load_scene(out)
+    assert [(m.name, m.model) for m in scene.materials] == [
+        ("air", "free"), ("flesh", "drag"), ("bone", "rigid")
+    ]  # fmt: skip
+    assert scene.materials[1].drag_distance_mm == 0.5
+    assert materials_at(scene, [[0, 0, 0], [0, 0, 14], [0, 0, 24]]) == ["bone", "flesh", "air"]
+    assert (tmp_path / "scene.vtu").stat().st_size > 0
+
+    info = run_cli("info", out)
+    assert info.returncode == 0, info.stderr
+    counts = scene.metadata["build_report"]["tets_per_material"]
+    assert f"{len(scene.tets)} tets" in info.stdout
+    for name, count in counts.items():
+        assert f"{name}" in info.stdout and str(count) in info.stdout
+    assert "min dihedral" in info.stdout and "tets per edge max" in info.stdout
+    assert "drag (drag_distance_mm=0.5)" in info.stdout
+
+
+def test_info_prints_table3_beside_the_paper_for_the_spheres():
+    result = run_cli("info", EXAMPLES / "sphere80.hapticut.msgpack")
+    assert result.returncode == 0, result.stderr
+    assert "Paper's Table 3 (sphere80)" in result.stdout
+    assert "394" in result.stdout and "234" in result.stdout
+    result = run_cli("info", EXAMPLES / "sphere320.hapticut.msgpack", "--json")
+    assert result.returncode == 0 and '"tets_per_material"' in result.stdout
+
+
+def test_info_and_mesh_report_bad_arguments(tmp_path):
+    missing = run_cli("info", tmp_path / "none.hapticut.json")
+    assert missing.returncode == 1 and "none.hapticut.json" in missing.stderr
+    ball = write_obj(tmp_path / "ball.obj", *icosphere(5.0, 1))
+    wrong = run_cli("mesh", ball, "--material", "ball=jelly", "-o", tmp_path / "x.hapticut.json")
+    assert wrong.returncode == 2 and "jelly" in wrong.stderr
+    unknown = run_cli("mesh", ball, "--material", "bal=rigid", "-o", tmp_path / "x.hapticut.json")
+    assert unknown.returncode == 2 and "unknown region" in unknown.stderr
+    assert not (tmp_path / "x.hapticut.json").exists()
+
+
+def test_parse_material():
+    assert parse_material("skin=membrane,break_force_N=2") == (
+        "skin", Material("skin", "membrane", break_force_N=2.0)
+    )  # fmt: skip
+    assert parse_material("left=rigid,name=bone") == ("left", Material("bone", "rigid"))
+    assert parse_material("goo=viscous")[1].viscosity_N_s_per_mm > 0
+    with pytest.raises(ValueError, match="unknown parameter"):
+        parse_material("x=drag,speed=3")

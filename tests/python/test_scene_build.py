@@ -1,0 +1,191 @@
+"""hapticut.scene.builder.build on small meshes: labels, enclosures, sizing, progress, report."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from build_test_support import bunny_path, icosphere, materials_at
+from hapticut.scene import BladeSpec, Material, load_scene, save_scene
+from hapticut.scene.builder import (
+    BuildCancelled,
+    BuildError,
+    BuildSettings,
+    RefineZone,
+    Region,
+    build,
+)
+from hapticut.scene.geometry import (
+    boundary_faces,
+    enclosure_planes,
+    enclosure_surface,
+    winding_numbers,
+)
+from hapticut.scene.repair import read_surface
+
+FLESH = Material("flesh", "drag", drag_distance_mm=1.0)
+BONE = Material("bone", "rigid")
+
+
+@pytest.fixture(scope="module")
+def nested_scene():
+    """Bone (r 8) inside flesh (r 20) inside a box of air."""
+    flesh = Region("flesh", *icosphere(20.0, 2), FLESH)
+    bone = Region("bone", *icosphere(8.0, 1), BONE)
+    blade = BladeSpec("scalpel", (-50.0, 0.0, 0.0), (50.0, 0.0, 0.0), 50)
+    return build([flesh, bone], blades=[blade], settings=BuildSettings(accuracy_mm=0.3))
+
+
+def test_nested_regions_give_each_tet_the_innermost_material(nested_scene):
+    rng = np.random.default_rng(3)
+    directions = rng.normal(size=(60, 3))
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    # Radii well clear of the faceted surfaces (an icosphere's facets dip inside its radius).
+    for radius, expected in ((0.0, "bone"), (5.0, "bone"), (11.0, "flesh"), (17.0, "flesh"),
+                             (22.0, "air"), (24.0, "air")):  # fmt: skip
+        points = directions * radius
+        assert set(materials_at(nested_scene, points)) == {expected}, radius
+    assert [m.name for m in nested_scene.materials] == ["air", "flesh", "bone"]
+    assert nested_scene.materials[0].model == "free"
+
+
+def test_build_report_counts_quality_valence_and_deviation(nested_scene):
+    report = nested_scene.metadata["build_report"]
+    counts = np.bincount(nested_scene.tet_materials, minlength=3)
+    assert report["tets_per_material"] == {"air": counts[0], "flesh": counts[1], "bone": counts[2]}
+    assert report["tets"] == len(nested_scene.tets) == sum(report["tets_per_material"].values())
+    assert report["nesting"] == {"flesh": "", "bone": "flesh"}
+    assert report["quality"]["inverted_or_flat"] == 0
+    assert report["quality"]["min_dihedral_deg"] > 1.0
+    assert report["quality"]["sliver_threshold_deg"] == 10.0
+    assert 4 <= report["valence"]["max_tets_per_edge"] <= 30
+    assert report["valence"]["mean_tets_per_vertex"] > 4
+    assert report["repairs"] == {"flesh": {}, "bone": {}}
+    for region in ("flesh", "bone"):
+        assert report["deviation_mm"][region] <= report["settings"]["accuracy_mm"]
+    assert set(report["timings_s"]) >= {"repair", "tetrahedralize", "label", "total"}
+    assert nested_scene.blades[0].name == "scalpel"
+
+
+def test_built_scene_survives_a_save_and_load(nested_scene, tmp_path):
+    path = tmp_path / "nested.hapticut.msgpack"
+    save_scene(nested_scene, path)
+    loaded = load_scene(path)
+    assert len(loaded.tets) == len(nested_scene.tets)
+    np.testing.assert_array_equal(loaded.tet_materials, nested_scene.tet_materials)
+    assert loaded.metadata["build_report"]["tets"] == len(nested_scene.tets)
+
+
+@pytest.mark.parametrize("kind", ["box", "cube", "tetrahedron"])
+def test_the_mesh_boundary_is_the_enclosure_and_its_tets_are_air(kind):
+    vertices, faces = icosphere(10.0, 1)
+    scene = build(
+        [Region("ball", vertices, faces, BONE)],
+        settings=BuildSettings(enclosure=kind, margin_mm=5.0, accuracy_mm=0.2),
+    )
+    enclosure = enclosure_surface(kind, vertices.min(axis=0), vertices.max(axis=0), 5.0)
+    normals, offsets = enclosure_planes(*enclosure)
+    assert len(normals) == (4 if kind == "tetrahedron" else 6)
+    outer = boundary_faces(scene.tets)
+    off_plane = np.abs(scene.vertices[np.unique(outer)] @ normals.T - offsets).min(axis=1)
+    assert off_plane.max() < 1e-6
+    outer_tets = np.flatnonzero(np.isin(np.sort(scene.tets, axis=1), outer).sum(axis=1) >= 3)
+    assert np.all(scene.tet_materials[outer_tets] == 0)
+    report = scene.metadata["build_report"]
+    assert report["enclosure"]["faces"] == len(enclosure[1])
+    assert report["boundary"]["boundary_area_relative_error"] < 1e-3
+    if kind == "cube":
+        assert np.ptp(np.ptp(np.asarray(enclosure[0]), axis=0)) < 1e-9  # equal sides
+
+
+def test_adaptive_sizing_needs_fewer_tets_than_uniform():
+    region = Region("ball", *icosphere(10.0, 2), BONE)
+    common = dict(margin_mm=20.0, accuracy_mm=0.2, edge_near_mm=2.5)
+    uniform = build([region], settings=BuildSettings(adaptive=False, **common))
+    adaptive = build([region], settings=BuildSettings(edge_far_mm=12.0, **common))
+    assert len(adaptive.tets) < 0.6 * len(uniform.tets)
+    assert adaptive.metadata["build_report"]["settings"]["adaptive"] is True
+    assert uniform.metadata["build_report"]["settings"]["adaptive"] is False
+
+
+def test_a_refine_zone_makes_small_tets_along_a_blade_reach():
+    region = Region("ball", *icosphere(10.0, 1), BONE)
+    zone = RefineZone((-25.0, 0.0, 0.0), (-15.0, 0.0, 0.0), radius_mm=3.0, edge_mm=1.5)
+    settings = BuildSettings(margin_mm=15.0, accuracy_mm=0.2, edge_near_mm=5.0, edge_far_mm=12.0)
+    plain = build([region], settings=settings)
+    refined = build([region], settings=replace(settings, refine=(zone,)))
+
+    def edges_near_zone(scene):
+        centroids = scene.vertices[scene.tets].mean(axis=1)
+        near = np.linalg.norm(centroids - [-20.0, 0, 0], axis=1) < 4
+        ends = scene.vertices[scene.tets[near]]
+        return near.sum(), np.linalg.norm(ends[:, 0] - ends[:, 1], axis=1).mean()
+
+    plain_count, plain_edge = edges_near_zone(plain)
+    refined_count, refined_edge = edges_near_zone(refined)
+    assert refined_count > 3 * max(plain_count, 1)
+    assert refined_edge < plain_edge
+
+
+def test_progress_runs_from_0_to_1_and_a_cancel_stops_the_build():
+    region = Region("ball", *icosphere(10.0, 1), BONE)
+    seen: list[tuple[float, str]] = []
+    build(
+        [region], settings=BuildSettings(accuracy_mm=0.2), progress=lambda f, m: seen.append((f, m))
+    )
+    fractions = [f for f, _ in seen]
+    assert fractions == sorted(fractions) and fractions[-1] == 1.0
+    assert any("tetrahedraliz" in m for _, m in seen)
+
+    def cancel_while_tetwild_runs(fraction, message):
+        return "fTetWild," not in message  # The messages polled while the child process runs.
+
+    start = time.perf_counter()
+    with pytest.raises(BuildCancelled):
+        build([region], settings=BuildSettings(accuracy_mm=0.2), progress=cancel_while_tetwild_runs)
+    assert time.perf_counter() - start < 30
+
+
+def test_regions_sharing_a_material_share_its_entry():
+    left = Region("left", *icosphere(5.0, 1, centre=(-10, 0, 0)), BONE)
+    right = Region("right", *icosphere(5.0, 1, centre=(10, 0, 0)), BONE)
+    scene = build([left, right], settings=BuildSettings(accuracy_mm=0.2))
+    assert [m.name for m in scene.materials] == ["air", "bone"]
+    assert materials_at(scene, [[-10, 0, 0], [10, 0, 0], [0, 0, 0]]) == ["bone", "bone", "air"]
+    assert scene.metadata["build_report"]["nesting"] == {"left": "", "right": ""}
+    other_bone = Material("bone", "drag", drag_distance_mm=2.0)
+    with pytest.raises(BuildError, match="'right'.*given twice"):
+        build([left, Region("right", right.vertices, right.faces, other_bone)])
+
+
+def test_the_bunny_scan_is_repaired_meshed_and_labelled():
+    """A real scan through pymeshlab and fTetWild (coarse, so it stays quick)."""
+    vertices, faces = read_surface(bunny_path())
+    scale = 120.0 / float(np.ptp(vertices, axis=0).max())
+    vertices = (vertices - vertices.mean(axis=0)) * scale
+    scene = build(
+        [Region("bunny", vertices, faces, BONE)],
+        settings=BuildSettings(enclosure="cube", accuracy_mm=5.0, edge_far_mm=40.0),
+    )
+    report = scene.metadata["build_report"]
+    assert report["repairs"]["bunny"]["boundary_edges_before"] == 109
+    assert report["repairs"]["bunny"]["closed_holes"] == 5
+    assert report["surfaces"]["bunny"]["faces_meshed"] < report["surfaces"]["bunny"]["faces_in"]
+    assert report["deviation_mm"]["bunny"] <= 5.0
+    # Points clearly inside or outside the input scan get body or air.
+    rng = np.random.default_rng(7)
+    points = rng.uniform(vertices.min(axis=0), vertices.max(axis=0), size=(1000, 3))
+    winding = winding_numbers(points, vertices, faces)
+    clear_inside = points[winding > 0.99]
+    clear_outside = points[winding < 0.01]
+    from hapticut.scene.repair import Surface, distance_to_surfaces
+
+    surface = [Surface(vertices, faces)]
+    far = 8.0  # beyond the 5 mm accuracy
+    clear_inside = clear_inside[distance_to_surfaces(clear_inside, surface, far) >= far][:20]
+    clear_outside = clear_outside[distance_to_surfaces(clear_outside, surface, far) >= far][:20]
+    assert len(clear_inside) >= 3 and len(clear_outside) >= 3
+    assert set(materials_at(scene, clear_inside)) == {"bone"}
+    assert set(materials_at(scene, clear_outside)) == {"air"}
