@@ -410,10 +410,8 @@ Transition Proxy::step_outside(const Vec3& p) {
   FaceRef rim_face;
   std::array<int, 2> rim_sides{-1, -1};
   const auto& faces = mesh.boundary_faces();
-  auto try_face = [&](std::int32_t k) {
-    const Plane& plane = mesh.boundary_plane(static_cast<std::size_t>(k));
-    const double s =
-        segment_entry_parameter(plane.signed_distance(q), plane.signed_distance(p), eps);
+  // Tests boundary face k, which q->p crosses at parameter s (eq. 14).
+  auto try_face_at = [&](std::int32_t k, double s) {
     if (s < 0.0 || (s >= best_parameter && s >= rim_parameter)) return;
     const FaceRef& face = faces[k];
     const Vec3 c = q + d * s;
@@ -440,6 +438,11 @@ Transition Proxy::step_outside(const Vec3& p) {
       rim_sides = on_rim;
     }
   };
+  auto try_face = [&](std::int32_t k) {
+    const Plane& plane = mesh.boundary_plane(static_cast<std::size_t>(k));
+    try_face_at(k,
+                segment_entry_parameter(plane.signed_distance(q), plane.signed_distance(p), eps));
+  };
   // A handful of boundary faces (the paper's cube has 12) is scanned faster
   // than the tree is walked; above that the tree keeps entry logarithmic.
   if (faces.size() <= kLinearEntryScanMax) {
@@ -454,8 +457,25 @@ Transition Proxy::step_outside(const Vec3& p) {
       before[k] = column[0][k] * q.x + column[1][k] * q.y + column[2][k] * q.z - offset;
       after[k] = column[0][k] * p.x + column[1][k] * p.y + column[2][k] * p.z - offset;
     }
+    // Candidates nearest first: the first clean hit is the entry, and the
+    // others (up to 6 on a box) need no triangle test.
+    std::array<double, kLinearEntryScanMax> order_s;        // NOLINT: first `count` used.
+    std::array<std::int32_t, kLinearEntryScanMax> order_k;  // NOLINT: first `count` used.
+    std::size_t count = 0;
     for (std::size_t k = 0; k < n; ++k) {
-      if (before[k] >= -eps && after[k] < -eps) try_face(static_cast<std::int32_t>(k));
+      if (before[k] >= -eps && after[k] < -eps) {
+        const double s = before[k] <= 0.0 ? 0.0 : before[k] / (before[k] - after[k]);
+        std::size_t slot = count++;
+        for (; slot > 0 && order_s[slot - 1] > s; --slot) {
+          order_s[slot] = order_s[slot - 1];
+          order_k[slot] = order_k[slot - 1];
+        }
+        order_s[slot] = s;
+        order_k[slot] = static_cast<std::int32_t>(k);
+      }
+    }
+    for (std::size_t c = 0; c < count && best_face.tet == kNoTet; ++c) {
+      try_face_at(order_k[c], order_s[c]);
     }
   } else {
     mesh.boundary_tree().for_each_on_segment(q, p, eps, try_face);

@@ -16,7 +16,7 @@ def test_bench_transitions_prints_every_row_of_table2():
     rows = [line for line in result.stdout.splitlines() if line.startswith("|")]
     assert len(rows) == 2 + 24  # header, rule, 24 timed cells
     assert "489.3" in result.stdout and "50.7" in result.stdout  # the paper's figures beside ours
-    assert " - |" not in rows[2].split("|")[5]  # our ns column has a figure
+    assert rows[2].split("|")[5].strip() not in ("", "-")  # our ns column has a figure
 
 
 def test_bench_rejects_an_unknown_benchmark():

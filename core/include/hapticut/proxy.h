@@ -38,6 +38,11 @@ struct Transition {
   // The move stayed inside its tet or face: the next call in this tick would
   // change nothing (see docs/decisions.md, "Ending a tick"), so the tick ends.
   bool settled = false;
+  // Pads the struct to 8 bytes, returned in one register: at 5 bytes GCC
+  // returned it through memory and a TET move took 19 ns instead of 11.
+  std::uint8_t padding0 = 0;
+  std::uint8_t padding1 = 0;
+  std::uint8_t padding2 = 0;
 };
 
 struct ProxyCounters {
