@@ -8,15 +8,14 @@ files with the same checks and wording.
 
 from __future__ import annotations
 
-import contextlib
 import json
 import logging
 import os
-import secrets
 from pathlib import Path
 
 import msgpack
 
+from ..atomic_file import write_atomically
 from .model import (
     FORMAT_NAME,
     FORMAT_VERSION,
@@ -92,7 +91,7 @@ def load_scene(path: str | os.PathLike, *, strict: bool = False) -> Scene:
 
 def save_scene(scene: Scene, path: str | os.PathLike) -> None:
     """Write atomically: a temporary file beside ``path``, flushed, then renamed over it."""
-    _write_atomically(serialize_scene(scene, encoding_for_path(path)), os.fspath(path))
+    write_atomically(path, serialize_scene(scene, encoding_for_path(path)))
 
 
 def _checked(encoding: str) -> str:
@@ -112,19 +111,3 @@ def _decode(data: bytes, encoding: str):
         return msgpack.unpackb(data, raw=False)
     except Exception as error:  # msgpack raises many types for bad input.
         raise SceneError("(root)", f"truncated or not valid MessagePack: {error}") from None
-
-
-def _write_atomically(data: bytes, path: str) -> None:
-    # Created with O_EXCL and mode 0o666, so the umask applies as for any new file.
-    temporary = f"{path}.tmp-{secrets.token_hex(8)}"
-    descriptor = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-    try:
-        with os.fdopen(descriptor, "wb") as file:
-            file.write(data)
-            file.flush()
-            os.fsync(file.fileno())
-        os.replace(temporary, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(temporary)
-        raise

@@ -9,12 +9,12 @@ rigid), written atomically like scene files.
 from __future__ import annotations
 
 import base64
-import contextlib
 import os
-import secrets
 from xml.sax.saxutils import escape
 
 import numpy as np
+
+from ..atomic_file import write_atomically
 
 VTK_TETRA = 10
 
@@ -77,20 +77,4 @@ def write_vtu(path: str | os.PathLike, scene) -> None:
         [m.name for m in scene.materials],
         rigid=rigid_models[labels] if len(rigid_models) else None,
     )
-    write_atomically(os.fspath(path), data)
-
-
-def write_atomically(path: str, data: bytes) -> None:
-    """A temporary file beside ``path``, flushed, then renamed over it: never half written."""
-    temporary = f"{path}.tmp-{secrets.token_hex(8)}"
-    descriptor = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-    try:
-        with os.fdopen(descriptor, "wb") as file:
-            file.write(data)
-            file.flush()
-            os.fsync(file.fileno())
-        os.replace(temporary, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(temporary)
-        raise
+    write_atomically(path, data)
