@@ -182,6 +182,17 @@ void bind_mesh(nb::module_& m) {
       "icosahedron_mesh", [](double r) { return mesh_to_arrays(icosahedron_mesh(r)); },
       nb::arg("radius_mm") = 10.0, "The icosahedron's centre (vertex 0) in 20 tets.");
   m.def(
+      "vertex_fan_mesh", [](int k, double r) { return mesh_to_arrays(vertex_fan_mesh(k, r)); },
+      nb::arg("subdivisions") = 1, nb::arg("radius_mm") = 10.0,
+      "The centre (vertex 0) of a geodesic ball in 20 x 4^subdivisions tets (0: the "
+      "icosahedron).");
+  m.def(
+      "double_cone_mesh",
+      [](int n, double r, double h) { return mesh_to_arrays(double_cone_mesh(n, r, h)); },
+      nb::arg("ring_size") = 10, nb::arg("radius_mm") = 10.0, nb::arg("half_height_mm") = 10.0,
+      "The centre (vertex 0) of a double cone over a ring of ring_size vertices: 2 x ring_size "
+      "tets.");
+  m.def(
       "cube_mesh", [](double s) { return mesh_to_arrays(cube_mesh(s)); }, nb::arg("size_mm") = 10.0,
       "A cube of 6 tets, 12 boundary triangles.");
   m.def(

@@ -95,6 +95,7 @@ ForceShading::ForceShading(const Space& space) : space_(&space) {
     }
   }
   for (Vec3& n : vertex_normals_) n = normalized_or_zero(n);
+  build_shaded_faces();
 }
 
 ForceShading::ForceShading(const Space& space, const std::vector<Vec3>& source_vertices_mm,
@@ -150,6 +151,47 @@ ForceShading::ForceShading(const Space& space, const std::vector<Vec3>& source_v
     }
     const Vec3 n = normalized_or_zero(best_normal);
     if (n != Vec3{}) vertex_normals_[v] = n;
+  }
+  build_shaded_faces();
+}
+
+void ForceShading::build_shaded_faces() {
+  const TetMesh& mesh = space_->mesh();
+  shaded_faces_.clear();
+  face_record_.assign(4 * static_cast<std::size_t>(mesh.tet_count()), kNotShaded);
+  for (std::int32_t t = 0; t < mesh.tet_count(); ++t) {
+    if (space_->tet_is_rigid(t)) continue;
+    for (int f = 0; f < 4; ++f) {
+      const std::int32_t u = mesh.neighbour(t, f);
+      if (u == kNoTet || !space_->tet_is_rigid(u)) continue;
+      // Out of the rigid region = into the owner.
+      const Vec3 face_normal = -mesh.face_plane(t, f).normal;
+      std::array<Vec3, 3> corner;
+      std::array<Vec3, 3> normal;
+      int count = 0;
+      for (int v = 0; v < 4; ++v) {
+        if (v == f) continue;
+        normal[count] = vertex_normals_[mesh.tet(t)[v]];
+        corner[count++] = mesh.vertex(mesh.tet(t)[v]);
+      }
+      const double area = dot(cross(corner[1] - corner[0], corner[2] - corner[0]), face_normal);
+      if (area == 0.0 || !std::isfinite(area)) continue;
+      // w_k(x) = face_normal . ((c_{k+1} - x) x (c_{k+2} - x)) / area, whose
+      // gradient is ((c_{k+1} - c_{k+2}) x face_normal) / area; w_k(c_0) = [k == 0].
+      ShadedFace face;
+      face.origin = corner[0];
+      face.origin_normal = normal[0];
+      face.normal = face_normal;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 gradient = cross(corner[(k + 1) % 3] - corner[(k + 2) % 3], face_normal) / area;
+        face.rows[0] += gradient * normal[k].x;
+        face.rows[1] += gradient * normal[k].y;
+        face.rows[2] += gradient * normal[k].z;
+      }
+      face_record_[4 * static_cast<std::size_t>(t) + f] =
+          static_cast<std::int32_t>(shaded_faces_.size());
+      shaded_faces_.push_back(face);
+    }
   }
 }
 
@@ -210,57 +252,46 @@ Vec3 ForceShading::shade(const ProxyPlace& place, const Vec3& raw_force_N) const
   Vec3 shaded_normal;
   switch (place.state) {
     case ProxyState::Face: {
-      const int f = place.local;
-      const std::int32_t u = mesh.neighbour(t, f);
-      if (u == kNoTet || !space_->tet_is_rigid(u)) {
+      const std::int32_t record =
+          face_record_[4 * static_cast<std::size_t>(t) + static_cast<std::size_t>(place.local)];
+      if (record == kNotShaded) {
         shaded_normal = touching_normal(place);
         break;
       }
-      // Out of the rigid region = into the owner.
-      const Vec3 face_normal = -mesh.face_plane(t, f).normal;
-      const double normal_part = dot(raw_force_N, face_normal);
+      const ShadedFace& face = shaded_faces_[record];
+      const double normal_part = dot(raw_force_N, face.normal);
       if (normal_part <= 0.0) return raw_force_N;
-      std::array<Vec3, 3> corner;
-      std::array<std::int32_t, 3> vertex{};
-      int count = 0;
-      for (int v = 0; v < 4; ++v) {
-        if (v == f) continue;
-        vertex[count] = mesh.tet(t)[v];
-        corner[count++] = mesh.vertex(mesh.tet(t)[v]);
-      }
-      // The shaded normal at a point x of the face plane: barycentric
-      // weights from signed sub-triangle areas (linear, so it extrapolates a
-      // little past the face's edges), normals interpolated and normalised.
-      const Vec3 area_normal = cross(corner[1] - corner[0], corner[2] - corner[0]);
-      const double area = dot(area_normal, face_normal);
-      if (area == 0.0 || !std::isfinite(area)) return raw_force_N;
-      auto normal_at = [&](const Vec3& x) {
-        Vec3 n;
-        for (int k = 0; k < 3; ++k) {
-          const double w =
-              dot(cross(corner[(k + 1) % 3] - x, corner[(k + 2) % 3] - x), face_normal) / area;
-          n += vertex_normals_[vertex[k]] * w;
-        }
-        return normalized_or_zero(n);
+      // The shaded normal at a point x, unnormalised: barycentric weights
+      // from signed sub-triangle areas (linear, so it extrapolates a little
+      // past the face's edges), vertex normals interpolated.
+      auto normal_at = [&face](const Vec3& x) {
+        const Vec3 r = x - face.origin;
+        return face.origin_normal +
+               Vec3{dot(face.rows[0], r), dot(face.rows[1], r), dot(face.rows[2], r)};
       };
       // The contact point of the smooth surface the normals describe: where
       // the line from p along the shaded normal meets the face plane (q is
       // where the line along the facet normal meets it). A fixed point,
       // two iterations from q (Morgenbesser and Srinivasan's second pass).
-      const Vec3 p = place.q - raw_force_N / space_->settings().stiffness_N_per_mm;
-      const double p_height = dot(p - place.q, face_normal);
-      Vec3 x = place.q;
-      shaded_normal = normal_at(x);
+      // The point does not depend on the normal's length, so only the last
+      // normal is normalised. p - q = -raw / k, so p's height over the plane
+      // is -normal_part / k.
+      const double compliance_mm_per_N = 1.0 / space_->settings().stiffness_N_per_mm;
+      const double p_height = -normal_part * compliance_mm_per_N;
+      const Vec3 p = place.q - raw_force_N * compliance_mm_per_N;
+      Vec3 n = normal_at(place.q);
       for (int iteration = 0; iteration < kContactIterations; ++iteration) {
-        const double along = dot(shaded_normal, face_normal);
-        if (!(along > 0.5)) break;
-        x = p - shaded_normal * (p_height / along);
-        const Vec3 n = normal_at(x);
-        if (n == Vec3{}) break;
-        shaded_normal = n;
+        const double along = dot(n, face.normal);
+        // along / |n| > 0.5: the normal leans less than 60 degrees off the facet.
+        if (!(along > 0.0 && 4.0 * along * along > squared_norm(n))) break;
+        const Vec3 next = normal_at(p - n * (p_height / along));
+        if (next == Vec3{}) break;
+        n = next;
       }
-      if (shaded_normal == Vec3{}) return raw_force_N;
-      return raw_force_N - face_normal * normal_part + shaded_normal * normal_part;
+      const double length = norm(n);
+      if (!(length > 0.0)) return raw_force_N;
+      shaded_normal = n * (1.0 / length);
+      return raw_force_N - face.normal * normal_part + shaded_normal * normal_part;
     }
     case ProxyState::Edge: {
       const std::int32_t e = mesh.edge_of(t, place.local);
@@ -278,7 +309,9 @@ Vec3 ForceShading::shade(const ProxyPlace& place, const Vec3& raw_force_N) const
 }
 
 std::size_t ForceShading::memory_bytes() const {
-  return vertex_normals_.capacity() * sizeof(Vec3) + surface_edge_.capacity();
+  return vertex_normals_.capacity() * sizeof(Vec3) + surface_edge_.capacity() +
+         shaded_faces_.capacity() * sizeof(ShadedFace) +
+         face_record_.capacity() * sizeof(std::int32_t);
 }
 
 }  // namespace hapticut

@@ -35,8 +35,8 @@ double lag_distance_mm(const Material& material, const MoveContext& context) {
   return -1.0;
 }
 
-MoveResult move(const Material& material, const Vec3& target, const Vec3& q,
-                const MoveContext& context) {
+MoveResult move_with_resistance(const Material& material, const Vec3& target, const Vec3& q,
+                                const MoveContext& context) {
   switch (material.model) {
     case MaterialModel::Free:
       return {true, target};

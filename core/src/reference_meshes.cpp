@@ -1,8 +1,13 @@
 #include "hapticut/reference_meshes.h"
 
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <random>
+#include <stdexcept>
+#include <string>
+#include <utility>
 
 namespace hapticut {
 
@@ -68,6 +73,62 @@ MeshData icosahedron_mesh(double radius_mm) {
        {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
        {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}}};
   for (const auto& f : faces) mesh.tets.push_back({0, f[0] + 1, f[1] + 1, f[2] + 1});
+  orient_positive(mesh);
+  return mesh;
+}
+
+MeshData vertex_fan_mesh(int subdivisions, double radius_mm) {
+  if (subdivisions < 0 || subdivisions > 5) {
+    throw std::invalid_argument("vertex_fan_mesh: subdivisions must be 0 to 5, got " +
+                                std::to_string(subdivisions));
+  }
+  MeshData mesh = icosahedron_mesh(radius_mm);
+  // The shell's triangles: each tet is (centre, a, b, c) after orientation.
+  std::vector<std::array<std::int32_t, 3>> shell;
+  for (const auto& t : mesh.tets) shell.push_back({t[1], t[2], t[3]});
+  for (int level = 0; level < subdivisions; ++level) {
+    std::map<std::pair<std::int32_t, std::int32_t>, std::int32_t> midpoints;
+    auto middle = [&](std::int32_t a, std::int32_t b) {
+      const std::pair<std::int32_t, std::int32_t> key{std::min(a, b), std::max(a, b)};
+      const auto [it, added] =
+          midpoints.try_emplace(key, static_cast<std::int32_t>(mesh.vertices_mm.size()));
+      if (added) {
+        const Vec3 m = mesh.vertices_mm[a] + mesh.vertices_mm[b];
+        mesh.vertices_mm.push_back(m * (radius_mm / norm(m)));
+      }
+      return it->second;
+    };
+    std::vector<std::array<std::int32_t, 3>> finer;
+    for (const auto& [a, b, c] : shell) {
+      const std::int32_t ab = middle(a, b);
+      const std::int32_t bc = middle(b, c);
+      const std::int32_t ca = middle(c, a);
+      finer.insert(finer.end(), {{a, ab, ca}, {b, bc, ab}, {c, ca, bc}, {ab, bc, ca}});
+    }
+    shell = std::move(finer);
+  }
+  mesh.tets.clear();
+  for (const auto& [a, b, c] : shell) mesh.tets.push_back({0, a, b, c});
+  orient_positive(mesh);
+  return mesh;
+}
+
+MeshData double_cone_mesh(int ring_size, double radius_mm, double half_height_mm) {
+  if (ring_size < 3) {
+    throw std::invalid_argument("double_cone_mesh: ring_size must be at least 3, got " +
+                                std::to_string(ring_size));
+  }
+  MeshData mesh;
+  mesh.vertices_mm = {{0, 0, 0}, {0, 0, -half_height_mm}, {0, 0, half_height_mm}};
+  for (int i = 0; i < ring_size; ++i) {
+    const double angle = 2.0 * std::numbers::pi * i / ring_size;
+    mesh.vertices_mm.push_back({radius_mm * std::cos(angle), radius_mm * std::sin(angle), 0.0});
+  }
+  for (int apex = 1; apex <= 2; ++apex) {
+    for (int i = 0; i < ring_size; ++i) {
+      mesh.tets.push_back({0, apex, 3 + i, 3 + (i + 1) % ring_size});
+    }
+  }
   orient_positive(mesh);
   return mesh;
 }

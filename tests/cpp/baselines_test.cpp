@@ -167,5 +167,73 @@ TEST(ForceShading, PressingTheCentreOfABlockFaceKeepsTheFaceNormal) {
   EXPECT_NEAR(shaded.z, proxy.force_N().z, 1e-9);
 }
 
+// The FACE path of shade() written out as in Morgenbesser and Srinivasan:
+// barycentric weights from signed sub-triangle areas at each evaluation, two
+// fixed-point steps. shade() evaluates the same affine field from
+// precomputed per-face data; the two must agree.
+Vec3 shade_on_face_directly(const Space& space, const ForceShading& shading,
+                            const ProxyPlace& place, const Vec3& raw) {
+  const TetMesh& mesh = space.mesh();
+  const Vec3 face_normal = -mesh.face_plane(place.tet, place.local).normal;
+  std::array<Vec3, 3> corner;
+  std::array<Vec3, 3> normal;
+  int count = 0;
+  for (int v = 0; v < 4; ++v) {
+    if (v == place.local) continue;
+    normal[count] = shading.vertex_normal(mesh.tet(place.tet)[v]);
+    corner[count++] = mesh.vertex(mesh.tet(place.tet)[v]);
+  }
+  const double area = dot(cross(corner[1] - corner[0], corner[2] - corner[0]), face_normal);
+  auto normal_at = [&](const Vec3& x) {
+    Vec3 n;
+    for (int k = 0; k < 3; ++k) {
+      n += normal[k] *
+           (dot(cross(corner[(k + 1) % 3] - x, corner[(k + 2) % 3] - x), face_normal) / area);
+    }
+    return n / norm(n);
+  };
+  const double normal_part = dot(raw, face_normal);
+  const Vec3 p = place.q - raw / space.settings().stiffness_N_per_mm;
+  const double p_height = dot(p - place.q, face_normal);
+  Vec3 n = normal_at(place.q);
+  for (int iteration = 0; iteration < 2; ++iteration) {
+    const double along = dot(n, face_normal);
+    if (!(along > 0.5)) break;  // Leaning 60 degrees or more off the facet: keep n.
+    n = normal_at(p - n * (p_height / along));
+  }
+  return raw - face_normal * normal_part + n * normal_part;
+}
+
+TEST(ForceShading, PrecomputedFaceFieldMatchesTheDirectInterpolation) {
+  const MeshData data = grid_mesh({-10, -5, 0, 5, 10}, {-10, -5, 0, 5, 10}, {-10, -5, 0, 5, 10});
+  std::vector<std::int32_t> labels;
+  for (const auto& tet : data.tets) {
+    Vec3 c;
+    for (std::int32_t v : tet) c += data.vertices_mm[v] * 0.25;
+    labels.push_back(std::abs(c.x) < 5 && std::abs(c.y) < 5 && std::abs(c.z) < 5 ? 2 : 0);
+  }
+  const Space space = testing::make_space(data, labels);
+  const ForceShading shading(space);
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> across(-4.9, 4.9);
+  std::uniform_real_distribution<double> depth(0.1, 3.0);
+  int shaded_faces = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    // Press onto the top face (z = 5) near anywhere, corners included, where
+    // the block's vertex normals lean out and the shading turns the force.
+    const double x = across(rng);
+    const double y = across(rng);
+    Proxy proxy(space);
+    proxy.reset({x, y, 8.0});
+    proxy.step({x, y, 5.0 - depth(rng)}, 0.001);
+    if (proxy.place().state != ProxyState::Face) continue;
+    ++shaded_faces;
+    const Vec3 expected = shade_on_face_directly(space, shading, proxy.place(), proxy.force_N());
+    const Vec3 shaded = shading.shade(proxy.place(), proxy.force_N());
+    EXPECT_NEAR(norm(shaded - expected), 0.0, 1e-12 * norm(expected)) << x << " " << y;
+  }
+  EXPECT_GT(shaded_faces, 150);
+}
+
 }  // namespace
 }  // namespace hapticut

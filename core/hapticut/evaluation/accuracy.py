@@ -44,7 +44,7 @@ def run_accuracy(
     faces=SPHERE_FACES,
     voxel_sizes=methods.VOXEL_SIZES_MM,
     points: int = 8,
-    repeats: int = 3,
+    repeats: int = 5,
     log=print,
 ) -> list[dict]:
     """One row per (method, model size, rate)."""

@@ -1,7 +1,6 @@
 """Mesh economy: tets, build time and tick time against force error for
 uniform and adaptive sizing of the air and for a cube against a bounding-tet
-enclosure; and tick time against edge valence (the paper's open question on
-the cost of EDGE and VERTEX transitions)."""
+enclosure (tick time against valence: valence.py)."""
 
 from __future__ import annotations
 
@@ -12,59 +11,6 @@ import numpy as np
 
 from hapticut import _core
 from hapticut.evaluation import accuracy, meshes, paths
-
-EDGE_VALENCES = (4, 6, 8, 12, 16, 20, 24, 32)
-
-
-def _local_edge(tet: np.ndarray, vertices: np.ndarray, a: int, b: int) -> tuple[int, int]:
-    """(local index of a, of b) in the tet as the engine stores it (re-oriented
-    tets have their last two vertices swapped)."""
-    x = vertices[tet]
-    if np.linalg.det(x[1:] - x[0]) < 0:
-        tet = tet[[0, 1, 3, 2]]
-    return int(np.flatnonzero(tet == a)[0]), int(np.flatnonzero(tet == b)[0])
-
-
-EDGE_OF_VERTICES = [[-1, 0, 1, 2], [0, -1, 3, 4], [1, 3, -1, 5], [2, 4, 5, -1]]
-
-
-def valence_timing(repeats: int = 2000, batches: int = 7) -> list[dict]:
-    """ns of one EDGE transition on the centre edge of a fan of n tets: tet 0 is
-    air, the rest rigid. 'widen' pulls p into tet 0 (a-1 finds it); 'scan' pushes p
-    into the rigid side so every tet refuses and (a-3) scans every face."""
-    rows = []
-    for n in EDGE_VALENCES:
-        v, t = _core.edge_fan_mesh(n)
-        labels = np.full(len(t), meshes.RIGID, np.int32)
-        labels[0] = meshes.AIR
-        space = _core.Space(v, t, labels, meshes.MATERIALS)
-        la, lb = _local_edge(t[0], v, 0, 1)
-        local = EDGE_OF_VERTICES[la][lb]
-        q = (v[0] + v[1]) / 2
-        inward = v[t[0]].mean(axis=0) - q
-        opposite = -inward
-        for case, p in (("widen", q + inward), ("scan", q + opposite * 0.5)):
-            r = _core.time_transition(
-                space,
-                _core.ProxyState.EDGE,
-                0,
-                local,
-                np.ascontiguousarray(q),
-                np.ascontiguousarray(p),
-                repeats,
-                batches,
-            )
-            rows.append(
-                {
-                    "element": "edge",
-                    "valence": n,
-                    "case": case,
-                    "ns": r["ns"],
-                    "transition": f"{_core.STATE_NAMES[int(r['from'])]}->"
-                    f"{_core.STATE_NAMES[int(r['to'])]}",
-                }
-            )
-    return rows
 
 
 def _bounding_tet(half_mm: float) -> tuple[np.ndarray, np.ndarray]:
@@ -151,4 +97,170 @@ def sizing_economy(cache: Path, *, faces: int = 320, quick: bool = False, log=pr
             f"  {name:30s} {space.tet_count:7d} tets {scene.build_s:6.1f} s "
             f"{best['ns_per_update']:7.1f} ns {m['dir_err_mean_deg']:.3f} deg"
         )
+    return rows
+
+
+# The examples' scenes (examples/build_examples.py, built by hapticut.scene.builder):
+# the bunny standing in for the paper's mouse, and the layered finger (skin, flesh, bone).
+EXAMPLES_SCRIPT = Path(__file__).resolve().parents[3] / "examples" / "build_examples.py"
+# (example, depth of the press into its rigid surface in mm): the finger's bones are
+# capsules of 2.8 to 3.5 mm radius.
+EXAMPLE_DEPTH_MM = {"mouse": 2.0, "finger": 1.0}
+
+
+def _examples_module():
+    """examples/build_examples.py of the source tree (not part of the installed package)."""
+    import importlib.util
+
+    if not EXAMPLES_SCRIPT.exists():
+        raise FileNotFoundError(f"{EXAMPLES_SCRIPT} not found: run from the source tree")
+    spec = importlib.util.spec_from_file_location("build_examples", EXAMPLES_SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _example_regions(module, name: str):
+    regions, settings, _ = module.EXAMPLES[name]()
+    return regions, settings
+
+
+def _build_example(module, name: str, key: str, override: dict, cache: Path) -> dict:
+    """The example built with settings `override`, cached: vertices, tets, rigid flag
+    per tet, build seconds (the whole build, and fTetWild's share) and the sizes used."""
+    import json
+
+    file = cache / f"economy_{name}_{key}.npz"
+    if file.exists():
+        d = np.load(file)
+        return {k: d[k] for k in d.files} | {"report": json.loads(str(d["report_json"]))}
+    scene, seconds = module.build_example(name, override)
+    report = scene.metadata["build_report"]
+    rigid = np.array([m.model == "rigid" for m in scene.materials])[scene.tet_materials]
+    data = {
+        "vertices": np.asarray(scene.vertices, np.float64),
+        "tets": np.asarray(scene.tets, np.int32),
+        "rigid": rigid,
+        "build_s": seconds,
+        "tetwild_s": float(report["timings_s"].get("tetrahedralize", float("nan"))),
+        "report_json": json.dumps(report),
+    }
+    cache.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(file, **data)
+    return data | {"report": report}
+
+
+# Beyond sizing and enclosure: a finer surface (the build's accuracy), to show what
+# does lower the error. The bunny's own setting is 2 mm.
+EXTRA_VARIANTS = {
+    "mouse": [("adaptive, cube, accuracy 0.5 mm", {"enclosure": "cube", "accuracy_mm": 0.5})]
+}
+
+
+def _example_variants(enclosure: str, near_mm: float, quick: bool) -> list[tuple[str, dict]]:
+    """(label, BuildSettings fields) for one example: adaptive sizing in its own
+    enclosure, in a cube and in a bounding tet; uniform sizing (the adaptive build's
+    surface edge length, and twice that) in its own enclosure."""
+    names = {"box": "box", "cube": "cube", "tetrahedron": "bounding tet"}
+    kinds = [enclosure] + [k for k in ("cube", "tetrahedron") if k != enclosure]
+    variants = [(f"adaptive, {names[k]}", {"enclosure": k}) for k in kinds]
+    if quick:
+        return variants[:2]
+    for factor in (1, 2):
+        edge = factor * near_mm
+        variants.append(
+            (
+                f"uniform {edge:.3g} mm, {names[enclosure]}",
+                {"enclosure": enclosure, "adaptive": False, "edge_near_mm": edge},
+            )
+        )
+    return variants
+
+
+def _key(settings, override: dict) -> str:
+    """Cache key of a build: the overridden fields, readable, and a hash of the whole
+    settings (so a change to the example's own settings rebuilds)."""
+    import hashlib
+    from dataclasses import replace
+
+    readable = "_".join(
+        f"{k}-{v:.4g}" if isinstance(v, float) else f"{k}-{v}" for k, v in override.items()
+    )
+    digest = hashlib.sha1(repr(replace(settings, **override)).encode()).hexdigest()[:8]
+    return f"{readable}_{digest}"
+
+
+def example_economy(
+    cache: Path, *, quick: bool = False, points: int = 8, repeats: int = 3, log=print
+) -> list[dict]:
+    """Tets, build time, tick time and force error of the tet proxy (and with force
+    shading) on the examples' rigid surfaces, for adaptive and uniform sizing and a cube
+    or a bounding tet as the enclosure. Every non-rigid material is made free, so the
+    force is the contact force alone; the truth is the source surface's normal at the
+    closest source point to the proxy (facet normal, and the smooth normal
+    interpolated from its vertex normals). Returns [] when the examples are missing."""
+    from hapticut.evaluation import surface
+
+    try:
+        module = _examples_module()
+    except FileNotFoundError as error:
+        log(f"  skipped: {error}")
+        return []
+    rows = []
+    for name in ("mouse",) if quick else ("mouse", "finger"):
+        regions, settings = _example_regions(module, name)
+        rigid_regions = [r for r in regions if r.material.model == "rigid"]
+        offsets = np.cumsum([0] + [len(r.vertices) for r in rigid_regions[:-1]])
+        source = surface.Surface(
+            np.vstack([r.vertices for r in rigid_regions]),
+            np.vstack([r.faces + o for r, o in zip(rigid_regions, offsets, strict=True)]),
+        )
+        path, slide = surface.strokes(
+            source, 0.001, points=points, depth_mm=EXAMPLE_DEPTH_MM[name], slide_s=0.5
+        )
+        own = {"enclosure": settings.enclosure}
+        first = _build_example(module, name, _key(settings, own), own, cache)
+        near = float(first["report"]["settings"]["edge_near_mm"])
+        variants = _example_variants(settings.enclosure, near, quick)
+        if not quick:
+            variants += EXTRA_VARIANTS.get(name, [])
+        for label, override in variants:
+            built = _build_example(module, name, _key(settings, override), override, cache)
+            labels = np.where(built["rigid"], meshes.RIGID, meshes.AIR).astype(np.int32)
+            space = _core.Space(built["vertices"], built["tets"], labels, meshes.MATERIALS)
+            shading = _core.ForceShading(space, source.vertices, source.triangles)
+            row = {
+                "example": name,
+                "variant": label,
+                "tets": space.tet_count,
+                "boundary_faces": space.boundary_face_count,
+                "build_s": float(built["build_s"]),
+                "tetwild_s": float(built["tetwild_s"]),
+                "memory_bytes": space.memory_bytes,
+                "max_tets_per_edge": space.stats["max_tets_per_edge"],
+                "max_tets_per_vertex": space.stats["max_tets_per_vertex"],
+                "mean_tets_per_vertex": space.stats["mean_tets_per_vertex"],
+            }
+            for tag, with_shading in (("tet", None), ("shaded", shading)):
+                best = None
+                for _ in range(repeats):
+                    method = _core.TetMethodSet(space, points, with_shading)
+                    method.reset(np.ascontiguousarray(path[0]))
+                    out = method.run(path, 0.001)
+                    if best is None or out["ns_per_update"] < best["ns_per_update"]:
+                        best = out
+                m = surface.contact_metrics(source, slide, best["q"], best["force_N"])
+                row[f"{tag}_ns_per_update"] = best["ns_per_update"]
+                for metric in ("facet_mean", "facet_p95", "smooth_mean", "smooth_p95"):
+                    row[f"{tag}_dir_err_{metric}_deg"] = m[f"dir_err_{metric}_deg"]
+                if tag == "tet":
+                    row["contact_updates"] = m["contact_updates"]
+                    row["surface_gap_max_mm"] = m["surface_gap_max_mm"]
+            rows.append(row)
+            log(
+                f"  {name:7s} {label:28s} {row['tets']:7d} tets {row['build_s']:6.1f} s "
+                f"{row['tet_ns_per_update']:6.1f} ns facet {row['tet_dir_err_facet_mean_deg']:.2f} "
+                f"smooth {row['tet_dir_err_smooth_mean_deg']:.2f} "
+                f"shaded {row['shaded_dir_err_smooth_mean_deg']:.2f} deg"
+            )
     return rows

@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from hapticut.evaluation import accuracy, economy, report, stability
+from hapticut.evaluation import accuracy, economy, report, stability, valence
 
 
 def run_stability(cache: Path, *, quick: bool, families=None, log=print) -> list[dict]:
@@ -32,9 +32,14 @@ def run_all(out: Path, *, quick: bool = False, log=print) -> dict:
     stability_rows = run_stability(cache, quick=quick, log=log)
     log("closed loop")
     loop_rows = stability.run_closed_loop(cache, quick=quick)
+    log("valence")
+    valence_rows = valence.run_valence(quick=quick)
+    valence_fit = valence.fit(valence_rows)
+    valence_share = valence.transition_share(cache, faces=80 if quick else 320)
+    valence.chart(valence_rows, out / "valence.png")
     log("mesh economy")
-    valence_rows = economy.valence_timing()
     economy_rows = economy.sizing_economy(cache, quick=quick, log=log)
+    example_rows = economy.example_economy(cache, quick=quick, log=log)
     for name, rows in [
         ("accuracy", accuracy_rows),
         ("drag_lag", drag_rows),
@@ -42,6 +47,7 @@ def run_all(out: Path, *, quick: bool = False, log=print) -> dict:
         ("closed_loop", loop_rows),
         ("valence", valence_rows),
         ("mesh_economy", economy_rows),
+        ("example_economy", example_rows),
     ]:
         report.write_csv(out / f"{name}.csv", rows)
     report.chart(accuracy_rows, out / "speed_vs_error.png")
@@ -52,7 +58,10 @@ def run_all(out: Path, *, quick: bool = False, log=print) -> dict:
         stability_rows=stability_rows,
         loop_rows=loop_rows,
         valence_rows=valence_rows,
+        valence_fit=valence_fit,
+        valence_share=valence_share,
         economy_rows=economy_rows,
+        example_rows=example_rows,
         quick=quick,
         elapsed_s=time.perf_counter() - start,
     )

@@ -55,12 +55,31 @@ class ForceShading {
   std::size_t memory_bytes() const;
 
  private:
+  // A face of the rigid surface as seen from its non-rigid owner, ready for
+  // the FACE path of shade(): the interpolated normal is affine in x,
+  // n(x) = n0 + A (x - origin) (barycentric weights from signed areas are
+  // affine in x, exactly, also off the face's plane), so one matrix-vector
+  // product replaces three cross products per evaluation.
+  struct ShadedFace {
+    Vec3 origin;               // The face's first corner.
+    Vec3 origin_normal;        // n0: the vertex normal there.
+    std::array<Vec3, 3> rows;  // A, by rows: sum over corners of n_k (grad w_k)^T.
+    Vec3 normal;               // Unit normal out of the rigid region (into the owner).
+  };
+
   Vec3 edge_normal(std::int32_t e, const Vec3& q) const;
   Vec3 touching_normal(const ProxyPlace& place) const;
+  // Fills shaded_faces_ and face_record_ from vertex_normals_.
+  void build_shaded_faces();
 
   const Space* space_;
   std::vector<Vec3> vertex_normals_;
   std::vector<std::uint8_t> surface_edge_;
+  std::vector<ShadedFace> shaded_faces_;
+  // Per tet face (4 t + f): its index in shaded_faces_ when the face lies on the
+  // rigid surface with t its non-rigid owner, else kNotShaded.
+  static constexpr std::int32_t kNotShaded = -1;
+  std::vector<std::int32_t> face_record_;
 };
 
 }  // namespace hapticut

@@ -22,13 +22,21 @@ struct MoveResult {
   Vec3 q;  // q' (equal to q when not moved).
 };
 
+// move() for the models with a resistance (drag, viscous, membrane).
+MoveResult move_with_resistance(const Material& material, const Vec3& target, const Vec3& q,
+                                const MoveContext& context);
+
 // Free: q' = p'. Drag (16): the proxy trails p' by at most D. Rigid (17):
 // never moves. Viscous: drag whose lag D = c v / k grows with the stroke
 // speed v, so the force k D equals the viscous resistance c v (capped at
 // max_lag_mm). Membrane: rigid until the push k|p'-q| exceeds break_force_N,
-// then free.
-MoveResult move(const Material& material, const Vec3& target, const Vec3& q,
-                const MoveContext& context);
+// then free. The free and rigid cases, which the walk calls most, are inline.
+inline MoveResult move(const Material& material, const Vec3& target, const Vec3& q,
+                       const MoveContext& context) {
+  if (material.model == MaterialModel::Free) return {true, target};
+  if (material.model == MaterialModel::Rigid) return {false, q};
+  return move_with_resistance(material, target, q, context);
+}
 
 // The lag distance below which the material holds the proxy (drag-like
 // models), or a negative number for models without one.

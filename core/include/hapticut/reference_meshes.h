@@ -23,6 +23,17 @@ MeshData two_tets_mesh(double size_mm = 10.0);
 MeshData edge_fan_mesh(int fan_size = 12, double radius_mm = 10.0, double half_height_mm = 10.0);
 // The icosahedron's centre (vertex 0) shared by its 20 tets.
 MeshData icosahedron_mesh(double radius_mm = 10.0);
+// The centre (vertex 0) of a geodesic ball: the icosahedron's 20 faces, each
+// split into 4^subdivisions triangles (midpoints pushed onto the sphere of
+// radius_mm), joined to the centre. Vertex 0 lies in 20 x 4^subdivisions tets
+// (20, 80, 320, ...); subdivisions = 0 is icosahedron_mesh. 0 <= subdivisions <= 5.
+MeshData vertex_fan_mesh(int subdivisions = 1, double radius_mm = 10.0);
+// The centre (vertex 0) of a double cone: a regular ring of ring_size >= 3
+// vertices of radius radius_mm around it in the plane z = 0, apexes 1 and 2 at
+// z = -+half_height_mm. Vertex 0 lies in 2 x ring_size tets: vertex valences
+// between the geodesic family's powers.
+MeshData double_cone_mesh(int ring_size = 10, double radius_mm = 10.0,
+                          double half_height_mm = 10.0);
 // A cube of side size_mm split into 6 tets (Kuhn): 12 boundary triangles.
 MeshData cube_mesh(double size_mm = 10.0);
 // A box of nx x ny x nz cells, each split into 6 Kuhn tets (interior
