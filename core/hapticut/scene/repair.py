@@ -351,6 +351,17 @@ def surface_deviation(a: Surface, b: Surface) -> float:
     return hausdorff(meshes, 0, 1)
 
 
+def _merged_meshset(surfaces: list[Surface]):
+    """A pymeshlab MeshSet holding all the surfaces as one mesh (faces in input order)."""
+    pymeshlab = _meshlab()
+    vertices = np.concatenate([s.vertices for s in surfaces])
+    offsets = np.cumsum([0] + [len(s.vertices) for s in surfaces[:-1]])
+    faces = np.concatenate([s.faces + o for s, o in zip(surfaces, offsets, strict=True)])
+    meshes = pymeshlab.MeshSet()
+    meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=vertices, face_matrix=faces))
+    return meshes
+
+
 def distance_to_surfaces(points: np.ndarray, surfaces: list[Surface], max_mm: float) -> np.ndarray:
     """(n,) unsigned distance from each point to the nearest surface, capped at max_mm.
 
@@ -358,11 +369,7 @@ def distance_to_surfaces(points: np.ndarray, surfaces: list[Surface], max_mm: fl
     max_mm (a small cap keeps it fast).
     """
     pymeshlab = _meshlab()
-    vertices = np.concatenate([s.vertices for s in surfaces])
-    offsets = np.cumsum([0] + [len(s.vertices) for s in surfaces[:-1]])
-    faces = np.concatenate([s.faces + o for s, o in zip(surfaces, offsets, strict=True)])
-    meshes = pymeshlab.MeshSet()
-    meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=vertices, face_matrix=faces))
+    meshes = _merged_meshset(surfaces)
     meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=np.asarray(points, dtype=np.float64)))
     meshes.compute_scalar_by_distance_from_another_mesh_per_vertex(
         measuremesh=1, refmesh=0, signeddist=False, maxdist=pymeshlab.PureValue(float(max_mm))
@@ -372,11 +379,6 @@ def distance_to_surfaces(points: np.ndarray, surfaces: list[Surface], max_mm: fl
 
 def self_intersecting_faces(surfaces: list[Surface]) -> np.ndarray:
     """(f,) bool over the surfaces' faces, concatenated: faces that cross another face."""
-    pymeshlab = _meshlab()
-    vertices = np.concatenate([s.vertices for s in surfaces])
-    offsets = np.cumsum([0] + [len(s.vertices) for s in surfaces[:-1]])
-    faces = np.concatenate([s.faces + o for s, o in zip(surfaces, offsets, strict=True)])
-    meshes = pymeshlab.MeshSet()
-    meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=vertices, face_matrix=faces))
+    meshes = _merged_meshset(surfaces)
     meshes.compute_selection_by_self_intersections_per_face()
     return np.asarray(meshes.current_mesh().face_selection_array(), dtype=bool)
