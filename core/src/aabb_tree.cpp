@@ -24,28 +24,6 @@ bool Aabb::contains(const Vec3& p, double pad) const {
          p.z >= lo.z - pad && p.z <= hi.z + pad;
 }
 
-bool Aabb::hits_segment(const Vec3& a, const Vec3& inv_dir, const Vec3& dir, double pad) const {
-  // Slab test on the parameter range [0, 1]. An axis the segment does not
-  // move along (dir = 0, inv_dir = inf) must contain a itself.
-  double t_enter = 0.0;
-  double t_exit = 1.0;
-  for (int axis = 0; axis < 3; ++axis) {
-    const double box_lo = lo[axis] - pad;
-    const double box_hi = hi[axis] + pad;
-    if (dir[axis] == 0.0) {
-      if (a[axis] < box_lo || a[axis] > box_hi) return false;
-      continue;
-    }
-    double t0 = (box_lo - a[axis]) * inv_dir[axis];
-    double t1 = (box_hi - a[axis]) * inv_dir[axis];
-    if (t0 > t1) std::swap(t0, t1);
-    t_enter = std::max(t_enter, t0);
-    t_exit = std::min(t_exit, t1);
-    if (t_enter > t_exit) return false;
-  }
-  return true;
-}
-
 AabbTree::AabbTree(const std::vector<Aabb>& item_boxes) {
   if (item_boxes.empty()) return;
   items_.resize(item_boxes.size());

@@ -18,30 +18,51 @@ struct Exit {
   double parameter = 2.0;
 };
 
-Exit find_exit(const TetMesh& mesh, std::int32_t t, const Vec3& q, const Vec3& q1, int skip_face,
-               double eps) {
+// The faces of a tet other than the one indexed: FACE's candidate exits.
+constexpr std::array<std::array<int, 3>, 4> kOtherFaces{
+    {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}}};
+
+// The exit among `count` faces of tet t. Most moves end inside, so q1's
+// distances come first, all at once; q's are computed only for a plane q1 is out of.
+template <std::size_t count>
+inline Exit find_exit_among(const TetMesh& mesh, std::int32_t t,
+                            const std::array<int, count>& faces, const Vec3& q, const Vec3& q1,
+                            double eps) {
+  const Plane* planes = &mesh.face_plane(t, 0);
+  std::array<double, count> d1{};
+  bool any_out = false;
+  for (std::size_t k = 0; k < count; ++k) {
+    d1[k] = planes[faces[k]].signed_distance(q1);
+    any_out = any_out || d1[k] > eps;
+  }
   Exit best;
-  for (int f = 0; f < 4; ++f) {
-    if (f == skip_face) continue;
-    const Plane& plane = mesh.face_plane(t, f);
-    const double s =
-        segment_exit_parameter(plane.signed_distance(q), plane.signed_distance(q1), eps);
-    if (s >= 0.0 && s < best.parameter) best = {f, s};
+  if (!any_out) return best;
+  for (std::size_t k = 0; k < count; ++k) {
+    if (!(d1[k] > eps)) continue;
+    const double s = segment_exit_parameter(planes[faces[k]].signed_distance(q), d1[k], eps);
+    if (s >= 0.0 && s < best.parameter) best = {faces[k], s};
   }
   return best;
 }
 
+inline Exit find_tet_exit(const TetMesh& mesh, std::int32_t t, const Vec3& q, const Vec3& q1,
+                          double eps) {
+  static constexpr std::array<int, 4> kAllFaces{0, 1, 2, 3};
+  return find_exit_among(mesh, t, kAllFaces, q, q1, eps);
+}
+
+inline Exit find_face_exit(const TetMesh& mesh, std::int32_t t, int face, const Vec3& q,
+                           const Vec3& q1, double eps) {
+  return find_exit_among(mesh, t, kOtherFaces[face], q, q1, eps);
+}
+
+// "Neighbour" in Table 2: the new state is owned by another tet than the old one.
+bool is_neighbour(std::int32_t from_tet, std::int32_t to_tet) {
+  return from_tet != kNoTet && to_tet != kNoTet && to_tet != from_tet;
+}
+
 // Up to this many boundary faces, OUTSIDE scans them all instead of walking the tree.
 constexpr std::size_t kLinearEntryScanMax = 32;
-
-// (b-2) of TET and FACE: q moved within its tet or face and stopped where
-// the material put it. Called again, the material (same target, q now at
-// its answer) holds q, and FACE's (a) tests see the same n . (p - q), since
-// q moved in the plane: nothing would change.
-Transition settle(Transition t) {
-  t.settled = true;
-  return t;
-}
 
 int local_index_of(const std::array<std::int32_t, 4>& tet, std::int32_t vertex) {
   for (int k = 0; k < 4; ++k) {
@@ -80,17 +101,24 @@ const char* proxy_state_name(ProxyState state) {
 
 Proxy::Proxy(const Space& space) : space_(&space) {}
 
-Transition Proxy::stay() const { return {place_.state, place_.state, false, false}; }
+// (b-2) of TET and FACE: q moved within its tet or face and stopped where
+// the material put it. Called again, the material (same target, q now at
+// its answer) holds q, and FACE's (a) tests see the same n . (p - q), since
+// q moved in the plane: nothing would change, so the tick ends here. State,
+// owner and local index stay; only q moves.
+Proxy::Outcome Proxy::settle_at(const Vec3& q) {
+  const double tolerance = space_->tolerance();
+  const bool changed = squared_norm(q - place_.q) > tolerance * tolerance;
+  place_.q = q;
+  return changed ? Outcome::Settled : Outcome::Unchanged;
+}
 
-Transition Proxy::go(ProxyState to, std::int32_t tet, int local, const Vec3& q) {
-  Transition result;
-  result.from = place_.state;
-  result.to = to;
-  result.to_neighbour = place_.tet != kNoTet && tet != kNoTet && tet != place_.tet;
-  result.changed = to != place_.state || tet != place_.tet || local != place_.local ||
-                   squared_norm(q - place_.q) > space_->tolerance() * space_->tolerance();
+Proxy::Outcome Proxy::go(ProxyState to, std::int32_t tet, int local, const Vec3& q) {
+  const double tolerance = space_->tolerance();
+  const bool changed = to != place_.state || tet != place_.tet || local != place_.local ||
+                       squared_norm(q - place_.q) > tolerance * tolerance;
   place_ = {to, tet, static_cast<std::int8_t>(local), q};
-  return result;
+  return changed ? Outcome::Changed : Outcome::Unchanged;
 }
 
 StartKind Proxy::reset(const Vec3& p) {
@@ -173,11 +201,14 @@ TickResult Proxy::step(const Vec3& p, double dt_s) {
       result.capped = true;
       break;
     }
-    const Transition t = transition(p, context);
-    if (!t.changed) break;
+    const ProxyState from = place_.state;
+    const std::int32_t from_tet = place_.tet;
+    const Outcome outcome = advance(p, context);
+    if (outcome == Outcome::Unchanged) break;
     ++result.transitions;
-    ++counters_.transitions[static_cast<int>(t.from)][static_cast<int>(t.to)][t.to_neighbour];
-    if (t.settled) break;
+    ++counters_.transitions[static_cast<int>(from)][static_cast<int>(place_.state)]
+                           [is_neighbour(from_tet, place_.tet)];
+    if (outcome == Outcome::Settled) break;
   }
   counters_.total_transitions += static_cast<std::uint64_t>(result.transitions);
   counters_.max_transitions_in_tick =
@@ -198,6 +229,18 @@ TickResult Proxy::step(const Vec3& p, double dt_s) {
 }
 
 Transition Proxy::transition(const Vec3& p, const MoveContext& context) {
+  const ProxyPlace before = place_;
+  const Outcome outcome = advance(p, context);
+  Transition result;
+  result.from = before.state;
+  result.to = place_.state;
+  result.to_neighbour = is_neighbour(before.tet, place_.tet);
+  result.changed = outcome != Outcome::Unchanged;
+  result.settled = outcome == Outcome::Settled;
+  return result;
+}
+
+Proxy::Outcome Proxy::advance(const Vec3& p, const MoveContext& context) {
   switch (place_.state) {
     case ProxyState::Tet:
       return step_tet(p, context);
@@ -210,43 +253,47 @@ Transition Proxy::transition(const Vec3& p, const MoveContext& context) {
     case ProxyState::Outside:
       return step_outside(p);
   }
-  return stay();
+  return Outcome::Unchanged;
 }
 
 // TET: (a) nothing widens; (b-1) move; (b-2) stay inside; (b-3) stop on the
 // nearest exit face (eqs. 2-4 with repair 1).
-Transition Proxy::step_tet(const Vec3& p, const MoveContext& context) {
+Proxy::Outcome Proxy::step_tet(const Vec3& p, const MoveContext& context) {
   const TetMesh& mesh = space_->mesh();
   const std::int32_t t = place_.tet;
   const Vec3 q = place_.q;
   const MoveResult moved = move(space_->material_of_tet(t), p, q, context);
-  if (!moved.moved) return stay();
-  const Exit exit = find_exit(mesh, t, q, moved.q, -1, context.tolerance_mm);
-  if (exit.face < 0) return settle(go(ProxyState::Tet, t, 0, moved.q));
+  if (!moved.moved) return Outcome::Unchanged;
+  const Exit exit = find_tet_exit(mesh, t, q, moved.q, context.tolerance_mm);
+  if (exit.face < 0) return settle_at(moved.q);
   return go(ProxyState::Face, t, exit.face, q + (moved.q - q) * exit.parameter);
 }
 
 // FACE: (a-1) toward the outside of the owner (eq. 5): into the neighbour or
 // OUTSIDE; (a-2) back into the owner; (b) slide on the plane (eq. 6) and stop
 // on the nearest edge.
-Transition Proxy::step_face(const Vec3& p, const MoveContext& context) {
+Proxy::Outcome Proxy::step_face(const Vec3& p, const MoveContext& context) {
   const TetMesh& mesh = space_->mesh();
   const std::int32_t t = place_.tet;
   const int face = place_.local;
   const Vec3 q = place_.q;
   const Plane& plane = mesh.face_plane(t, face);
   const double eps = context.tolerance_mm;
+  const Material& material = space_->material_of_tet(t);
   if (dot(plane.normal, p - q) > eps) {
     const std::int32_t u = mesh.neighbour(t, face);
     if (u == kNoTet) return go(ProxyState::Outside, kNoTet, 0, q);  // Repair 3: keep q.
-    if (move(space_->material_of_tet(u), p, q, context).moved) return go(ProxyState::Tet, u, 0, q);
-  } else if (move(space_->material_of_tet(t), p, q, context).moved) {
+    // A rigid neighbour refuses at once (the common case of a slide on bone).
+    if (!space_->tet_is_rigid(u) && move(space_->material_of_tet(u), p, q, context).moved) {
+      return go(ProxyState::Tet, u, 0, q);
+    }
+  } else if (move(material, p, q, context).moved) {
     return go(ProxyState::Tet, t, 0, q);
   }
-  const MoveResult moved = move(space_->material_of_tet(t), project_to_plane(p, plane), q, context);
-  if (!moved.moved) return stay();
-  const Exit exit = find_exit(mesh, t, q, moved.q, face, eps);
-  if (exit.face < 0) return settle(go(ProxyState::Face, t, face, moved.q));
+  const MoveResult moved = move(material, project_to_plane(p, plane), q, context);
+  if (!moved.moved) return Outcome::Unchanged;
+  const Exit exit = find_face_exit(mesh, t, face, q, moved.q, eps);
+  if (exit.face < 0) return settle_at(moved.q);
   return go(ProxyState::Edge, t, kEdgeOfFaces[face][exit.face], q + (moved.q - q) * exit.parameter);
 }
 
@@ -254,7 +301,7 @@ Transition Proxy::step_face(const Vec3& p, const MoveContext& context) {
 // of the mesh only from a boundary edge when p is outside every closed wedge
 // (repair 2); (a-3) onto the fan face the projected target moves furthest
 // along (eq. 8); (b) slide on the line (eq. 9), stopping at an end (eq. 10).
-Transition Proxy::step_edge(const Vec3& p, const MoveContext& context) {
+Proxy::Outcome Proxy::step_edge(const Vec3& p, const MoveContext& context) {
   const TetMesh& mesh = space_->mesh();
   const std::int32_t t = place_.tet;
   const int local_edge = place_.local;
@@ -262,7 +309,7 @@ Transition Proxy::step_edge(const Vec3& p, const MoveContext& context) {
   const Vec3 q = place_.q;
   const Vec3 d = p - q;
   const double eps = context.tolerance_mm;
-  if (squared_norm(d) <= eps * eps) return stay();
+  if (squared_norm(d) <= eps * eps) return Outcome::Unchanged;
   const auto fan = mesh.edge_fan(e);
 
   // One pass over the fan, as in step_vertex: (a-1) returns at once; the
@@ -304,7 +351,7 @@ Transition Proxy::step_edge(const Vec3& p, const MoveContext& context) {
   const Vec3& o0 = mesh.vertex(ends[0]);
   const MoveResult moved =
       move(space_->material_of_tet(t), project_to_line(p, o0, direction), q, context);
-  if (!moved.moved) return stay();
+  if (!moved.moved) return Outcome::Unchanged;
   if (dot(moved.q - o0, direction) <= 0.0) {
     return go(ProxyState::Vertex, t, local_index_of(mesh.tet(t), ends[0]), o0);
   }
@@ -319,14 +366,14 @@ Transition Proxy::step_edge(const Vec3& p, const MoveContext& context) {
 // the mesh only from a boundary vertex, p outside every closed cone (repair
 // 2); (a-3) onto the face (eq. 12) or edge (eq. 13, sign fixed) the projected
 // target moves furthest along; (b) no motion of its own.
-Transition Proxy::step_vertex(const Vec3& p, const MoveContext& context) {
+Proxy::Outcome Proxy::step_vertex(const Vec3& p, const MoveContext& context) {
   const TetMesh& mesh = space_->mesh();
   const std::int32_t vertex = mesh.tet(place_.tet)[place_.local];
   const Vec3 q = place_.q;
   const Vec3 d = p - q;
   const double eps = context.tolerance_mm;
   const double d_squared = squared_norm(d);
-  if (d_squared <= eps * eps) return stay();
+  if (d_squared <= eps * eps) return Outcome::Unchanged;
 
   // One pass over the fan: (a-1) returns at once; the (a-2) verdict and the
   // best (a-3) candidate are gathered on the way and used only if no tet
@@ -390,13 +437,13 @@ Transition Proxy::step_vertex(const Vec3& p, const MoveContext& context) {
     return go(ProxyState::Outside, kNoTet, 0, q);
   }
   if (best.tet != kNoTet) return go(best.state, best.tet, best.local, q);
-  return stay();
+  return Outcome::Unchanged;
 }
 
 // OUTSIDE: q' = p unless q->p enters through a boundary triangle (eq. 14,
 // repairs 3 and 4); the nearest entry wins. The boundary tree makes this
 // logarithmic in the number of boundary faces rather than linear.
-Transition Proxy::step_outside(const Vec3& p) {
+Proxy::Outcome Proxy::step_outside(const Vec3& p) {
   const TetMesh& mesh = space_->mesh();
   const Vec3 q = place_.q;
   const Vec3 d = p - q;
@@ -481,8 +528,8 @@ Transition Proxy::step_outside(const Vec3& p) {
     mesh.boundary_tree().for_each_on_segment(q, p, eps, try_face);
   }
   if (rim_face.tet != kNoTet && rim_parameter < best_parameter) {
-    const Transition entered = enter_through_rim(rim_face, rim_sides, q + d * rim_parameter, d);
-    if (entered.changed) return entered;
+    const Outcome entered = enter_through_rim(rim_face, rim_sides, q + d * rim_parameter, d);
+    if (entered != Outcome::Unchanged) return entered;
   }
   if (best_face.tet != kNoTet) {
     return go(ProxyState::Face, best_face.tet, best_face.face, q + d * best_parameter);
@@ -494,8 +541,8 @@ Transition Proxy::step_outside(const Vec3& p) {
 // two: a vertex). It enters the mesh there only if some tet around that edge
 // (eq. 7) or vertex (eq. 11) lies toward p; then the proxy lands on the edge
 // or vertex, whose own step takes it into that tet.
-Transition Proxy::enter_through_rim(const FaceRef& face, const std::array<int, 2>& sides,
-                                    const Vec3& c, const Vec3& d) {
+Proxy::Outcome Proxy::enter_through_rim(const FaceRef& face, const std::array<int, 2>& sides,
+                                        const Vec3& c, const Vec3& d) {
   const TetMesh& mesh = space_->mesh();
   const double eps = space_->tolerance();
   if (sides[1] >= 0) {
@@ -508,7 +555,7 @@ Transition Proxy::enter_through_rim(const FaceRef& face, const std::array<int, 2
       }
       if (toward) return go(ProxyState::Vertex, face.tet, corner, mesh.vertex(vertex));
     }
-    return stay();
+    return Outcome::Unchanged;
   }
   const int local_edge = kEdgeOfFaces[face.face][sides[0]];
   const std::int32_t e = mesh.edge_of(face.tet, local_edge);
@@ -520,7 +567,7 @@ Transition Proxy::enter_through_rim(const FaceRef& face, const std::array<int, 2
                 project_to_line(c, o0, mesh.edge_direction(e)));
     }
   }
-  return stay();
+  return Outcome::Unchanged;
 }
 
 std::string Proxy::check_invariants(double tolerance_factor) const {

@@ -73,12 +73,9 @@ def sizing_economy(cache: Path, *, faces: int = 320, quick: bool = False, log=pr
         scene = _build(key, faces, enclosure, edge, adaptive, cache)
         space = scene.space()
         path, slide = paths.press_and_slide(0.001)
-        best = None
-        for _ in range(3):
-            result = _core.TetMethodSet(space, path.shape[1])
-            result.reset(np.ascontiguousarray(path[0]))
-            out = result.run(path, 0.001)
-            best = out if best is None or out["ns_per_update"] < best["ns_per_update"] else best
+        method = _core.TetMethodSet(space, path.shape[1])
+        method.reset(np.ascontiguousarray(path[0]))
+        best = method.run(path, 0.001, timing_repeats=3)
         m = accuracy.contact_metrics(path, slide, best["q"], best["force_N"])
         rows.append(
             {
@@ -242,13 +239,9 @@ def example_economy(
                 "mean_tets_per_vertex": space.stats["mean_tets_per_vertex"],
             }
             for tag, with_shading in (("tet", None), ("shaded", shading)):
-                best = None
-                for _ in range(repeats):
-                    method = _core.TetMethodSet(space, points, with_shading)
-                    method.reset(np.ascontiguousarray(path[0]))
-                    out = method.run(path, 0.001)
-                    if best is None or out["ns_per_update"] < best["ns_per_update"]:
-                        best = out
+                method = _core.TetMethodSet(space, points, with_shading)
+                method.reset(np.ascontiguousarray(path[0]))
+                best = method.run(path, 0.001, timing_repeats=repeats)
                 m = surface.contact_metrics(source, slide, best["q"], best["force_N"])
                 row[f"{tag}_ns_per_update"] = best["ns_per_update"]
                 for metric in ("facet_mean", "facet_p95", "smooth_mean", "smooth_p95"):

@@ -25,7 +25,11 @@ def run_all(out: Path, *, quick: bool = False, log=print) -> dict:
     faces = (80, 320) if quick else accuracy.SPHERE_FACES
     voxel_sizes = (4.0, 1.0) if quick else None
     accuracy_rows = accuracy.run_accuracy(
-        cache, faces=faces, log=log, **({"voxel_sizes": voxel_sizes} if voxel_sizes else {})
+        cache,
+        faces=faces,
+        min_seconds=0.0 if quick else 3.0,
+        log=log,
+        **({"voxel_sizes": voxel_sizes} if voxel_sizes else {}),
     )
     drag_rows = accuracy.run_drag_lag(cache, faces=80 if quick else 320)
     log("stability")

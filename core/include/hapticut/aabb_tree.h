@@ -3,6 +3,7 @@
 // OUTSIDE is not linear in their number) and for locating a point's tet.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -21,6 +22,31 @@ struct Aabb {
   // Slab test: does the segment a->b touch the box inflated by pad?
   bool hits_segment(const Vec3& a, const Vec3& inv_dir, const Vec3& dir, double pad) const;
 };
+
+namespace detail {
+// One axis of the slab test: narrows [t_enter, t_exit] to where the segment
+// a + t dir is within [lo, hi] on this axis. An axis the segment does not move
+// along (dir = 0, inv_dir = inf) must contain a itself.
+inline bool clip_slab(double a, double inv_dir, double dir, double lo, double hi, double& t_enter,
+                      double& t_exit) {
+  if (dir == 0.0) return a >= lo && a <= hi;
+  const double t0 = (lo - a) * inv_dir;
+  const double t1 = (hi - a) * inv_dir;
+  t_enter = std::max(t_enter, std::min(t0, t1));
+  t_exit = std::min(t_exit, std::max(t0, t1));
+  return t_enter <= t_exit;
+}
+}  // namespace detail
+
+// Slab test on the parameter range [0, 1]; inline, as the tree walks call it per node.
+inline bool Aabb::hits_segment(const Vec3& a, const Vec3& inv_dir, const Vec3& dir,
+                               double pad) const {
+  double t_enter = 0.0;
+  double t_exit = 1.0;
+  return detail::clip_slab(a.x, inv_dir.x, dir.x, lo.x - pad, hi.x + pad, t_enter, t_exit) &&
+         detail::clip_slab(a.y, inv_dir.y, dir.y, lo.y - pad, hi.y + pad, t_enter, t_exit) &&
+         detail::clip_slab(a.z, inv_dir.z, dir.z, lo.z - pad, hi.z + pad, t_enter, t_exit);
+}
 
 class AabbTree {
  public:

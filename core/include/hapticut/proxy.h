@@ -96,15 +96,19 @@ class Proxy {
   std::string check_invariants(double tolerance_factor = 100.0) const;
 
  private:
-  Transition step_tet(const Vec3& p, const MoveContext& context);
-  Transition step_face(const Vec3& p, const MoveContext& context);
-  Transition step_edge(const Vec3& p, const MoveContext& context);
-  Transition step_vertex(const Vec3& p, const MoveContext& context);
-  Transition step_outside(const Vec3& p);
-  Transition enter_through_rim(const FaceRef& face, const std::array<int, 2>& sides, const Vec3& c,
-                               const Vec3& d);
-  Transition go(ProxyState to, std::int32_t tet, int local, const Vec3& q);
-  Transition stay() const;
+  // What one step of a state did: nothing, moved (the tick goes on), or
+  // moved within its tet or face and settled (the tick ends; see settle_at).
+  enum class Outcome : std::uint8_t { Unchanged, Changed, Settled };
+  Outcome advance(const Vec3& p, const MoveContext& context);
+  Outcome step_tet(const Vec3& p, const MoveContext& context);
+  Outcome step_face(const Vec3& p, const MoveContext& context);
+  Outcome step_edge(const Vec3& p, const MoveContext& context);
+  Outcome step_vertex(const Vec3& p, const MoveContext& context);
+  Outcome step_outside(const Vec3& p);
+  Outcome enter_through_rim(const FaceRef& face, const std::array<int, 2>& sides, const Vec3& c,
+                            const Vec3& d);
+  Outcome go(ProxyState to, std::int32_t tet, int local, const Vec3& q);
+  Outcome settle_at(const Vec3& q);
   StartKind push_out_of_rigid(std::int32_t start_tet, const Vec3& p);
 
   const Space* space_;
