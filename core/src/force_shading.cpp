@@ -95,6 +95,7 @@ ForceShading::ForceShading(const Space& space) : space_(&space) {
     }
   }
   for (Vec3& n : vertex_normals_) n = normalized_or_zero(n);
+  face_normals_ = vertex_normals_;
   build_shaded_faces();
 }
 
@@ -150,7 +151,11 @@ ForceShading::ForceShading(const Space& space, const std::vector<Vec3>& source_v
       });
     }
     const Vec3 n = normalized_or_zero(best_normal);
-    if (n != Vec3{}) vertex_normals_[v] = n;
+    if (n == Vec3{}) continue;
+    vertex_normals_[v] = n;
+    // Unnormalised: the source's field is linear over each source triangle,
+    // so pieces of a split triangle interpolating these values reproduce it.
+    face_normals_[v] = best_normal;
   }
   build_shaded_faces();
 }
@@ -171,7 +176,7 @@ void ForceShading::build_shaded_faces() {
       int count = 0;
       for (int v = 0; v < 4; ++v) {
         if (v == f) continue;
-        normal[count] = vertex_normals_[mesh.tet(t)[v]];
+        normal[count] = face_normals_[mesh.tet(t)[v]];
         corner[count++] = mesh.vertex(mesh.tet(t)[v]);
       }
       const double area = dot(cross(corner[1] - corner[0], corner[2] - corner[0]), face_normal);
@@ -309,8 +314,8 @@ Vec3 ForceShading::shade(const ProxyPlace& place, const Vec3& raw_force_N) const
 }
 
 std::size_t ForceShading::memory_bytes() const {
-  return vertex_normals_.capacity() * sizeof(Vec3) + surface_edge_.capacity() +
-         shaded_faces_.capacity() * sizeof(ShadedFace) +
+  return (vertex_normals_.capacity() + face_normals_.capacity()) * sizeof(Vec3) +
+         surface_edge_.capacity() + shaded_faces_.capacity() * sizeof(ShadedFace) +
          face_record_.capacity() * sizeof(std::int32_t);
 }
 

@@ -58,7 +58,15 @@ def _build(
     return meshes.TetScene(name, tv, tt, labels, build_s, sv, st)
 
 
-def sizing_economy(cache: Path, *, faces: int = 320, quick: bool = False, log=print) -> list[dict]:
+def sizing_economy(
+    cache: Path,
+    *,
+    faces: int = 320,
+    quick: bool = False,
+    repeats: int = 5,
+    min_seconds: float = 3.0,
+    log=print,
+) -> list[dict]:
     variants = [
         ("uniform 12 mm, cube", "cube", 12.0, False),
         ("uniform 6 mm, cube", "cube", 6.0, False),
@@ -67,16 +75,23 @@ def sizing_economy(cache: Path, *, faces: int = 320, quick: bool = False, log=pr
     ]
     if not quick:
         variants.insert(0, ("uniform 3 mm, cube", "cube", 3.0, False))
-    rows = []
+    path, slide = paths.press_and_slide(0.001)
+    built = []
     for name, enclosure, edge, adaptive in variants:
         key = f"{faces}_" + name.replace(" ", "_").replace(",", "")
         scene = _build(key, faces, enclosure, edge, adaptive, cache)
         space = scene.space()
-        path, slide = paths.press_and_slide(0.001)
         method = _core.TetMethodSet(space, path.shape[1])
         method.reset(np.ascontiguousarray(path[0]))
-        best = method.run(path, 0.001, timing_repeats=3)
-        m = accuracy.contact_metrics(path, slide, best["q"], best["force_N"])
+        built.append((name, scene, space, method))
+    # All variants timed in the same rounds (see accuracy.time_round_robin).
+    best_ns = accuracy.time_round_robin(
+        [method for *_, method in built], path, 0.001, repeats, 0.0 if quick else min_seconds
+    )
+    rows = []
+    for (name, scene, space, method), ns in zip(built, best_ns, strict=True):
+        result = method.run(path, 0.001, timing_repeats=0)
+        m = accuracy.contact_metrics(path, slide, result["q"], result["force_N"])
         rows.append(
             {
                 "variant": name,
@@ -84,7 +99,7 @@ def sizing_economy(cache: Path, *, faces: int = 320, quick: bool = False, log=pr
                 "tets": space.tet_count,
                 "build_s": scene.build_s,
                 "memory_bytes": space.memory_bytes,
-                "ns_per_update": best["ns_per_update"],
+                "ns_per_update": ns,
                 "dir_err_mean_deg": m["dir_err_mean_deg"],
                 "max_tets_per_edge": space.stats["max_tets_per_edge"],
                 "max_tets_per_vertex": space.stats["max_tets_per_vertex"],
@@ -92,7 +107,7 @@ def sizing_economy(cache: Path, *, faces: int = 320, quick: bool = False, log=pr
         )
         log(
             f"  {name:30s} {space.tet_count:7d} tets {scene.build_s:6.1f} s "
-            f"{best['ns_per_update']:7.1f} ns {m['dir_err_mean_deg']:.3f} deg"
+            f"{ns:7.1f} ns {m['dir_err_mean_deg']:.3f} deg"
         )
     return rows
 
@@ -188,7 +203,13 @@ def _key(settings, override: dict) -> str:
 
 
 def example_economy(
-    cache: Path, *, quick: bool = False, points: int = 8, repeats: int = 3, log=print
+    cache: Path,
+    *,
+    quick: bool = False,
+    points: int = 8,
+    repeats: int = 5,
+    min_seconds: float = 3.0,
+    log=print,
 ) -> list[dict]:
     """Tets, build time, tick time and force error of the tet proxy (and with force
     shading) on the examples' rigid surfaces, for adaptive and uniform sizing and a cube
@@ -221,6 +242,7 @@ def example_economy(
         variants = _example_variants(settings.enclosure, near, quick)
         if not quick:
             variants += EXTRA_VARIANTS.get(name, [])
+        cases = []  # (row, shading, method sets: tet and shaded)
         for label, override in variants:
             built = _build_example(module, name, _key(settings, override), override, cache)
             labels = np.where(built["rigid"], meshes.RIGID, meshes.AIR).astype(np.int32)
@@ -238,12 +260,22 @@ def example_economy(
                 "max_tets_per_vertex": space.stats["max_tets_per_vertex"],
                 "mean_tets_per_vertex": space.stats["mean_tets_per_vertex"],
             }
+            sets = {}
             for tag, with_shading in (("tet", None), ("shaded", shading)):
-                method = _core.TetMethodSet(space, points, with_shading)
-                method.reset(np.ascontiguousarray(path[0]))
-                best = method.run(path, 0.001, timing_repeats=repeats)
-                m = surface.contact_metrics(source, slide, best["q"], best["force_N"])
-                row[f"{tag}_ns_per_update"] = best["ns_per_update"]
+                sets[tag] = _core.TetMethodSet(space, points, with_shading)
+                sets[tag].reset(np.ascontiguousarray(path[0]))
+            cases.append((row, shading, sets))
+        # Every variant of this example, with and without shading, timed in the
+        # same rounds (see accuracy.time_round_robin).
+        all_sets = [method for _, _, sets in cases for method in sets.values()]
+        best_ns = iter(
+            accuracy.time_round_robin(all_sets, path, 0.001, repeats, 0.0 if quick else min_seconds)
+        )
+        for row, _, sets in cases:
+            for tag, method in sets.items():
+                result = method.run(path, 0.001, timing_repeats=0)
+                m = surface.contact_metrics(source, slide, result["q"], result["force_N"])
+                row[f"{tag}_ns_per_update"] = next(best_ns)
                 for metric in ("facet_mean", "facet_p95", "smooth_mean", "smooth_p95"):
                     row[f"{tag}_dir_err_{metric}_deg"] = m[f"dir_err_{metric}_deg"]
                 if tag == "tet":
@@ -251,7 +283,7 @@ def example_economy(
                     row["surface_gap_max_mm"] = m["surface_gap_max_mm"]
             rows.append(row)
             log(
-                f"  {name:7s} {label:28s} {row['tets']:7d} tets {row['build_s']:6.1f} s "
+                f"  {name:7s} {row['variant']:28s} {row['tets']:7d} tets {row['build_s']:6.1f} s "
                 f"{row['tet_ns_per_update']:6.1f} ns facet {row['tet_dir_err_facet_mean_deg']:.2f} "
                 f"smooth {row['tet_dir_err_smooth_mean_deg']:.2f} "
                 f"shaded {row['shaded_dir_err_smooth_mean_deg']:.2f} deg"

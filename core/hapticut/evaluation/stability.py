@@ -166,7 +166,6 @@ def evaluate_scenario(scenario: Scenario, families=None) -> list[dict]:
                 "wrong_side_ticks": wrong,
                 "invariant_failures": failures,
                 "ticks": int(q.shape[0] * q.shape[1]),
-                "ns_per_update": result["ns_per_update"],
                 "figure": figure,
                 "first_failure": result["first_failure"],
             }

@@ -74,6 +74,10 @@ class ForceShading {
 
   const Space* space_;
   std::vector<Vec3> vertex_normals_;
+  // What the FACE path interpolates over a face: the unit vertex normal, or
+  // with a source surface the source's interpolated normal at the vertex's
+  // nearest source point, not normalised (see the source constructor).
+  std::vector<Vec3> face_normals_;
   std::vector<std::uint8_t> surface_edge_;
   std::vector<ShadedFace> shaded_faces_;
   // Per tet face (4 t + f): its index in shaded_faces_ when the face lies on the
