@@ -110,22 +110,37 @@ def max_points_within(space: _core.Space, poses: np.ndarray, budget_ns: float = 
     middle = len(poses) // 2
     short = poses[max(0, middle - 150) : middle + 150]  # where the blade is in the body
     lo, hi = 50, 50
-    while np.median(time_ticks(space, hi, short, 1)["tick_ns"]) <= budget_ns and hi < 2_000_000:
+    while np.median(time_ticks(space, hi, short, 3)["tick_ns"]) <= budget_ns and hi < 2_000_000:
         lo, hi = hi, hi * 2
     while hi - lo > max(8, lo // 50):
         mid = (lo + hi) // 2
-        if np.median(time_ticks(space, mid, short, 1)["tick_ns"]) <= budget_ns:
+        if np.median(time_ticks(space, mid, short, 3)["tick_ns"]) <= budget_ns:
             lo = mid
         else:
             hi = mid
     return lo
 
 
-def run(find_max: bool = True) -> str:
+def run(find_max: bool = True, rounds: int = 3) -> str:
+    """The table. Every scene is timed once per round, in turn, and keeps its best
+    round (lowest median tick; most points within the budget): this machine's slow
+    spells last seconds, and a scene timed inside one reads up to twice its cost."""
+    cases = [(label, space, stroke_poses(space)) for label, space in scenes()]
+    best: list[dict | None] = [None] * len(cases)
+    most = [0] * len(cases)
+    search_s = [0.0] * len(cases)
+    for _ in range(max(1, rounds)):
+        for k, (_, space, poses) in enumerate(cases):
+            r = time_ticks(space, 50, poses)
+            if best[k] is None or np.median(r["tick_ns"]) < np.median(best[k]["tick_ns"]):
+                best[k] = r
+            if find_max:
+                started = time.perf_counter()
+                most[k] = max(most[k], max_points_within(space, poses))
+                search_s[k] += time.perf_counter() - started
     rows = []
-    for label, space in scenes():
-        poses = stroke_poses(space)
-        r = time_ticks(space, 50, poses)
+    for k, (label, space, poses) in enumerate(cases):
+        r = best[k]
         ticks = np.asarray(r["tick_ns"])
         row = [
             label,
@@ -139,9 +154,8 @@ def run(find_max: bool = True) -> str:
             int(np.sum(r["capped_points"])),
         ]
         if find_max:
-            started = time.perf_counter()
-            row.append(max_points_within(space, poses))
-            row.append(f"{time.perf_counter() - started:.0f} s")
+            row.append(most[k])
+            row.append(f"{search_s[k]:.0f} s")
         rows.append(row)
     headers = [
         "scene",

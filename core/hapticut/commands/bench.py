@@ -14,6 +14,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--repeats", type=int, default=20000, help="calls per timed batch")
     parser.add_argument("--batches", type=int, default=15, help="batches (the median is shown)")
     parser.add_argument(
+        "--rounds",
+        type=int,
+        default=5,
+        help="time every row this many times in turn; each keeps its best round",
+    )
+    parser.add_argument(
         "--no-max-points", action="store_true", help="blade: skip the points-in-100-µs search"
     )
 
@@ -25,9 +31,9 @@ def run(args: argparse.Namespace) -> int:
     if args.which == "transitions":
         from hapticut.bench import transitions
 
-        print(transitions.run(args.repeats, args.batches))
+        print(transitions.run(args.repeats, args.batches, args.rounds))
     else:
         from hapticut.bench import blade
 
-        print(blade.run(find_max=not args.no_max_points))
+        print(blade.run(find_max=not args.no_max_points, rounds=args.rounds))
     return 0

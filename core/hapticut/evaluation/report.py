@@ -134,6 +134,25 @@ def matched_accuracy(accuracy_rows: list[dict], rate: float = 1000.0) -> list[tu
     return out
 
 
+def shaded_against_best(accuracy_rows: list[dict], rate: float = 1000.0) -> str:
+    """A clause: the fastest shaded model against the most accurate god-object model."""
+    god = [r for r in accuracy_rows if r["method"] == methods.GOD and r["rate_Hz"] == rate]
+    shaded = [r for r in accuracy_rows if r["method"] == methods.SHADED and r["rate_Hz"] == rate]
+    if not god or not shaded:
+        return ""
+    best_god = min(god, key=lambda r: r["dir_err_mean_deg"])
+    fast = min(shaded, key=lambda r: r["ns_per_update"])
+    if fast["dir_err_mean_deg"] > best_god["dir_err_mean_deg"]:
+        return ""
+    ratio = best_god["ns_per_update"] / fast["ns_per_update"]
+    return (
+        f": on {fast['faces']} faces ({fast['dir_err_mean_deg']:.3f} deg, "
+        f"{fast['ns_per_update']:.0f} ns) it is {ratio:.1f}x "
+        f"faster than the god-object's most accurate model ({best_god['faces']} faces, "
+        f"{best_god['dir_err_mean_deg']:.2f} deg, {best_god['ns_per_update']:.0f} ns)"
+    )
+
+
 def scene_sizing(accuracy_rows: list[dict]) -> list[str]:
     """The note on how fine the sphere scenes are meshed, with their tet counts."""
     tets = {r["faces"]: r["tets"] for r in accuracy_rows if r["method"] == methods.TET}
@@ -184,10 +203,16 @@ def speed_gap(accuracy_rows: list[dict]) -> list[str]:
             if min(ratios.values()) >= 10
             else "The target is NOT met on every model."
         )
-        + f" With force shading on the same facets the proxy is {span(shaded)} faster"
-        + (f" and at 50 Hz {span(slow)}" if slow else "")
-        + "; both are far more accurate than the god-object there, and the matched-accuracy "
-        "lines above compare them with the god-object model they beat.",
+        + f" With force shading on the same facets the proxy is {span(shaded)} faster, and "
+        "far more accurate than any god-object model here"
+        + shaded_against_best(accuracy_rows)
+        + "."
+        + (
+            f" At 50 Hz the bare proxy is {span(slow)} faster than the god-object at 50 Hz: "
+            "the 10x target is read at the servo's 1 kHz."
+            if slow
+            else ""
+        ),
         "",
         "How it is timed: each method runs the same 8 strokes in C++; a round times every "
         "method in turn, three passes each with the first warming the caches (a servo loop "
