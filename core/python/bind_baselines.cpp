@@ -79,7 +79,9 @@ struct MethodSet {
   std::vector<Method> items;
   std::size_t memory_bytes = 0;
   std::shared_ptr<const baselines::TriangleSurface> surface;  // Owned here for GodObjectSet.
-  mutable std::uint64_t nonfinite_forces = 0;  // Seen in timed passes (see best_timed_pass).
+  // Timed passes whose force sum was not finite: read back, so the timed
+  // passes must compute every force (see best_timed_pass).
+  mutable std::uint64_t nonfinite_forces = 0;
 
   void check_count(std::size_t n) const {
     if (n != items.size()) {
@@ -218,6 +220,10 @@ void bind_method_set(nb::class_<MethodSet<Method>>& cls) {
             for (std::size_t i = 0; i < points.size(); ++i) points[i] = s.items[i].force_N();
             return from_points(points);
           },
+          nb::rv_policy::move)
+      .def_prop_ro(
+          "timed_nonfinite_passes", [](const Set& s) { return s.nonfinite_forces; },
+          "Timed passes whose summed force was not finite (0 unless a method broke).",
           nb::rv_policy::move)
       .def_prop_ro(
           "memory_bytes", [](const Set& s) { return s.memory_bytes; },

@@ -11,8 +11,8 @@ namespace hapticut {
 
 namespace {
 
-// The nearest plane among a tet's faces (all but skip_face) that q->q1 exits
-// through (repair 1), and where.
+// The nearest plane among some of a tet's faces that q->q1 exits through
+// (repair 1), and where.
 struct Exit {
   int face = -1;
   double parameter = 2.0;

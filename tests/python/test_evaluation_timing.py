@@ -43,6 +43,7 @@ def test_timed_passes_leave_the_methods_where_they_were(scene, stroke):
         before_q, before_force = method_set.q.copy(), method_set.force_N.copy()
         ns = method_set.time(stroke, 0.001, repeats=2)
         assert math.isfinite(ns) and ns > 0.0
+        assert method_set.timed_nonfinite_passes == 0
         np.testing.assert_array_equal(method_set.q, before_q)
         np.testing.assert_array_equal(method_set.force_N, before_force)
 

@@ -21,7 +21,7 @@ CUBE_HALF_MM = 45.0
 # Target tet edge of the sphere scenes: no finer than the scene needs. fTetWild
 # refines wherever the sphere's facets require it (their edges are 2 to 16 mm),
 # so a coarse target keeps the surface exact and the air and bone coarse (at 6
-# mm the 80-face scene had 40k tets and 16 MB, at 16 mm 2.6k tets and 1.1 MB).
+# mm the 80-face scene had 40k tets and 16 MB, at 16 mm about 2.5k and 1.1 MB).
 SPHERE_EDGE_MM = 16.0
 # Materials shared by every scene of the evaluation: 0 air, 1 drag (1 mm), 2 rigid.
 MATERIALS = [

@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "hapticut/vec3.h"
@@ -26,10 +28,12 @@ struct Aabb {
 namespace detail {
 // One axis of the slab test: narrows [t_enter, t_exit] to where the segment
 // a + t dir is within [lo, hi] on this axis. An axis the segment does not move
-// along (dir = 0, inv_dir = inf) must contain a itself.
+// along (dir = 0, or so small that 1 / dir overflows) must contain a itself.
 inline bool clip_slab(double a, double inv_dir, double dir, double lo, double hi, double& t_enter,
                       double& t_exit) {
-  if (dir == 0.0) return a >= lo && a <= hi;
+  if (dir == 0.0 || !(std::abs(inv_dir) <= std::numeric_limits<double>::max())) {
+    return a >= lo && a <= hi;
+  }
   const double t0 = (lo - a) * inv_dir;
   const double t1 = (hi - a) * inv_dir;
   t_enter = std::max(t_enter, std::min(t0, t1));

@@ -33,13 +33,16 @@ class ForceShading {
   // angle-weighted vertex normals interpolated at its nearest source point.
   // Tetrahedralization splits the source's facets; normals of the split
   // pieces' new vertices then follow the source's smooth field instead of
-  // repeating the facet normal.
+  // repeating the facet normal. The FACE path interpolates these values
+  // unnormalised (the field is linear over a source triangle, so the pieces
+  // reproduce it exactly); EDGE and VERTEX use them normalised.
   ForceShading(const Space& space, const std::vector<Vec3>& source_vertices_mm,
                const std::vector<std::array<std::int32_t, 3>>& source_triangles);
 
   // The shaded force for a proxy at `place` whose raw force is k (q - p), eq. (15).
   // FACE on the rigid surface: the normal component keeps its size and takes
-  // the direction interpolated (barycentric) from the face's vertex normals;
+  // the direction interpolated (barycentric) from the face's vertex values
+  // (face_normals_) at the shaded contact point;
   // the tangential component is kept. EDGE or VERTEX on the rigid surface:
   // the whole force (which lies in the feature's normal cone) takes the
   // interpolated direction; so does a FACE or EDGE not on the surface whose
@@ -62,14 +65,14 @@ class ForceShading {
   // product replaces three cross products per evaluation.
   struct ShadedFace {
     Vec3 origin;               // The face's first corner.
-    Vec3 origin_normal;        // n0: the vertex normal there.
+    Vec3 origin_normal;        // n0: the vertex's face_normals_ value there.
     std::array<Vec3, 3> rows;  // A, by rows: sum over corners of n_k (grad w_k)^T.
     Vec3 normal;               // Unit normal out of the rigid region (into the owner).
   };
 
   Vec3 edge_normal(std::int32_t e, const Vec3& q) const;
   Vec3 touching_normal(const ProxyPlace& place) const;
-  // Fills shaded_faces_ and face_record_ from vertex_normals_.
+  // Fills shaded_faces_ and face_record_ from face_normals_.
   void build_shaded_faces();
 
   const Space* space_;
