@@ -94,18 +94,3 @@ def test_matched_accuracy_takes_the_fastest_model_at_least_as_accurate():
 def test_matched_accuracy_leaves_out_a_model_nothing_of_ours_matches():
     rows = [_row(methods.GOD, 80, 300.0, 0.01), _row(methods.TET, 80, 20.0, 8.9)]
     assert report.matched_accuracy(rows) == []
-
-
-def test_shaded_proxy_is_compared_with_the_most_accurate_god_object_model():
-    rows = [
-        _row(methods.GOD, 80, 300.0, 9.0),
-        _row(methods.GOD, 5120, 600.0, 1.3),
-        _row(methods.SHADED, 80, 50.0, 0.04),
-        _row(methods.SHADED, 320, 60.0, 0.2),
-    ]
-    clause = report.shaded_against_best(rows)
-    assert "on 80 faces" in clause and "12.0x" in clause and "5120 faces" in clause
-    # A shaded model less accurate than the best god-object model is not claimed.
-    rows[2]["dir_err_mean_deg"] = 2.0
-    rows[3]["dir_err_mean_deg"] = 2.0
-    assert report.shaded_against_best(rows) == ""
