@@ -250,27 +250,42 @@ def chart(rows: list[dict], out: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    styles = {"widen": "o-", "scan": "s-", "stay": "s-", "face": "^-", "edge": "v-"}
-    for element, colour in (("edge", "tab:blue"), ("vertex", "tab:red")):
-        for case, style in styles.items():
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    colours = {
+        "widen": "tab:green",
+        "scan": "tab:blue",
+        "stay": "tab:blue",
+        "face": "tab:orange",
+        "edge": "tab:purple",
+    }
+    for element, marker in (("edge", "o"), ("vertex", "s")):
+        for case, colour in colours.items():
             sel = sorted(
                 (r for r in rows if r["element"] == element and r["case"] == case),
                 key=lambda r: r["valence"],
             )
-            if sel:
-                ax.plot(
-                    [r["valence"] for r in sel],
-                    [r["ns"] for r in sel],
-                    style,
-                    color=colour,
-                    alpha=1.0 if case != "widen" else 0.6,
-                    label=f"{element} {case}",
-                )
+            if not sel:
+                continue
+            x = np.array([r["valence"] for r in sel], float)
+            y = np.array([r["ns"] for r in sel], float)
+            # Points only (the fans come from different mesh families), and the
+            # least-squares line ns = fixed + per tet x valence through them.
+            ax.plot(
+                x,
+                y,
+                marker,
+                color=colour,
+                mfc=colour if element == "edge" else "none",
+                label=f"{element} {case}",
+            )
+            if len(sel) >= 2:
+                slope, fixed = np.polyfit(x, y, 1)
+                span = np.linspace(x.min(), x.max(), 50)
+                ax.plot(span, fixed + slope * span, "-", color=colour, lw=0.8, alpha=0.6)
     ax.set_xscale("log", base=2)
     ax.set_yscale("log")
     ax.set_xlabel("tets around the edge or vertex (valence)")
-    ax.set_ylabel("ns per transition (median)")
+    ax.set_ylabel("ns per transition (median; widen: mean over targets)")
     ax.set_title("One EDGE / VERTEX transition against valence")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8, ncol=2)
