@@ -323,6 +323,12 @@ Proxy::Outcome Proxy::step_edge(const Vec3& p, const MoveContext& context) {
                                              &mesh.face_plane(entry.tet, entry.faces[1])};
     const std::array<double, 2> along{dot(d, planes[0]->normal), dot(d, planes[1]->normal)};
     outside_every_wedge = outside_every_wedge && (along[0] > eps || along[1] > eps);
+    // A rigid tet refuses every move: it can neither take the proxy (a-1)
+    // nor offer a face to slide on (a-3), so only its (a-2) test counts.
+    if (space_->tet_is_rigid(entry.tet)) {
+      any_toward = any_toward || (along[0] < -eps && along[1] < -eps);
+      continue;
+    }
     const Material& material = space_->material_of_tet(entry.tet);
     if (along[0] < -eps && along[1] < -eps) {
       any_toward = true;
@@ -398,6 +404,11 @@ Proxy::Outcome Proxy::step_vertex(const Vec3& p, const MoveContext& context) {
       ++k;
     }
     outside_every_cone = outside_every_cone && out_of_cone;
+    // A rigid tet refuses every move: no (a-1) tet, no (a-3) face or edge.
+    if (space_->tet_is_rigid(entry.tet)) {
+      any_toward = any_toward || toward;
+      continue;
+    }
     const Material& material = space_->material_of_tet(entry.tet);
     if (toward) {
       any_toward = true;

@@ -254,7 +254,7 @@ def speed_gap(accuracy_rows: list[dict]) -> list[str]:
         "neighbour slows less), so a ratio measured inside a spell is up to a quarter "
         "lower. Best rounds compare the two outside the spells. The engine and the "
         "baselines here are built for this CPU (HAPTICUT_NATIVE=ON, as the test command "
-        "builds them); a portable build, the default for wheels, measured 12.4x to 16.3x "
+        "builds them); a portable build, the default for wheels, measured 12.5x to 16.3x "
         "on the day this generator was written.",
         "",
         f"Where the time goes. Ours grows from {tet_ns[0]:.0f} to {tet_ns[-1]:.0f} ns "
@@ -531,11 +531,14 @@ def valence_section(rows: list[dict], fits: list[dict], share: dict) -> list[str
         "for every tet before the one that takes the proxy. Testing (a-1) first (three dot "
         "products per tet for a vertex, two for an edge) and scoring candidates only when "
         "no tet takes the proxy would cut widening to a few ns per tet scanned.",
-        "2. **Material-aware fans.** A rigid tet never takes the proxy and never yields a "
-        "candidate, so its planes need not be read: store, per edge and vertex, the fan "
-        "entries whose material can move. At a vertex of a rigid surface about half the "
-        "fan is rigid (half the cost); inside bone nothing is left to search (the `stay` "
-        "row goes to zero).",
+        "2. **Material-aware fans** (done in part). A rigid tet never takes the proxy and "
+        "never yields a candidate: the engine now skips it right after its (a-2) test "
+        "(two or three dot products), which cut the paper's EDGE and VERTEX rows by half "
+        "to two thirds in the benchmark, whose set-ups use rigid tets (docs/benchmarks.md). "
+        "The set-ups "
+        "here use a drag material that refuses every move, so they still measure the "
+        "full search. Storing per edge and vertex only the entries that can move would "
+        "skip reading the rigid tets' planes as well.",
         "3. **Start where the proxy came from.** The tets around a vertex form a spherical "
         "triangulation of directions; walking it from the tet the proxy arrived through "
         "toward p - q finds the (a-1) tet in about sqrt(n) steps instead of n/2 on average.",

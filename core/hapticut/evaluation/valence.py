@@ -43,11 +43,21 @@ def _outward_normals(x: np.ndarray) -> np.ndarray:
     return normals
 
 
+# The tets that refuse: a drag material whose lag is larger than any move here,
+# so every move is refused after the full test. (Rigid tets would be skipped
+# after their (a-2) test, and the search would not be measured.)
+REFUSING = [
+    {"name": "air", "model": "free"},
+    {"name": "refusing", "model": "drag", "drag_distance_mm": 1.0e6},
+]
+
+
 def _space(v: np.ndarray, t: np.ndarray, air: np.ndarray | None) -> _core.Space:
-    """The fan with `air` tets free and the rest rigid (all free when air is None)."""
-    labels = np.full(len(t), meshes.RIGID, np.int32)
-    labels[slice(None) if air is None else air] = meshes.AIR
-    return _core.Space(v, t, labels, meshes.MATERIALS)
+    """The fan with `air` tets free and the rest refusing every move, after the
+    whole search (all free when air is None)."""
+    labels = np.ones(len(t), np.int32)
+    labels[slice(None) if air is None else air] = 0
+    return _core.Space(v, t, labels, REFUSING)
 
 
 def _time(space, state, tet, local, q, p, repeats, batches) -> dict:
@@ -102,9 +112,9 @@ def _row(element, mesh, valence, case, transition, ns, ns_max=None) -> dict:
 def edge_rows(valences=EDGE_VALENCES, repeats: int = 2000, batches: int = 7) -> list[dict]:
     """The centre edge (vertices 0-1) of a fan of n tets.
     widen: all tets free, p at a fan tet's centroid: EDGE->TET (a-1), mean over targets.
-    scan: tet 0 free, the rest rigid, p pulled away from tet 0 across the fan:
+    scan: tet 0 free, the rest refusing, p pulled away from tet 0 across the fan:
     every tet refuses, (a-3) scans all 2n faces, then (b) slides (here in place).
-    face: tet 0 free, the rest rigid, p along one of tet 0's edge faces and a little
+    face: tet 0 free, the rest refusing, p along one of tet 0's edge faces and a little
     out of it: (a-3) picks that face, EDGE->FACE, after scanning the whole fan."""
     rows = []
     for n in valences:
@@ -146,8 +156,8 @@ def edge_rows(valences=EDGE_VALENCES, repeats: int = 2000, batches: int = 7) -> 
 def vertex_rows(fans=VERTEX_FANS, repeats: int = 2000, batches: int = 7) -> list[dict]:
     """The centre vertex 0 of a fan.
     widen: all tets free, p at a fan tet's centroid: VERTEX->TET (a-1), mean over targets.
-    stay: all rigid: (a-1) and every (a-3) candidate refuse, the full search ends in place.
-    face / edge: tet 0 free, the rest rigid, p along a face (edge) of tet 0 through the
+    stay: all refusing: (a-1) and every (a-3) candidate refuse, the full search ends in place.
+    face / edge: tet 0 free, the rest refusing, p along a face (edge) of tet 0 through the
     vertex and a little out of tet 0: (a-3) picks it, after scanning the whole fan."""
     rows = []
     for name, valence, build in fans:
@@ -165,8 +175,10 @@ def vertex_rows(fans=VERTEX_FANS, repeats: int = 2000, batches: int = 7) -> list
         tet = fan[0]
         corner = local_of(tet)
         x = free.vertices[free.tets[tet]]
-        rigid = _space(v, t, [])
-        r = _time(rigid, _core.ProxyState.VERTEX, tet, corner, q, x.mean(axis=0), repeats, batches)
+        refusing = _space(v, t, [])
+        r = _time(
+            refusing, _core.ProxyState.VERTEX, tet, corner, q, x.mean(axis=0), repeats, batches
+        )
         rows.append(_row("vertex", name, valence, "stay", r["transition"], r["ns"]))
 
         one = _space(v, t, fan[:1])
