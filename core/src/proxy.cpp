@@ -323,17 +323,13 @@ Proxy::Outcome Proxy::step_edge(const Vec3& p, const MoveContext& context) {
                                              &mesh.face_plane(entry.tet, entry.faces[1])};
     const std::array<double, 2> along{dot(d, planes[0]->normal), dot(d, planes[1]->normal)};
     outside_every_wedge = outside_every_wedge && (along[0] > eps || along[1] > eps);
+    const bool toward = along[0] < -eps && along[1] < -eps;
+    any_toward = any_toward || toward;
     // A rigid tet refuses every move: it can neither take the proxy (a-1)
     // nor offer a face to slide on (a-3), so only its (a-2) test counts.
-    if (space_->tet_is_rigid(entry.tet)) {
-      any_toward = any_toward || (along[0] < -eps && along[1] < -eps);
-      continue;
-    }
+    if (space_->tet_is_rigid(entry.tet)) continue;
     const Material& material = space_->material_of_tet(entry.tet);
-    if (along[0] < -eps && along[1] < -eps) {
-      any_toward = true;
-      if (move(material, p, q, context).moved) return go(ProxyState::Tet, entry.tet, 0, q);
-    }
+    if (toward && move(material, p, q, context).moved) return go(ProxyState::Tet, entry.tet, 0, q);
     const double normals_dot = dot(planes[0]->normal, planes[1]->normal);
     for (int side = 0; side < 2; ++side) {
       // Eq. (8) on p' = p - n sd(p): (p' - q) . n_other = d . n_other - sd(p) (n . n_other).
@@ -404,16 +400,11 @@ Proxy::Outcome Proxy::step_vertex(const Vec3& p, const MoveContext& context) {
       ++k;
     }
     outside_every_cone = outside_every_cone && out_of_cone;
+    any_toward = any_toward || toward;
     // A rigid tet refuses every move: no (a-1) tet, no (a-3) face or edge.
-    if (space_->tet_is_rigid(entry.tet)) {
-      any_toward = any_toward || toward;
-      continue;
-    }
+    if (space_->tet_is_rigid(entry.tet)) continue;
     const Material& material = space_->material_of_tet(entry.tet);
-    if (toward) {
-      any_toward = true;
-      if (move(material, p, q, context).moved) return go(ProxyState::Tet, entry.tet, 0, q);
-    }
+    if (toward && move(material, p, q, context).moved) return go(ProxyState::Tet, entry.tet, 0, q);
     for (int m = 0; m < 3; ++m) {
       // Eq. (12) on p' = p - n_m sd_m(p), without forming p' unless it wins:
       // (p' - q) . n_g = d . n_g - sd_m(p) (n_m . n_g).

@@ -242,7 +242,7 @@ def example_economy(
         variants = _example_variants(settings.enclosure, near, quick)
         if not quick:
             variants += EXTRA_VARIANTS.get(name, [])
-        cases = []  # (row, shading, method sets: tet and shaded)
+        cases = []  # (row, method sets: tet and shaded)
         for label, override in variants:
             built = _build_example(module, name, _key(settings, override), override, cache)
             labels = np.where(built["rigid"], meshes.RIGID, meshes.AIR).astype(np.int32)
@@ -264,14 +264,14 @@ def example_economy(
             for tag, with_shading in (("tet", None), ("shaded", shading)):
                 sets[tag] = _core.TetMethodSet(space, points, with_shading)
                 sets[tag].reset(np.ascontiguousarray(path[0]))
-            cases.append((row, shading, sets))
+            cases.append((row, sets))
         # Every variant of this example, with and without shading, timed in the
         # same rounds (see accuracy.time_round_robin).
-        all_sets = [method for _, _, sets in cases for method in sets.values()]
+        all_sets = [method for _, sets in cases for method in sets.values()]
         best_ns = iter(
             accuracy.time_round_robin(all_sets, path, 0.001, repeats, 0.0 if quick else min_seconds)
         )
-        for row, _, sets in cases:
+        for row, sets in cases:
             for tag, method in sets.items():
                 result = method.run(path, 0.001, timing_repeats=0)
                 m = surface.contact_metrics(source, slide, result["q"], result["force_N"])
