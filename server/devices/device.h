@@ -1,0 +1,74 @@
+// Device: what the servo loop reads a tool pose from and writes a force to.
+// One small interface for every backend (sim, replay, viewport, HID, UDP
+// bridge), one file each in server/devices/. The loop calls read() and
+// write() once per tick on the real-time thread; they must not block,
+// allocate, lock or log. A backend that talks to hardware or a socket does
+// its I/O on its own thread at its own rate and hands the newest sample over
+// through a LatestValue (latest_value.h); read() then only copies it.
+#pragma once
+
+#include <cstdint>
+
+#include "hapticut/blade.h"
+#include "hapticut/vec3.h"
+
+namespace hapticut::servo {
+
+// One sample of the tool: its pose in the scene's world frame (mm), the
+// button bits, and when it was taken (seconds on CLOCK_MONOTONIC).
+struct DeviceSample {
+  Pose pose;
+  std::uint32_t buttons = 0;
+  double time_s = 0.0;
+  // Increments with every new sample; the same number again means no new sample.
+  std::uint64_t sequence = 0;
+};
+
+// How read() went this tick.
+enum class DeviceStatus : std::uint8_t {
+  Fresh,  // A new sample since the last read.
+  Stale,  // No new sample; `sample` holds the last one (the watchdog counts these).
+  Lost,   // The device is gone (unplugged, bridge silent, told to fail): zero force.
+};
+
+// What the device can take. The safety layer clamps to these; a scene or a
+// control message may only lower them.
+struct DeviceLimits {
+  bool has_force_output = false;        // false: input only (viewport, SpaceMouse).
+  double max_force_N = 0.0;             // Continuous force the device can render.
+  double max_torque_N_mm = 0.0;         // 0 when it renders no torque.
+  double max_stiffness_N_per_mm = 0.0;  // Stable stiffness at 1 kHz; 0: no limit known.
+  Vec3 workspace_min_mm;                // Samples outside [min, max] are device faults.
+  Vec3 workspace_max_mm;
+};
+
+class Device {
+ public:
+  virtual ~Device() = default;
+  Device() = default;
+  Device(const Device&) = delete;
+  Device& operator=(const Device&) = delete;
+
+  // The backend's name for messages ("sim", "replay", "viewport", "hid", "bridge").
+  virtual const char* kind() const = 0;
+  virtual DeviceLimits limits() const = 0;
+
+  // Opens the device and starts any I/O thread. Not real-time; may throw
+  // std::runtime_error with a message naming what is wrong.
+  virtual void start() {}
+  // Stops the I/O thread and leaves the device pushing nothing.
+  virtual void stop() {}
+
+  // Real-time thread, once per tick: the newest sample. now_s is the tick's
+  // time on CLOCK_MONOTONIC.
+  virtual DeviceStatus read(double now_s, DeviceSample& sample) = 0;
+  // Real-time thread, once per tick after read (zero while not engaged or on
+  // a fault): the force on the hand and the torque about the tool origin,
+  // world frame, already clamped by the safety layer.
+  virtual void write(const Vec3& force_N, const Vec3& torque_N_mm) = 0;
+
+  // Non-real-time housekeeping thread, about 2 Hz: reconnection attempts.
+  virtual void maintain() {}
+};
+
+}  // namespace hapticut::servo
