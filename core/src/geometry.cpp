@@ -1,5 +1,9 @@
 #include "hapticut/geometry.h"
 
+#include <algorithm>
+#include <array>
+#include <limits>
+
 namespace hapticut {
 
 Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
@@ -27,6 +31,108 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
   }
   const double denom = 1.0 / (va + vb + vc);
   return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+
+double distance_to_tet(const TetMesh& mesh, std::int32_t t, const Vec3& x) {
+  if (mesh.outside_distance(t, x) <= 0.0) return 0.0;
+  const auto& tet = mesh.tet(t);
+  double best = std::numeric_limits<double>::infinity();
+  for (int f = 0; f < 4; ++f) {
+    std::array<Vec3, 3> corner;
+    for (int v = 0, n = 0; v < 4; ++v) {
+      if (v != f) corner[n++] = mesh.vertex(tet[v]);
+    }
+    best = std::min(best, norm(closest_point_on_triangle(x, corner[0], corner[1], corner[2]) - x));
+  }
+  return best;
+}
+
+bool lies_in_mesh_interior(const TetMesh& mesh, const Vec3& x, double margin) {
+  bool near_tet = false;
+  bool near_boundary = false;
+  mesh.tet_tree().for_each_containing(x, margin, [&](std::int32_t t) {
+    // A plane distance never exceeds the Euclidean one: past margin, t is too far.
+    if (near_boundary || mesh.outside_distance(t, x) > margin) return;
+    const auto& tet = mesh.tet(t);
+    for (int f = 0; f < 4 && !near_boundary; ++f) {
+      if (mesh.neighbour(t, f) != kNoTet) continue;
+      std::array<Vec3, 3> corner;
+      for (int v = 0, n = 0; v < 4; ++v) {
+        if (v != f) corner[n++] = mesh.vertex(tet[v]);
+      }
+      near_boundary =
+          norm(closest_point_on_triangle(x, corner[0], corner[1], corner[2]) - x) <= margin;
+    }
+    near_tet = near_tet || distance_to_tet(mesh, t, x) <= margin;
+  });
+  return near_tet && !near_boundary;
+}
+
+Aabb reach_box(const TetMesh& mesh) {
+  Aabb box;
+  for (const Vec3& v : mesh.vertices()) box.grow(v);
+  const double diagonal = norm(box.hi - box.lo);
+  box.lo -= Vec3{diagonal, diagonal, diagonal};
+  box.hi += Vec3{diagonal, diagonal, diagonal};
+  return box;
+}
+
+namespace {
+
+// The point a + h u of a clipped segment, with the coordinate of the box face
+// it crosses set exactly to that face and the others kept inside the box, so
+// rounding cannot move it into the box's interior or off its surface.
+Vec3 point_on_box_face(const Vec3& a, const Vec3& h, double u, int axis, double face,
+                       const Aabb& box) {
+  std::array<double, 3> x{a.x + h.x * u, a.y + h.y * u, a.z + h.z * u};
+  const std::array<double, 3> lo{box.lo.x, box.lo.y, box.lo.z};
+  const std::array<double, 3> hi{box.hi.x, box.hi.y, box.hi.z};
+  for (int i = 0; i < 3; ++i) x[i] = i == axis ? face : std::clamp(x[i], lo[i], hi[i]);
+  return {x[0], x[1], x[2]};
+}
+
+}  // namespace
+
+ClippedSegment clip_segment_to_box(const Vec3& a, const Vec3& b, const Aabb& box) {
+  const bool a_inside = box.contains(a, 0.0);
+  const bool b_inside = box.contains(b, 0.0);
+  if (a_inside && b_inside) return {true, a, b};
+  // Half the direction, so b - a cannot overflow: the segment is a + h u, u in [0, 2].
+  const Vec3 h = b * 0.5 - a * 0.5;
+  const std::array<double, 3> origin{a.x, a.y, a.z};
+  const std::array<double, 3> step{h.x, h.y, h.z};
+  const std::array<double, 3> lo{box.lo.x, box.lo.y, box.lo.z};
+  const std::array<double, 3> hi{box.hi.x, box.hi.y, box.hi.z};
+  double u_enter = 0.0;
+  double u_exit = 2.0;
+  int enter_axis = 0;
+  int exit_axis = 0;
+  double enter_face = 0.0;
+  double exit_face = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    if (step[i] == 0.0) {
+      if (origin[i] < lo[i] || origin[i] > hi[i]) return {};
+      continue;
+    }
+    const double near_face = step[i] > 0.0 ? lo[i] : hi[i];
+    const double far_face = step[i] > 0.0 ? hi[i] : lo[i];
+    const double u_near = (near_face - origin[i]) / step[i];
+    const double u_far = (far_face - origin[i]) / step[i];
+    if (u_near > u_enter) {
+      u_enter = u_near;
+      enter_axis = i;
+      enter_face = near_face;
+    }
+    if (u_far < u_exit) {
+      u_exit = u_far;
+      exit_axis = i;
+      exit_face = far_face;
+    }
+  }
+  if (u_enter > u_exit) return {};
+  return {true, a_inside ? a : point_on_box_face(a, h, u_enter, enter_axis, enter_face, box),
+          b_inside ? b : point_on_box_face(a, h, u_exit, exit_axis, exit_face, box)};
 }
 
 }  // namespace hapticut
