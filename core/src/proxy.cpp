@@ -351,8 +351,8 @@ Proxy::Outcome Proxy::step_edge(const Vec3& p, const MoveContext& context) {
     const std::array<const Plane*, 2> planes{&mesh.face_plane(entry.tet, entry.faces[0]),
                                              &mesh.face_plane(entry.tet, entry.faces[1])};
     const std::array<double, 2> along{dot(d, planes[0]->normal), dot(d, planes[1]->normal)};
-    outside_every_wedge = outside_every_wedge && (along[0] > eps || along[1] > eps);
-    const bool toward = along[0] < -eps && along[1] < -eps;
+    outside_every_wedge = outside_every_wedge && points_strictly_out_of(along, eps);
+    const bool toward = points_strictly_into(along, eps);
     any_toward = any_toward || toward;
     // A rigid tet refuses every move: it can neither take the proxy (a-1)
     // nor offer a face to slide on (a-3), so only its (a-2) test counts.
@@ -417,18 +417,15 @@ Proxy::Outcome Proxy::step_vertex(const Vec3& p, const MoveContext& context) {
     std::array<int, 3> faces{};
     std::array<const Plane*, 3> planes{};
     std::array<double, 3> along{};  // d . n_f for the three faces through the vertex.
-    bool toward = true;
-    bool out_of_cone = false;
     for (int k = 0, f = 0; f < 4; ++f) {
       if (f == corner) continue;
       faces[k] = f;
       planes[k] = &mesh.face_plane(entry.tet, f);
       along[k] = dot(d, planes[k]->normal);
-      toward = toward && along[k] < -eps;
-      out_of_cone = out_of_cone || along[k] > eps;
       ++k;
     }
-    outside_every_cone = outside_every_cone && out_of_cone;
+    const bool toward = points_strictly_into(along, eps);
+    outside_every_cone = outside_every_cone && points_strictly_out_of(along, eps);
     any_toward = any_toward || toward;
     // A rigid tet refuses every move: no (a-1) tet, no (a-3) face or edge.
     if (space_->tet_is_rigid(entry.tet)) continue;
@@ -494,8 +491,7 @@ Proxy::Outcome Proxy::step_outside(const Vec3& p) {
         continue;
       }
       if (entry.face.tet != kNoTet) {
-        return go(ProxyState::Face, entry.face.tet, entry.face.face,
-                  q + d * entry.face_parameter);
+        return go(ProxyState::Face, entry.face.tet, entry.face.face, q + d * entry.face_parameter);
       }
       break;
     }
@@ -543,8 +539,8 @@ Proxy::EntrySearch Proxy::find_entry(const Vec3& q, const Vec3& end, double afte
   };
   auto try_face = [&](std::int32_t k) {
     const Plane& plane = mesh.boundary_plane(static_cast<std::size_t>(k));
-    try_face_at(k, segment_entry_parameter(plane.signed_distance(q), plane.signed_distance(end),
-                                           eps));
+    try_face_at(k,
+                segment_entry_parameter(plane.signed_distance(q), plane.signed_distance(end), eps));
   };
   // A handful of boundary faces (the paper's cube has 12) is scanned faster
   // than the tree is walked; above that the tree keeps entry logarithmic.

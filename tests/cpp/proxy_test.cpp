@@ -39,7 +39,8 @@ bool has_boundary_face(const TetMesh& mesh, std::int32_t t) {
 bool inside_rigid(const Space& space, const Vec3& q) {
   const TetMesh& mesh = space.mesh();
   for (std::int32_t t = 0; t < mesh.tet_count(); ++t) {
-    if (space.tet_is_rigid(t) && mesh.outside_distance(t, q) < -100 * space.tolerance()) return true;
+    if (space.tet_is_rigid(t) && mesh.outside_distance(t, q) < -100 * space.tolerance())
+      return true;
   }
   return false;
 }
@@ -196,8 +197,7 @@ TEST(Proxy, EntersExactlyThroughABoundaryVertexIntoAnInnerTet) {
 // now lands on the vertex unless p - q points strictly out of every closed cone.
 TEST(Proxy, EnteringThroughABoundaryVertexAlongAnInnerFacePlaneStopsAtTheBone) {
   const MeshData data = grid_mesh({0, 5, 10}, {0, 5, 10}, {0, 5, 10}, 0.3, 21);
-  const TetMesh shape(data.vertices_mm, data.tets,
-                      std::vector<std::int32_t>(data.tets.size(), 0));
+  const TetMesh shape(data.vertices_mm, data.tets, std::vector<std::int32_t>(data.tets.size(), 0));
   std::vector<std::int32_t> materials(data.tets.size(), 0);
   for (std::int32_t t = 0; t < shape.tet_count(); ++t) {
     if (!has_boundary_face(shape, t)) materials[t] = 2;
@@ -324,8 +324,8 @@ TEST(Proxy, AFaceSlideEndingOnAnEdgeLetsTheEdgeFanDecide) {
 // for good. The entry search now runs on the segment clipped to the mesh's
 // reach, so the way back gives the same place and force as no glitch at all.
 TEST(Proxy, AHugeJumpOutAndBackEntersExactly) {
-  const Space space = Space::from_scene(
-      load_scene(std::string(HAPTICUT_TEST_DATA_DIR) + "/../../examples/sphere80.hapticut.msgpack"));
+  const Space space = Space::from_scene(load_scene(std::string(HAPTICUT_TEST_DATA_DIR) +
+                                                   "/../../examples/sphere80.hapticut.msgpack"));
   Proxy direct(space);
   direct.reset({0, 0, 40});
   direct.step({0, 0, 0}, kDt);
