@@ -68,13 +68,17 @@ bool lies_in_mesh_interior(const TetMesh& mesh, const Vec3& x, double margin) {
   return near_tet && !near_boundary;
 }
 
-Aabb reach_box(const TetMesh& mesh) {
+Aabb mesh_box(const TetMesh& mesh, double pad) {
   Aabb box;
   for (const Vec3& v : mesh.vertices()) box.grow(v);
-  const double diagonal = norm(box.hi - box.lo);
-  box.lo -= Vec3{diagonal, diagonal, diagonal};
-  box.hi += Vec3{diagonal, diagonal, diagonal};
+  box.lo -= Vec3{pad, pad, pad};
+  box.hi += Vec3{pad, pad, pad};
   return box;
+}
+
+Aabb reach_box(const TetMesh& mesh) {
+  const Aabb tight = mesh_box(mesh, 0.0);
+  return mesh_box(mesh, norm(tight.hi - tight.lo));
 }
 
 namespace {
@@ -136,9 +140,9 @@ Vec3 point_on_box_surface(const Vec3& o, const Vec3& h, double u, int axis, doub
 
 }  // namespace
 
-ClippedSegment clip_segment_to_box(const Vec3& a, const Vec3& b, const Aabb& box) {
-  const bool a_inside = box.contains(a, 0.0);
-  const bool b_inside = box.contains(b, 0.0);
+ClippedSegment clip_far_segment_to_box(const Vec3& a, const Vec3& b, const Aabb& box) {
+  const bool a_inside = box_holds(box, a);
+  const bool b_inside = box_holds(box, b);
   if (a_inside && b_inside) return {true, a, b};
   // Half the direction, so b - a cannot overflow: a + h u, u in [0, 2]. Each
   // clipped end is computed from the original end nearer to it (u <= 1), so

@@ -112,7 +112,10 @@ const char* proxy_state_name(ProxyState state) {
   return "?";
 }
 
-Proxy::Proxy(const Space& space) : space_(&space), reach_box_(reach_box(space.mesh())) {}
+Proxy::Proxy(const Space& space)
+    : space_(&space),
+      reach_box_(reach_box(space.mesh())),
+      mesh_box_(mesh_box(space.mesh(), space.tolerance())) {}
 
 // (b-2) of TET and FACE: q moved within its tet or face and stopped where
 // the material put it. Called again, the material (same target, q now at
@@ -496,7 +499,9 @@ Proxy::Outcome Proxy::step_outside(const Vec3& p) {
       break;
     }
   }
-  if (lies_in_mesh_interior(space_->mesh(), p, space_->tolerance())) return Outcome::Unchanged;
+  if (box_holds(mesh_box_, p) && lies_in_mesh_interior(space_->mesh(), p, space_->tolerance())) {
+    return Outcome::Unchanged;
+  }
   return go(ProxyState::Outside, kNoTet, 0, p);
 }
 

@@ -154,13 +154,17 @@ TEST(Geometry, MeshInteriorExcludesTheBoundaryAndIncludesInnerFacesAndVertices) 
   EXPECT_FALSE(lies_in_mesh_interior(mesh, {1e18, 0, 0}, margin));
 }
 
-TEST(Geometry, ReachBoxIsTheMeshBoxGrownByItsDiagonal) {
+TEST(Geometry, MeshBoxAndReachBox) {
   const MeshData data = cube_mesh(10.0);
   const TetMesh mesh(data.vertices_mm, data.tets, std::vector<std::int32_t>(data.tets.size(), 0));
   const Aabb box = reach_box(mesh);
   const double diagonal = std::sqrt(300.0);
   EXPECT_NEAR(box.lo.x, -diagonal, 1e-12);
   EXPECT_NEAR(box.hi.z, 10.0 + diagonal, 1e-12);
+  EXPECT_EQ(mesh_box(mesh, 0.5).lo, Vec3(-0.5, -0.5, -0.5));
+  EXPECT_EQ(mesh_box(mesh, 0.5).hi, Vec3(10.5, 10.5, 10.5));
+  EXPECT_TRUE(box_holds(mesh_box(mesh, 0.0), {10, 0, 5}));  // Closed.
+  EXPECT_FALSE(box_holds(mesh_box(mesh, 0.0), {10.001, 0, 5}));
 }
 
 TEST(Geometry, ClipSegmentToBoxKeepsInsideEndsAndPutsClippedOnesOnItsSurface) {

@@ -102,8 +102,11 @@ double distance_to_tet(const TetMesh& mesh, std::int32_t t, const Vec3& x);
 // point near a sharp outer corner does not.
 bool lies_in_mesh_interior(const TetMesh& mesh, const Vec3& x, double margin);
 
-// The box of the mesh's vertices grown by its own diagonal on every side:
-// every point of the mesh is farther than one diagonal from its outside.
+// The box of the mesh's vertices grown by pad on every side.
+Aabb mesh_box(const TetMesh& mesh, double pad);
+
+// The mesh's box grown by its own diagonal on every side: every point of the
+// mesh is farther than one diagonal from the outside of this box.
 Aabb reach_box(const TetMesh& mesh);
 
 // The part of segment a->b inside box (issue 8, defect 7): an OUTSIDE entry
@@ -117,6 +120,18 @@ struct ClippedSegment {
   Vec3 start;
   Vec3 end;
 };
-ClippedSegment clip_segment_to_box(const Vec3& a, const Vec3& b, const Aabb& box);
+ClippedSegment clip_far_segment_to_box(const Vec3& a, const Vec3& b, const Aabb& box);
+
+// Whether the closed box holds x; inline, as OUTSIDE asks it every step.
+inline bool box_holds(const Aabb& box, const Vec3& x) {
+  return x.x >= box.lo.x && x.x <= box.hi.x && x.y >= box.lo.y && x.y <= box.hi.y &&
+         x.z >= box.lo.z && x.z <= box.hi.z;
+}
+
+// clip_far_segment_to_box, with the common case (both ends inside) inline.
+inline ClippedSegment clip_segment_to_box(const Vec3& a, const Vec3& b, const Aabb& box) {
+  if (box_holds(box, a) && box_holds(box, b)) return {true, a, b};
+  return clip_far_segment_to_box(a, b, box);
+}
 
 }  // namespace hapticut

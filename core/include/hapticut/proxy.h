@@ -125,6 +125,8 @@ class Proxy {
   const Space* space_;
   // The mesh's box grown by its diagonal: OUTSIDE clips its entry search to it.
   Aabb reach_box_;
+  // The mesh's box grown by the tolerance: a p outside it is outside the mesh.
+  Aabb mesh_box_;
   ProxyPlace place_;
   Vec3 last_p_;
   bool has_last_p_ = false;
