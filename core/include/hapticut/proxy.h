@@ -107,15 +107,9 @@ class Proxy {
   Outcome step_edge(const Vec3& p, const MoveContext& context);
   Outcome step_vertex(const Vec3& p, const MoveContext& context);
   Outcome step_outside(const Vec3& p);
-  // The nearest entries of q->end beyond parameter `after` (see step_outside).
-  struct EntrySearch {
-    double face_parameter = 2.0;
-    FaceRef face;
-    double rim_parameter = 2.0;
-    FaceRef rim_face;
-    std::array<int, 2> rim_sides{-1, -1};
-  };
-  EntrySearch find_entry(const Vec3& q, const Vec3& end, double after) const;
+  Outcome enter_beyond(const Vec3& q, const Vec3& end, const Vec3& p, double lowest,
+                       int rims_passed);
+  Outcome leave_outside(const Vec3& p);
   Outcome enter_through_rim(const FaceRef& face, const std::array<int, 2>& sides, const Vec3& c,
                             const Vec3& p);
   Outcome go(ProxyState to, std::int32_t tet, int local, const Vec3& q);
