@@ -239,6 +239,60 @@ TEST(Proxy, EnteringThroughABoundaryVertexAlongAnInnerFacePlaneStopsAtTheBone) {
   EXPECT_EQ(between_rigid, 48);  // The issue's paths: a face between two rigid tets.
 }
 
+// A rim passed by outside does not end the search. The path of the test
+// above first grazes the corner of a small cube set beside the grid, exactly,
+// heading out of it; only the rim beyond, at the grid's vertex, enters.
+TEST(Proxy, ARimPassedByOutsideLeavesTheSearchToTheRimBeyond) {
+  const MeshData grid = grid_mesh({0, 5, 10}, {0, 5, 10}, {0, 5, 10}, 0.3, 21);
+  const TetMesh shape(grid.vertices_mm, grid.tets, std::vector<std::int32_t>(grid.tets.size(), 0));
+  int checked = 0;
+  for (std::int32_t v = 0; v < shape.vertex_count() && checked < 6; ++v) {
+    if (!shape.is_boundary_vertex(v)) continue;
+    for (const VertexFanEntry& entry : shape.vertex_fan(v)) {
+      if (has_boundary_face(shape, entry.tet) || checked >= 6) continue;
+      const int f = (entry.local_vertex + 1) % 4;
+      Vec3 face_centre;
+      for (int w = 0; w < 4; ++w) {
+        if (w != f) face_centre += shape.vertex(shape.tet(entry.tet)[w]) / 3.0;
+      }
+      const Vec3 along_face = face_centre - shape.vertex(v);
+      const Vec3 corner = shape.vertex(v) - along_face * 0.75;
+      if (along_face.x == 0.0 || along_face.y == 0.0) continue;
+      // A 1 mm cube with its corner on the path, in the octant the path leaves on both sides.
+      const Vec3 octant{along_face.x > 0 ? -1.0 : 1.0, along_face.y > 0 ? 1.0 : -1.0,
+                        along_face.z > 0 ? -1.0 : 1.0};
+      MeshData both = grid;
+      const MeshData cube = cube_mesh(1.0);
+      const auto first = static_cast<std::int32_t>(both.vertices_mm.size());
+      bool apart = true;
+      for (const Vec3& c : cube.vertices_mm) {
+        both.vertices_mm.push_back(corner + Vec3{c.x * octant.x, c.y * octant.y, c.z * octant.z});
+        apart = apart && shape.locate(both.vertices_mm.back()) == kNoTet;
+      }
+      if (!apart) continue;
+      for (auto tet : cube.tets) {
+        for (auto& w : tet) w += first;
+        both.tets.push_back(tet);
+      }
+      std::vector<std::int32_t> materials(both.tets.size(), 0);
+      for (std::int32_t t = 0; t < shape.tet_count(); ++t) {
+        if (!has_boundary_face(shape, t)) materials[t] = 2;
+      }
+      const Space space = make_space(both, materials);
+      Proxy proxy(space);
+      ASSERT_EQ(proxy.reset(shape.vertex(v) - along_face * 1.5), StartKind::Outside);
+      const Vec3 p = shape.vertex(v) + along_face * 0.5;
+      proxy.step(p, kDt);
+      // Landed at the vertex, then perhaps slid nearer p on free faces.
+      EXPECT_NE(proxy.place().state, ProxyState::Outside) << "vertex " << v;
+      EXPECT_LE(norm(proxy.q() - p), norm(shape.vertex(v) - p) + 1e-9) << "vertex " << v;
+      EXPECT_EQ(proxy.check_invariants(), "") << "vertex " << v;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 6);
+}
+
 // Issue 8, defect 2: an OUTSIDE proxy on an inner vertex or face of the mesh
 // passed the check (its tolerance was the wrong way round); one on the
 // boundary is fine.
