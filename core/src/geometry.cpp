@@ -1,5 +1,9 @@
 #include "hapticut/geometry.h"
 
+#include <algorithm>
+#include <array>
+#include <limits>
+
 namespace hapticut {
 
 Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
@@ -27,6 +31,143 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
   }
   const double denom = 1.0 / (va + vb + vc);
   return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+double distance_to_tet(const TetMesh& mesh, std::int32_t t, const Vec3& x) {
+  if (mesh.outside_distance(t, x) <= 0.0) return 0.0;
+  const auto& tet = mesh.tet(t);
+  double best = std::numeric_limits<double>::infinity();
+  for (int f = 0; f < 4; ++f) {
+    std::array<Vec3, 3> corner;
+    for (int v = 0, n = 0; v < 4; ++v) {
+      if (v != f) corner[n++] = mesh.vertex(tet[v]);
+    }
+    best = std::min(best, norm(closest_point_on_triangle(x, corner[0], corner[1], corner[2]) - x));
+  }
+  return best;
+}
+
+bool lies_in_mesh_interior(const TetMesh& mesh, const Vec3& x, double margin) {
+  bool near_tet = false;
+  bool near_boundary = false;
+  mesh.tet_tree().for_each_containing(x, margin, [&](std::int32_t t) {
+    // A plane distance never exceeds the Euclidean one: past margin, t is too far.
+    if (near_boundary || mesh.outside_distance(t, x) > margin) return;
+    const auto& tet = mesh.tet(t);
+    for (int f = 0; f < 4 && !near_boundary; ++f) {
+      if (mesh.neighbour(t, f) != kNoTet) continue;
+      std::array<Vec3, 3> corner;
+      for (int v = 0, n = 0; v < 4; ++v) {
+        if (v != f) corner[n++] = mesh.vertex(tet[v]);
+      }
+      near_boundary =
+          norm(closest_point_on_triangle(x, corner[0], corner[1], corner[2]) - x) <= margin;
+    }
+    near_tet = near_tet || distance_to_tet(mesh, t, x) <= margin;
+  });
+  return near_tet && !near_boundary;
+}
+
+Aabb mesh_box(const TetMesh& mesh, double pad) {
+  Aabb box;
+  for (const Vec3& v : mesh.vertices()) box.grow(v);
+  box.lo -= Vec3{pad, pad, pad};
+  box.hi += Vec3{pad, pad, pad};
+  return box;
+}
+
+Aabb reach_box(const TetMesh& mesh) {
+  const Aabb tight = mesh_box(mesh, 0.0);
+  return mesh_box(mesh, norm(tight.hi - tight.lo));
+}
+
+namespace {
+
+// Where the segment o + h u, u in [0, 2], enters and leaves a box: the
+// parameters, and the axis and face coordinate of the crossing (axis -1:
+// the rounded parameters cross no face there, an end within rounding of it).
+struct SlabCrossings {
+  double u_enter = 0.0;
+  double u_exit = 2.0;
+  int enter_axis = -1;
+  int exit_axis = -1;
+  double enter_face = 0.0;
+  double exit_face = 0.0;
+  bool misses = false;
+};
+
+SlabCrossings cross_slabs(const Vec3& o, const Vec3& h, const Aabb& box) {
+  const std::array<double, 3> origin{o.x, o.y, o.z};
+  const std::array<double, 3> step{h.x, h.y, h.z};
+  const std::array<double, 3> lo{box.lo.x, box.lo.y, box.lo.z};
+  const std::array<double, 3> hi{box.hi.x, box.hi.y, box.hi.z};
+  SlabCrossings c;
+  for (int i = 0; i < 3; ++i) {
+    if (step[i] == 0.0) {
+      c.misses = c.misses || origin[i] < lo[i] || origin[i] > hi[i];
+      continue;
+    }
+    const double near_face = step[i] > 0.0 ? lo[i] : hi[i];
+    const double far_face = step[i] > 0.0 ? hi[i] : lo[i];
+    const double u_near = (near_face - origin[i]) / step[i];
+    const double u_far = (far_face - origin[i]) / step[i];
+    if (u_near > c.u_enter) {
+      c.u_enter = u_near;
+      c.enter_axis = i;
+      c.enter_face = near_face;
+    }
+    if (u_far < c.u_exit) {
+      c.u_exit = u_far;
+      c.exit_axis = i;
+      c.exit_face = far_face;
+    }
+  }
+  c.misses = c.misses || c.u_enter > c.u_exit;
+  return c;
+}
+
+// The point o + h u, with the coordinate of the face it crosses set exactly
+// to that face and the others kept inside the box: rounding cannot move it
+// into the box's interior or off its surface.
+Vec3 point_on_box_surface(const Vec3& o, const Vec3& h, double u, int axis, double face,
+                          const Aabb& box) {
+  std::array<double, 3> x{o.x + h.x * u, o.y + h.y * u, o.z + h.z * u};
+  const std::array<double, 3> lo{box.lo.x, box.lo.y, box.lo.z};
+  const std::array<double, 3> hi{box.hi.x, box.hi.y, box.hi.z};
+  for (int i = 0; i < 3; ++i) x[i] = i == axis ? face : std::clamp(x[i], lo[i], hi[i]);
+  return {x[0], x[1], x[2]};
+}
+
+}  // namespace
+
+ClippedSegment clip_far_segment_to_box(const Vec3& a, const Vec3& b, const Aabb& box) {
+  const bool a_inside = box_holds(box, a);
+  const bool b_inside = box_holds(box, b);
+  if (a_inside && b_inside) return {true, a, b};
+  // Half the direction, so b - a cannot overflow: a + h u, u in [0, 2]. Each
+  // clipped end is computed from the original end nearer to it (u <= 1), so
+  // a far end's digits never enter it: from_b runs the same segment backward.
+  const Vec3 h = b * 0.5 - a * 0.5;
+  const SlabCrossings from_a = cross_slabs(a, h, box);
+  const SlabCrossings from_b = cross_slabs(b, -h, box);
+  // Either verdict of a miss is a graze of the surface within rounding, one
+  // box margin away from the mesh: no entry there either way.
+  if (from_a.misses || from_b.misses) return {};
+  ClippedSegment clipped{true, a, b};
+  if (!a_inside) {
+    clipped.start =
+        from_a.u_enter <= 1.0
+            ? point_on_box_surface(a, h, from_a.u_enter, from_a.enter_axis, from_a.enter_face, box)
+            : point_on_box_surface(b, -h, from_b.u_exit, from_b.exit_axis, from_b.exit_face, box);
+  }
+  if (!b_inside) {
+    clipped.end =
+        from_a.u_exit <= 1.0
+            ? point_on_box_surface(a, h, from_a.u_exit, from_a.exit_axis, from_a.exit_face, box)
+            : point_on_box_surface(b, -h, from_b.u_enter, from_b.enter_axis, from_b.enter_face,
+                                   box);
+  }
+  return clipped;
 }
 
 }  // namespace hapticut

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "hapticut/aabb_tree.h"
+#include "hapticut/reference_meshes.h"
 
 namespace hapticut {
 namespace {
@@ -81,6 +82,122 @@ TEST(Geometry, SlabTestTreatsAnAxisWithoutMotionAsContainment) {
   const double sub = 1e-310;
   EXPECT_TRUE(hits({0.0, 0.0, 0.0}, {-0.5, sub, -sub}));
   EXPECT_FALSE(hits({0.0, 2.0, 0.0}, {-0.5, 2.0 + sub, 0.0}));
+}
+
+TEST(Geometry, PointsStrictlyIntoNeedsEveryPlanePassedByMoreThanEps) {
+  constexpr double eps = 1e-9;
+  EXPECT_TRUE(points_strictly_into(std::array<double, 3>{-1.0, -2e-9, -0.5}, eps));
+  EXPECT_FALSE(points_strictly_into(std::array<double, 3>{-1.0, -1e-9, -0.5}, eps));  // On a plane.
+  EXPECT_FALSE(points_strictly_into(std::array<double, 2>{-1.0, 0.0}, eps));  // In a face plane.
+  EXPECT_FALSE(points_strictly_into(std::array<double, 2>{-1.0, 2.0}, eps));
+}
+
+TEST(Geometry, PointsStrictlyOutOfAClosedConeNeedsOnePlanePassedByMoreThanEps) {
+  constexpr double eps = 1e-9;
+  EXPECT_TRUE(points_strictly_out_of(std::array<double, 3>{-1.0, 2e-9, -0.5}, eps));
+  EXPECT_FALSE(points_strictly_out_of(std::array<double, 3>{-1.0, 1e-9, -0.5}, eps));  // Closed.
+  EXPECT_FALSE(points_strictly_out_of(std::array<double, 2>{0.0, 0.0}, eps));  // Along the edge.
+  EXPECT_FALSE(points_strictly_out_of(std::array<double, 2>{-1.0, -1.0}, eps));
+  // Neither strictly into nor strictly out of: in the closed cone's boundary,
+  // where repair 2 keeps the walk on the feature (defect 1).
+  const std::array<double, 3> in_a_face_plane{-1.0, 0.0, -0.5};
+  EXPECT_FALSE(points_strictly_into(in_a_face_plane, eps));
+  EXPECT_FALSE(points_strictly_out_of(in_a_face_plane, eps));
+}
+
+TEST(Geometry, SideOfRimIsClosedWithinEps) {
+  constexpr double eps = 1e-9;
+  EXPECT_EQ(side_of_rim(-1.0, eps), RimSide::Inside);
+  EXPECT_EQ(side_of_rim(-1e-9, eps), RimSide::OnRim);
+  EXPECT_EQ(side_of_rim(0.0, eps), RimSide::OnRim);
+  EXPECT_EQ(side_of_rim(1e-9, eps), RimSide::OnRim);
+  EXPECT_EQ(side_of_rim(1.1e-9, eps), RimSide::Outside);
+}
+
+TEST(Geometry, SlideReachesEdgeOnlyOnItsLineAndWithTheTargetNotBackInside) {
+  constexpr double eps = 1e-9;
+  EXPECT_TRUE(slide_reaches_edge(0.0, 1.0, eps));     // Ended on the line, target beyond it.
+  EXPECT_TRUE(slide_reaches_edge(-5e-10, 0.0, eps));  // Target on the line too.
+  EXPECT_FALSE(slide_reaches_edge(-2e-9, 1.0, eps));  // Stopped short of the line.
+  EXPECT_FALSE(slide_reaches_edge(2e-9, 1.0, eps));   // Past it: an exit, not an arrival.
+  // Target strictly back inside: the complement of EDGE's (a-3) test, which
+  // picked this face, so FACE and EDGE cannot hand the proxy back and forth.
+  EXPECT_FALSE(slide_reaches_edge(0.0, -2e-9, eps));
+}
+
+TEST(Geometry, DistanceToTetIsEuclidean) {
+  const MeshData data = cube_mesh(10.0);
+  const TetMesh mesh(data.vertices_mm, data.tets, std::vector<std::int32_t>(data.tets.size(), 0));
+  double nearest = 1e300;
+  for (std::int32_t t = 0; t < mesh.tet_count(); ++t) {
+    nearest = std::min(nearest, distance_to_tet(mesh, t, {13, 14, 10}));
+  }
+  EXPECT_NEAR(nearest, 5.0, 1e-12);  // From the corner (10, 10, 10).
+  const std::int32_t inside = mesh.locate({2, 3, 4});
+  ASSERT_NE(inside, kNoTet);
+  EXPECT_EQ(distance_to_tet(mesh, inside, {2, 3, 4}), 0.0);
+}
+
+TEST(Geometry, MeshInteriorExcludesTheBoundaryAndIncludesInnerFacesAndVertices) {
+  const MeshData data = grid_mesh({0, 10, 20}, {0, 10, 20}, {0, 10, 20});
+  const TetMesh mesh(data.vertices_mm, data.tets, std::vector<std::int32_t>(data.tets.size(), 0));
+  constexpr double margin = 1e-6;
+  EXPECT_TRUE(lies_in_mesh_interior(mesh, {10, 10, 10}, margin));  // The inner vertex.
+  EXPECT_TRUE(lies_in_mesh_interior(mesh, {10, 4, 3}, margin));    // An inner face plane.
+  EXPECT_TRUE(lies_in_mesh_interior(mesh, {4, 3, 2}, margin));
+  EXPECT_TRUE(lies_in_mesh_interior(mesh, {2e-6, 3, 2}, margin));   // Deeper than the margin.
+  EXPECT_FALSE(lies_in_mesh_interior(mesh, {5e-7, 3, 2}, margin));  // Within it of the boundary.
+  EXPECT_FALSE(lies_in_mesh_interior(mesh, {0, 3, 2}, margin));
+  EXPECT_FALSE(lies_in_mesh_interior(mesh, {0, 0, 0}, margin));  // A boundary corner.
+  EXPECT_FALSE(lies_in_mesh_interior(mesh, {-1, 3, 2}, margin));
+  EXPECT_FALSE(lies_in_mesh_interior(mesh, {-1e-7, -1e-7, -1e-7}, margin));
+  EXPECT_FALSE(lies_in_mesh_interior(mesh, {1e18, 0, 0}, margin));
+}
+
+TEST(Geometry, MeshBoxAndReachBox) {
+  const MeshData data = cube_mesh(10.0);
+  const TetMesh mesh(data.vertices_mm, data.tets, std::vector<std::int32_t>(data.tets.size(), 0));
+  const Aabb box = reach_box(mesh);
+  const double diagonal = std::sqrt(300.0);
+  EXPECT_NEAR(box.lo.x, -diagonal, 1e-12);
+  EXPECT_NEAR(box.hi.z, 10.0 + diagonal, 1e-12);
+  EXPECT_EQ(mesh_box(mesh, 0.5).lo, Vec3(-0.5, -0.5, -0.5));
+  EXPECT_EQ(mesh_box(mesh, 0.5).hi, Vec3(10.5, 10.5, 10.5));
+  EXPECT_TRUE(box_holds(mesh_box(mesh, 0.0), {10, 0, 5}));  // Closed.
+  EXPECT_FALSE(box_holds(mesh_box(mesh, 0.0), {10.001, 0, 5}));
+}
+
+TEST(Geometry, ClipSegmentToBoxKeepsInsideEndsAndPutsClippedOnesOnItsSurface) {
+  const Aabb box{{-10, -10, -10}, {10, 10, 10}};
+  const ClippedSegment inside = clip_segment_to_box({1, 2, 3}, {-4, 5, 6}, box);
+  EXPECT_TRUE(inside.hits);
+  EXPECT_EQ(inside.start, Vec3(1, 2, 3));
+  EXPECT_EQ(inside.end, Vec3(-4, 5, 6));
+  // A jump of 1e18 mm and back: the clipped start is exactly on the top face.
+  const ClippedSegment back = clip_segment_to_box({0, 0, 1e18}, {0, 0, 0}, box);
+  EXPECT_TRUE(back.hits);
+  EXPECT_EQ(back.start, Vec3(0, 0, 10));
+  EXPECT_EQ(back.end, Vec3(0, 0, 0));
+  // Both ends far, on opposite sides: both clipped, and b - a overflowing
+  // (1.8e308 - -1.8e308) does not matter.
+  const double huge = std::numeric_limits<double>::max();
+  const ClippedSegment through = clip_segment_to_box({huge, 1, 2}, {-huge, 1, 2}, box);
+  EXPECT_TRUE(through.hits);
+  EXPECT_EQ(through.start, Vec3(10, 1, 2));
+  EXPECT_EQ(through.end, Vec3(-10, 1, 2));
+  // A diagonal from far away keeps the clipped point on the box's surface.
+  const ClippedSegment diagonal = clip_segment_to_box({1e18, -1e18, 1e18}, {0, 0, 0}, box);
+  EXPECT_TRUE(diagonal.hits);
+  EXPECT_NEAR(norm(diagonal.start - Vec3(10, -10, 10)), 0.0, 1e-12);  // Its digits kept.
+  EXPECT_EQ(diagonal.end, Vec3(0, 0, 0));
+  EXPECT_FALSE(clip_segment_to_box({20, 20, 0}, {20, -20, 0}, box).hits);  // Passes by.
+  EXPECT_FALSE(clip_segment_to_box({0, 0, 1e3}, {0, 0, 11}, box).hits);    // Stops short.
+  // Short by 1 mm in 1e18: not resolvable, but whatever is kept lies on the surface.
+  const ClippedSegment grazing = clip_segment_to_box({0, 0, 1e18}, {0, 0, 11}, box);
+  if (grazing.hits) {
+    EXPECT_EQ(grazing.start, Vec3(0, 0, 10));
+    EXPECT_EQ(grazing.end, Vec3(0, 0, 10));
+  }
 }
 
 }  // namespace

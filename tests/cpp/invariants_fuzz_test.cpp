@@ -1,9 +1,13 @@
-// Invariant and fuzz tests (issue: engine, item 7): random meshes with
-// slivers and large fans, random trajectories with jumps across many tets.
-// Device points also land exactly on vertices, edges and faces.
-// After every tick: q finite, the state agrees with q, q outside every rigid
-// tet; rigid layers one tet thick are never crossed. At least 10^6 steps run
-// here; HAPTICUT_FUZZ_STEPS raises it (tests/run_long_fuzz.sh).
+// Invariant and fuzz tests (issue: engine, item 7; issue 8): random meshes
+// with slivers and large fans, random trajectories with jumps across many
+// tets. Device points also land exactly on vertices, edges and faces, and
+// segments q -> p run exactly through boundary vertices, edges and faces,
+// along face planes (issue 8, defects 1 and 2: putting p on a feature never
+// drove the segment through one). After every tick: q finite, the state
+// agrees with q, q outside every rigid tet, an OUTSIDE q outside the mesh;
+// stepping again with the same p changes nothing; rigid layers one tet thick
+// are never crossed. At least 10^6 steps run here; HAPTICUT_FUZZ_STEPS raises
+// it (tests/run_long_fuzz.sh).
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -47,8 +51,111 @@ Box bounds(const MeshData& mesh) {
   return b;
 }
 
-// A random walk of several proxies: small steps, sliding strokes, and now and
-// then a jump anywhere in (and a little beyond) the mesh's box.
+// Two device points whose segment runs exactly through a feature of the
+// mesh boundary: a boundary vertex, a point of a boundary edge or of a
+// boundary face, along a face plane through it, along an edge, or into or
+// out of a tet there. The first point brings the proxy (OUTSIDE: q = p) to one
+// end; the second drives q -> p through the feature.
+struct FeaturePath {
+  Vec3 first;
+  Vec3 second;
+};
+
+template <class Rng>
+FeaturePath path_through_boundary_feature(const TetMesh& mesh, Rng& rng) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const auto& faces = mesh.boundary_faces();
+  const FaceRef face = faces[rng() % faces.size()];
+  const auto& tet = mesh.tet(face.tet);
+  std::array<int, 3> corner{};
+  for (int v = 0, n = 0; v < 4; ++v) {
+    if (v != face.face) corner[n++] = v;
+  }
+  auto centre_of = [&](std::int32_t t) {
+    Vec3 c;
+    for (std::int32_t w : mesh.tet(t)) c += mesh.vertex(w) * 0.25;
+    return c;
+  };
+  Vec3 at;
+  Vec3 direction;
+  const int feature = static_cast<int>(rng() % 3);
+  const int kind = static_cast<int>(rng() % 3);
+  if (feature == 0) {  // A boundary vertex, and any tet around it.
+    const std::int32_t vertex = tet[corner[rng() % 3]];
+    at = mesh.vertex(vertex);
+    const auto fan = mesh.vertex_fan(vertex);
+    const VertexFanEntry entry = fan[rng() % fan.size()];
+    const auto& around = mesh.tet(entry.tet);
+    const int other = (entry.local_vertex + 1 + static_cast<int>(rng() % 3)) % 4;
+    if (kind == 0) {  // Along the plane of a face through the vertex.
+      Vec3 c;
+      for (int w = 0; w < 4; ++w) {
+        if (w != other) c += mesh.vertex(around[w]) / 3.0;
+      }
+      direction = c - at;
+    } else if (kind == 1) {  // Along an edge.
+      direction = mesh.vertex(around[other]) - at;
+    } else {  // Into the tet.
+      direction = centre_of(entry.tet) - at;
+    }
+  } else if (feature == 1) {  // A point of a boundary edge, and any tet around it.
+    const int side = corner[rng() % 3];
+    const int local_edge = kEdgeOfFaces[face.face][side];
+    const std::int32_t e = mesh.edge_of(face.tet, local_edge);
+    const Vec3& a = mesh.vertex(mesh.edge_vertices(e)[0]);
+    const Vec3& b = mesh.vertex(mesh.edge_vertices(e)[1]);
+    at = a + (b - a) * unit(rng);
+    const auto fan = mesh.edge_fan(e);
+    const EdgeFanEntry entry = fan[rng() % fan.size()];
+    if (kind == 0) {  // Along the plane of a face through the edge.
+      const int opposite = entry.faces[rng() % 2];
+      const auto& around = mesh.tet(entry.tet);
+      // The face's corner off the edge: its local vertices are all but `opposite`.
+      Vec3 off_edge;
+      for (int w = 0; w < 4; ++w) {
+        const Vec3& x = mesh.vertex(around[w]);
+        if (w != opposite && !(x == a) && !(x == b)) off_edge = x;
+      }
+      direction = off_edge - at;
+    } else if (kind == 1) {
+      direction = b - a;
+    } else {
+      direction = centre_of(entry.tet) - at;
+    }
+  } else {  // A point of a boundary face.
+    const double u = unit(rng);
+    const double v = unit(rng) * (1.0 - u);
+    const Vec3& a = mesh.vertex(tet[corner[0]]);
+    const Vec3& b = mesh.vertex(tet[corner[1]]);
+    const Vec3& c = mesh.vertex(tet[corner[2]]);
+    at = a + (b - a) * u + (c - a) * v;
+    direction = kind == 0 ? mesh.vertex(tet[corner[rng() % 3]]) - at : centre_of(face.tet) - at;
+  }
+  if (rng() % 2 == 0) direction = -direction;
+  return {at - direction * (0.05 + unit(rng)), at + direction * (0.05 + unit(rng))};
+}
+
+bool same_place_and_force(const Proxy& a, const Proxy& b) {
+  return a.place().state == b.place().state && a.place().tet == b.place().tet &&
+         a.place().local == b.place().local && a.q() == b.q() && a.force_N() == b.force_N();
+}
+
+// Stepping again with the same p changes nothing (place, force). With a
+// speed-dependent material the first repeat sees the speed drop to zero, so
+// the second repeat is compared with the first.
+std::string check_repeat_changes_nothing(const Proxy& proxy, const Vec3& p, bool uses_speed) {
+  Proxy twin = proxy;
+  if (uses_speed && twin.step(p, 0.001).capped) return "";
+  const Proxy before = twin;
+  if (twin.step(p, 0.001).capped) return "";
+  if (same_place_and_force(before, twin)) return "";
+  return std::string("stepping again with the same p moved the proxy from ") +
+         proxy_state_name(before.place().state) + " to " + proxy_state_name(twin.place().state);
+}
+
+// A random walk of several proxies: small steps, sliding strokes, now and
+// then a jump anywhere in (and a little beyond) the mesh's box, and paths
+// exactly through boundary features.
 std::int64_t run_walk(const Space& space, const MeshData& mesh, std::int64_t steps,
                       std::uint64_t seed, bool expect_vertex = true) {
   std::mt19937_64 rng(seed);
@@ -64,6 +171,8 @@ std::int64_t run_walk(const Space& space, const MeshData& mesh, std::int64_t ste
   const double scale = norm(size);
   std::vector<Proxy> proxies(8, Proxy(space));
   std::vector<Vec3> points(proxies.size());
+  std::vector<Vec3> pending(proxies.size());
+  std::vector<bool> has_pending(proxies.size(), false);
   for (std::size_t i = 0; i < proxies.size(); ++i) {
     points[i] = anywhere();
     proxies[i].reset(points[i]);
@@ -72,9 +181,17 @@ std::int64_t run_walk(const Space& space, const MeshData& mesh, std::int64_t ste
   for (std::int64_t s = 0; s < steps; ++s) {
     const std::size_t i = static_cast<std::size_t>(s) % proxies.size();
     const double kind = unit(rng);
-    if (kind < 0.02) {
+    if (has_pending[i]) {
+      points[i] = pending[i];  // The second half of a path through a boundary feature.
+      has_pending[i] = false;
+    } else if (kind < 0.05) {
+      const FeaturePath path = path_through_boundary_feature(space.mesh(), rng);
+      points[i] = path.first;
+      pending[i] = path.second;
+      has_pending[i] = true;
+    } else if (kind < 0.07) {
       points[i] = anywhere();  // A jump across many tets in one tick.
-    } else if (kind < 0.04) {
+    } else if (kind < 0.09) {
       // Exactly on a vertex, an edge or a face: where strict tests go wrong.
       const auto& tet = mesh.tets[rng() % mesh.tets.size()];
       const Vec3& a = mesh.vertices_mm[tet[0]];
@@ -88,7 +205,10 @@ std::int64_t run_walk(const Space& space, const MeshData& mesh, std::int64_t ste
     }
     const TickResult r = proxies[i].step(points[i], 0.001);
     capped += r.capped ? 1 : 0;
-    const std::string problem = proxies[i].check_invariants();
+    std::string problem = proxies[i].check_invariants();
+    if (problem.empty() && !r.capped) {
+      problem = check_repeat_changes_nothing(proxies[i], points[i], space.uses_speed());
+    }
     if (!problem.empty()) {
       ADD_FAILURE() << "step " << s << ", proxy " << i << ", state "
                     << proxy_state_name(proxies[i].place().state) << ": " << problem;

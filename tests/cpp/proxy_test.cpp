@@ -4,7 +4,10 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
 
+#include "hapticut/geometry.h"
+#include "hapticut/scene_io.h"
 #include "test_support.h"
 
 namespace hapticut {
@@ -16,6 +19,30 @@ constexpr double kDt = 0.001;
 
 std::uint64_t count(const Proxy& proxy, ProxyState from, ProxyState to, bool neighbour) {
   return proxy.counters().transitions[int(from)][int(to)][neighbour ? 1 : 0];
+}
+
+Vec3 centroid(const TetMesh& mesh, std::int32_t t) {
+  Vec3 c;
+  for (std::int32_t v : mesh.tet(t)) c += mesh.vertex(v) * 0.25;
+  return c;
+}
+
+bool has_boundary_face(const TetMesh& mesh, std::int32_t t) {
+  for (int f = 0; f < 4; ++f) {
+    if (mesh.neighbour(t, f) == kNoTet) return true;
+  }
+  return false;
+}
+
+// Checked here without check_invariants, so the tests also fail against an
+// engine whose check had the blind spot (issue 8, defect 2).
+bool inside_rigid(const Space& space, const Vec3& q) {
+  const TetMesh& mesh = space.mesh();
+  for (std::int32_t t = 0; t < mesh.tet_count(); ++t) {
+    if (space.tet_is_rigid(t) && mesh.outside_distance(t, q) < -100 * space.tolerance())
+      return true;
+  }
+  return false;
 }
 
 TEST(Proxy, WalksIntoTheNeighbourThroughTheSharedFace) {
@@ -160,6 +187,254 @@ TEST(Proxy, EntersExactlyThroughABoundaryVertexIntoAnInnerTet) {
     }
   }
   EXPECT_GT(checked, 0) << "the grid should have inner tets at boundary vertices";
+}
+
+// Issue 8, defect 1: on the jittered grid with every tet that has no
+// boundary face rigid, a path from outside exactly through a boundary vertex
+// and along the plane of a rigid tet's face through it met no fan tet
+// strictly toward p; OUTSIDE then set q = p inside the mesh, and the next
+// tick walked into the bone with zero force (48 of 48 such paths). The rim
+// now lands on the vertex unless p - q points strictly out of every closed cone.
+TEST(Proxy, EnteringThroughABoundaryVertexAlongAnInnerFacePlaneStopsAtTheBone) {
+  const MeshData data = grid_mesh({0, 5, 10}, {0, 5, 10}, {0, 5, 10}, 0.3, 21);
+  const TetMesh shape(data.vertices_mm, data.tets, std::vector<std::int32_t>(data.tets.size(), 0));
+  std::vector<std::int32_t> materials(data.tets.size(), 0);
+  for (std::int32_t t = 0; t < shape.tet_count(); ++t) {
+    if (!has_boundary_face(shape, t)) materials[t] = 2;
+  }
+  const Space space = make_space(data, materials);
+  const TetMesh& mesh = space.mesh();
+  int paths = 0;
+  int between_rigid = 0;
+  for (std::int32_t v = 0; v < mesh.vertex_count(); ++v) {
+    if (!mesh.is_boundary_vertex(v)) continue;
+    for (const VertexFanEntry& entry : mesh.vertex_fan(v)) {
+      if (!space.tet_is_rigid(entry.tet)) continue;
+      for (int f = 0; f < 4; ++f) {
+        if (f == entry.local_vertex) continue;
+        Vec3 face_centre;
+        for (int w = 0; w < 4; ++w) {
+          if (w != f) face_centre += mesh.vertex(mesh.tet(entry.tet)[w]) / 3.0;
+        }
+        const Vec3 along_face = face_centre - mesh.vertex(v);
+        const Vec3 from = mesh.vertex(v) - along_face * 0.5;
+        if (mesh.locate(from) != kNoTet) continue;  // Behind the vertex is still mesh.
+        Proxy proxy(space);
+        proxy.reset(from);
+        proxy.step(mesh.vertex(v) + along_face * 0.5, kDt);
+        EXPECT_NE(proxy.place().state, ProxyState::Outside) << "vertex " << v << " face " << f;
+        EXPECT_EQ(proxy.check_invariants(), "") << "vertex " << v << " face " << f;
+        // Then into the bone itself: the proxy must stay out and push back.
+        const Vec3 deep = centroid(mesh, entry.tet);
+        proxy.step(deep, kDt);
+        EXPECT_FALSE(inside_rigid(space, proxy.q())) << "vertex " << v << " face " << f;
+        EXPECT_GT(norm(proxy.force_N()), 0.0) << "vertex " << v << " face " << f;
+        ++paths;
+        const std::int32_t across = mesh.neighbour(entry.tet, f);
+        between_rigid += across != kNoTet && space.tet_is_rigid(across) ? 1 : 0;
+      }
+    }
+  }
+  EXPECT_EQ(paths, 108);
+  EXPECT_EQ(between_rigid, 48);  // The issue's paths: a face between two rigid tets.
+}
+
+// A rim passed by outside does not end the search. The path of the test
+// above first grazes the corner of a small cube set beside the grid, exactly,
+// heading out of it; only the rim beyond, at the grid's vertex, enters.
+TEST(Proxy, ARimPassedByOutsideLeavesTheSearchToTheRimBeyond) {
+  const MeshData grid = grid_mesh({0, 5, 10}, {0, 5, 10}, {0, 5, 10}, 0.3, 21);
+  const TetMesh shape(grid.vertices_mm, grid.tets, std::vector<std::int32_t>(grid.tets.size(), 0));
+  int checked = 0;
+  for (std::int32_t v = 0; v < shape.vertex_count() && checked < 6; ++v) {
+    if (!shape.is_boundary_vertex(v)) continue;
+    for (const VertexFanEntry& entry : shape.vertex_fan(v)) {
+      if (has_boundary_face(shape, entry.tet) || checked >= 6) continue;
+      const int f = (entry.local_vertex + 1) % 4;
+      Vec3 face_centre;
+      for (int w = 0; w < 4; ++w) {
+        if (w != f) face_centre += shape.vertex(shape.tet(entry.tet)[w]) / 3.0;
+      }
+      const Vec3 along_face = face_centre - shape.vertex(v);
+      const Vec3 corner = shape.vertex(v) - along_face * 0.75;
+      if (along_face.x == 0.0 || along_face.y == 0.0) continue;
+      // A 1 mm cube with its corner on the path, in the octant the path leaves on both sides.
+      const Vec3 octant{along_face.x > 0 ? -1.0 : 1.0, along_face.y > 0 ? 1.0 : -1.0,
+                        along_face.z > 0 ? -1.0 : 1.0};
+      MeshData both = grid;
+      const MeshData cube = cube_mesh(1.0);
+      const auto first = static_cast<std::int32_t>(both.vertices_mm.size());
+      bool apart = true;
+      for (const Vec3& c : cube.vertices_mm) {
+        both.vertices_mm.push_back(corner + Vec3{c.x * octant.x, c.y * octant.y, c.z * octant.z});
+        apart = apart && shape.locate(both.vertices_mm.back()) == kNoTet;
+      }
+      if (!apart) continue;
+      for (auto tet : cube.tets) {
+        for (auto& w : tet) w += first;
+        both.tets.push_back(tet);
+      }
+      std::vector<std::int32_t> materials(both.tets.size(), 0);
+      for (std::int32_t t = 0; t < shape.tet_count(); ++t) {
+        if (!has_boundary_face(shape, t)) materials[t] = 2;
+      }
+      const Space space = make_space(both, materials);
+      Proxy proxy(space);
+      ASSERT_EQ(proxy.reset(shape.vertex(v) - along_face * 1.5), StartKind::Outside);
+      const Vec3 p = shape.vertex(v) + along_face * 0.5;
+      proxy.step(p, kDt);
+      // Landed at the vertex, then perhaps slid nearer p on free faces.
+      EXPECT_NE(proxy.place().state, ProxyState::Outside) << "vertex " << v;
+      EXPECT_LE(norm(proxy.q() - p), norm(shape.vertex(v) - p) + 1e-9) << "vertex " << v;
+      EXPECT_EQ(proxy.check_invariants(), "") << "vertex " << v;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 6);
+}
+
+// Issue 8, defect 2: an OUTSIDE proxy on an inner vertex or face of the mesh
+// passed the check (its tolerance was the wrong way round); one on the
+// boundary is fine.
+TEST(Proxy, CheckInvariantsRejectsAnOutsideProxyInsideTheMesh) {
+  const MeshData data = grid_mesh({0, 10, 20}, {0, 10, 20}, {0, 10, 20});
+  const Space space = make_space(data, 0);
+  Proxy proxy(space);
+  proxy.reset({-5, 5, 5});
+  proxy.set_place({ProxyState::Outside, kNoTet, 0, {10, 10, 10}});  // The inner vertex.
+  EXPECT_NE(proxy.check_invariants(), "");
+  proxy.set_place({ProxyState::Outside, kNoTet, 0, {10, 4, 3}});  // On the inner plane x = 10.
+  EXPECT_NE(proxy.check_invariants(), "");
+  proxy.set_place({ProxyState::Outside, kNoTet, 0, {4, 3, 2}});  // Inside a tet.
+  EXPECT_NE(proxy.check_invariants(), "");
+  proxy.set_place({ProxyState::Outside, kNoTet, 0, {0, 4, 3}});  // On the boundary.
+  EXPECT_EQ(proxy.check_invariants(), "");
+  proxy.set_place({ProxyState::Outside, kNoTet, 0, {-1e-3, 4, 3}});  // Just outside.
+  EXPECT_EQ(proxy.check_invariants(), "");
+}
+
+// Issue 8, defect 2: the rigid message was overwritten by the OUTSIDE one.
+TEST(Proxy, CheckInvariantsNamesTheRigidTet) {
+  const Space space = make_space(two_tets_mesh(), {0, 2});
+  Proxy proxy(space);
+  proxy.reset({2, 2, -1});
+  const Vec3 in_bone = centroid(space.mesh(), 1);
+  proxy.set_place({ProxyState::Outside, kNoTet, 0, in_bone});
+  EXPECT_EQ(proxy.check_invariants(), "q inside rigid tet 1");
+  proxy.set_place({ProxyState::Face, 0, 3, in_bone});
+  EXPECT_EQ(proxy.check_invariants(), "q inside rigid tet 1");
+}
+
+// The OUTSIDE safety net: q = p only where p is outside the mesh. From a
+// (corrupt) OUTSIDE place inside the mesh no entry can be found; the proxy
+// must hold rather than follow p through the bone.
+TEST(Proxy, OutsideNeverSetsQToAPointInsideTheMesh) {
+  const Space space = make_space(two_tets_mesh(), {0, 2});
+  Proxy proxy(space);
+  proxy.reset({2, 2, -1});
+  const Vec3 start = centroid(space.mesh(), 0);
+  proxy.set_place({ProxyState::Outside, kNoTet, 0, start});
+  proxy.step(centroid(space.mesh(), 1), kDt);
+  EXPECT_EQ(proxy.q(), start);
+  EXPECT_FALSE(inside_rigid(space, proxy.q()));
+}
+
+// Issue 8, defect 3: a 12-tet fan around (0,0,-5)-(0,0,5), rigid where x > 0
+// and y > 0. With q on the free face y = 0 and p at (0, 0.5, 0), exactly in
+// the plane between a rigid and a free tet, the face slide landed on the fan
+// edge and stayed there, pushing 0.05 N for as long as p was held (0.5 N
+// with p = (0, 5, 3) outside the mesh), though p itself is free and reachable.
+TEST(Proxy, AFaceSlideEndingOnAnEdgeLetsTheEdgeFanDecide) {
+  const MeshData data = edge_fan_mesh(12, 10.0, 5.0);
+  std::vector<std::int32_t> materials(data.tets.size(), 0);
+  for (std::size_t t = 0; t < data.tets.size(); ++t) {
+    Vec3 c;
+    for (std::int32_t v : data.tets[t]) c += data.vertices_mm[v] * 0.25;
+    if (c.x > 0 && c.y > 0) materials[t] = 2;
+  }
+  const Space space = make_space(data, materials);
+  for (const Vec3& start : {Vec3{-1, -1, 0}, Vec3{-1, -3, 1}}) {
+    Proxy proxy(space);
+    proxy.reset(start);
+    proxy.step({2, 2, 0}, kDt);  // Pressed into the bone: held on the face y = 0.
+    ASSERT_EQ(proxy.place().state, ProxyState::Face);
+    ASSERT_NEAR(norm(proxy.q() - Vec3(2, 0, 0)), 0.0, 1e-9);
+    for (int tick = 0; tick < 3; ++tick) {
+      proxy.step({0, 0.5, 0}, kDt);
+      EXPECT_EQ(proxy.q(), Vec3(0, 0.5, 0)) << "tick " << tick;
+      EXPECT_EQ(proxy.force_N(), Vec3(0, 0, 0)) << "tick " << tick;
+      EXPECT_EQ(proxy.check_invariants(), "");
+    }
+    proxy.step({2, 2, 0}, kDt);
+    proxy.step({0, 5, 3}, kDt);  // Outside the mesh, past the free tets.
+    EXPECT_EQ(proxy.place().state, ProxyState::Outside);
+    EXPECT_EQ(proxy.q(), Vec3(0, 5, 3));
+    EXPECT_EQ(proxy.force_N(), Vec3(0, 0, 0));
+  }
+}
+
+// Issue 8, defect 7: a jump to 1e18 mm and back left q where it was computed
+// as q + d s with every digit lost: inside the rigid sphere, OUTSIDE, 0 N,
+// for good. The entry search now runs on the segment clipped to the mesh's
+// reach, so the way back gives the same place and force as no glitch at all.
+TEST(Proxy, AHugeJumpOutAndBackEntersExactly) {
+  const Space space = Space::from_scene(load_scene(std::string(HAPTICUT_TEST_DATA_DIR) +
+                                                   "/../../examples/sphere80.hapticut.msgpack"));
+  Proxy direct(space);
+  direct.reset({0, 0, 40});
+  direct.step({0, 0, 0}, kDt);
+  ASSERT_GT(norm(direct.force_N()), 1.0);
+  for (const double far : {1e6, 1e15, 1e18, 1e300, std::numeric_limits<double>::max()}) {
+    for (const Vec3& away : {Vec3{0, 0, far}, Vec3{far, -far, far}, Vec3{-far, 0, 0}}) {
+      Proxy proxy(space);
+      proxy.reset({0, 0, 40});
+      proxy.step(away, kDt);
+      EXPECT_EQ(proxy.place().state, ProxyState::Outside);
+      proxy.step({0, 0, 0}, kDt);
+      EXPECT_FALSE(inside_rigid(space, proxy.q())) << "far " << far;
+      EXPECT_NE(proxy.place().state, ProxyState::Outside) << "far " << far;
+      EXPECT_GT(norm(proxy.force_N()), 1.0) << "far " << far;
+      EXPECT_EQ(proxy.check_invariants(), "") << "far " << far;
+      if (away.x == 0.0) {  // Straight back down the same line: exactly as without the jump.
+        EXPECT_NEAR(norm(proxy.q() - direct.q()), 0.0, 1e-9) << "far " << far;
+        EXPECT_NEAR(norm(proxy.force_N() - direct.force_N()), 0.0, 1e-10) << "far " << far;
+      }
+    }
+  }
+}
+
+// The same on a grid of slivers with a rigid core, from 1e15 mm on every
+// side and straight through from one side to the other.
+TEST(Proxy, HugeJumpsOnASliverGridNeverEndInTheBone) {
+  const MeshData data =
+      grid_mesh({0, 7, 15, 16, 30, 41}, {0, 9, 12, 25, 33}, {0, 10, 19, 20.5, 32}, 0.45, 11);
+  std::vector<std::int32_t> materials(data.tets.size(), 0);
+  Vec3 middle{20.5, 16.5, 16};
+  for (std::size_t t = 0; t < data.tets.size(); ++t) {
+    Vec3 c;
+    for (std::int32_t v : data.tets[t]) c += data.vertices_mm[v] * 0.25;
+    if (norm(c - middle) < 9.0) materials[t] = 2;
+  }
+  const Space space = make_space(data, materials);
+  for (const double far : {1e15, 1e18, 1e200}) {
+    for (int axis = 0; axis < 3; ++axis) {
+      for (const double sign : {-1.0, 1.0}) {
+        Vec3 offset;
+        (axis == 0 ? offset.x : axis == 1 ? offset.y : offset.z) = sign * far;
+        Proxy proxy(space);
+        proxy.reset(middle + offset * (20.0 / far));
+        proxy.step(middle + offset, kDt);
+        proxy.step(middle, kDt);
+        EXPECT_FALSE(inside_rigid(space, proxy.q())) << "far " << far << " axis " << axis;
+        EXPECT_GT(norm(proxy.force_N()), 0.1) << "far " << far << " axis " << axis;
+        EXPECT_EQ(proxy.check_invariants(), "");
+        proxy.step(middle + offset, kDt);
+        proxy.step(middle - offset, kDt);  // Both ends far: straight through the mesh.
+        EXPECT_FALSE(inside_rigid(space, proxy.q())) << "far " << far << " axis " << axis;
+        EXPECT_EQ(proxy.check_invariants(), "");
+      }
+    }
+  }
 }
 
 TEST(Proxy, EdgeFanPicksTheTetTowardP) {

@@ -3,6 +3,12 @@
 // proxy.cpp calls these and never compares floats itself.
 #pragma once
 
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include "hapticut/aabb_tree.h"
 #include "hapticut/tet_mesh.h"
 #include "hapticut/vec3.h"
 
@@ -38,5 +44,94 @@ inline double segment_entry_parameter(double d0, double d1, double eps) {
 
 // The point of triangle abc nearest to p (Ericson, Real-Time Collision Detection 5.1.5).
 Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+
+// ---- Predicates of the walk --------------------------------------------------
+// Every predicate takes eps, the mesh's one tolerance (TetMesh::tolerance(),
+// docs/decisions.md "Tolerance and its scale"), and the same quantities: an
+// "along" value d . n, with d = p - q not normalised (how far p lies beyond
+// the plane through q with outward unit normal n), or a signed distance.
+// Strict means beyond eps; closed means within eps counts as on the plane.
+
+// Eqs. (7) and (11): d points strictly into the wedge (2 planes) or cone (3
+// planes) that the planes through q bound: the tet lies toward p.
+template <std::size_t count>
+constexpr bool points_strictly_into(const std::array<double, count>& along, double eps) {
+  for (const double a : along) {
+    if (!(a < -eps)) return false;
+  }
+  return true;
+}
+
+// Repair 2: d points strictly out of the closed wedge or cone: past one of
+// its planes by more than eps. Only then may a walk leave the mesh there.
+template <std::size_t count>
+constexpr bool points_strictly_out_of(const std::array<double, count>& along, double eps) {
+  for (const double a : along) {
+    if (a > eps) return true;
+  }
+  return false;
+}
+
+// Where a point lies against one side plane of a triangle (eq. 14 with
+// repair 4): inside, on the rim (within eps), or outside the triangle.
+enum class RimSide : std::uint8_t { Inside, OnRim, Outside };
+constexpr RimSide side_of_rim(double side_distance, double eps) {
+  if (side_distance > eps) return RimSide::Outside;
+  return side_distance >= -eps ? RimSide::OnRim : RimSide::Inside;
+}
+
+// FACE (b) ending on an edge (issue 8, defect 3): the slide's end q' lies on
+// the plane of another face of the tet (|d1| <= eps: on the edge line) and
+// the target p' does not lie strictly behind that plane as seen from q
+// ((p' - q) . n >= -eps). Then the slide has reached the edge, and the edge's
+// fan decides where the proxy goes; EDGE's (a-3) picks this face back only
+// when (p' - q) . n < -eps, the exact complement, so the two never ping-pong.
+constexpr bool slide_reaches_edge(double end_distance, double target_along, double eps) {
+  return end_distance >= -eps && end_distance <= eps && target_along >= -eps;
+}
+
+// ---- Mesh queries of the OUTSIDE state ----------------------------------------
+
+// Euclidean distance from x to tet t (0 inside or on it).
+double distance_to_tet(const TetMesh& mesh, std::int32_t t, const Vec3& x);
+
+// Whether x lies in the mesh farther than margin from its boundary: within
+// margin of some tet and of no boundary triangle. An OUTSIDE proxy must never
+// be there (the OUTSIDE safety net and Proxy::check_invariants). Exact
+// distances, so a point on an interior face or vertex counts as inside and a
+// point near a sharp outer corner does not.
+bool lies_in_mesh_interior(const TetMesh& mesh, const Vec3& x, double margin);
+
+// The box of the mesh's vertices grown by pad on every side.
+Aabb mesh_box(const TetMesh& mesh, double pad);
+
+// The mesh's box grown by its own diagonal on every side: every point of the
+// mesh is farther than one diagonal from the outside of this box.
+Aabb reach_box(const TetMesh& mesh);
+
+// The part of segment a->b inside box (issue 8, defect 7): an OUTSIDE entry
+// search on a->b computes the same entry on start->end, but with both ends
+// near the mesh, so q + d s keeps its precision for any finite a and b (a
+// jump from 1e18 mm loses every digit otherwise). An end inside the box is
+// returned bit for bit; a clipped end lies exactly on the box's surface, so
+// it is outside the mesh. hits is false when the segment misses the box.
+struct ClippedSegment {
+  bool hits = false;
+  Vec3 start;
+  Vec3 end;
+};
+ClippedSegment clip_far_segment_to_box(const Vec3& a, const Vec3& b, const Aabb& box);
+
+// Whether the closed box holds x; inline, as OUTSIDE asks it every step.
+inline bool box_holds(const Aabb& box, const Vec3& x) {
+  return x.x >= box.lo.x && x.x <= box.hi.x && x.y >= box.lo.y && x.y <= box.hi.y &&
+         x.z >= box.lo.z && x.z <= box.hi.z;
+}
+
+// clip_far_segment_to_box, with the common case (both ends inside) inline.
+inline ClippedSegment clip_segment_to_box(const Vec3& a, const Vec3& b, const Aabb& box) {
+  if (box_holds(box, a) && box_holds(box, b)) return {true, a, b};
+  return clip_far_segment_to_box(a, b, box);
+}
 
 }  // namespace hapticut

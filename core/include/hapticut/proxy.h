@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <string>
 
+#include "hapticut/aabb_tree.h"
 #include "hapticut/material.h"
 #include "hapticut/space.h"
 
@@ -92,7 +93,8 @@ class Proxy {
   void clear_counters() { counters_ = {}; }
 
   // Does the state agree with q (within tolerance_factor x the mesh tolerance),
-  // and is q outside every rigid tet? Returns "" when it does, else the reason.
+  // is q outside every rigid tet, and an OUTSIDE q outside the mesh (or on its
+  // boundary)? Returns "" when it does, else the first reason found.
   std::string check_invariants(double tolerance_factor = 100.0) const;
 
  private:
@@ -105,13 +107,20 @@ class Proxy {
   Outcome step_edge(const Vec3& p, const MoveContext& context);
   Outcome step_vertex(const Vec3& p, const MoveContext& context);
   Outcome step_outside(const Vec3& p);
+  Outcome enter_beyond(const Vec3& q, const Vec3& end, const Vec3& p, double lowest,
+                       int rims_passed);
+  Outcome leave_outside(const Vec3& p);
   Outcome enter_through_rim(const FaceRef& face, const std::array<int, 2>& sides, const Vec3& c,
-                            const Vec3& d);
+                            const Vec3& p);
   Outcome go(ProxyState to, std::int32_t tet, int local, const Vec3& q);
   Outcome settle_at(const Vec3& q);
   StartKind push_out_of_rigid(std::int32_t start_tet, const Vec3& p);
 
   const Space* space_;
+  // The mesh's box grown by its diagonal: OUTSIDE clips its entry search to it.
+  Aabb reach_box_;
+  // The mesh's box grown by the tolerance: a p outside it is outside the mesh.
+  Aabb mesh_box_;
   ProxyPlace place_;
   Vec3 last_p_;
   bool has_last_p_ = false;
