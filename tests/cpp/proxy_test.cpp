@@ -19,7 +19,8 @@ std::uint64_t count(const Proxy& proxy, ProxyState from, ProxyState to, bool nei
 }
 
 TEST(Proxy, WalksIntoTheNeighbourThroughTheSharedFace) {
-  const Space space = make_space(two_tets_mesh(), 0);
+  const auto space_owner = make_space(two_tets_mesh(), 0);
+  const Space& space = *space_owner;
   Proxy proxy(space);
   EXPECT_EQ(proxy.reset({2, 2, -1}), StartKind::InsideTet);
   const std::int32_t start_tet = proxy.place().tet;
@@ -36,7 +37,8 @@ TEST(Proxy, WalksIntoTheNeighbourThroughTheSharedFace) {
 TEST(Proxy, RigidNeighbourHoldsTheProxyOnTheFaceAndLetsItSlide) {
   const MeshData mesh = two_tets_mesh();
   // Tet 1 (above z = 0) is bone.
-  const Space space = make_space(mesh, {0, 2});
+  const auto space_owner = make_space(mesh, {0, 2});
+  const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({2, 2, -1});
   proxy.step({2, 2, 3}, kDt);
@@ -66,7 +68,8 @@ TEST(Proxy, SlidesIntoAValleyEdgeThenItsCorner) {
     for (std::int32_t v : mesh.tets[t]) c += mesh.vertices_mm[v] * 0.25;
     if (c.z < 10 || (c.z < 20 && (c.x > 20 || c.y > 20))) m[t] = 2;
   }
-  const Space space = make_space(mesh, m);
+  const auto space_owner = make_space(mesh, m);
+  const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({15, 15, 15});
   proxy.step({25, 15, 5}, kDt);
@@ -84,7 +87,8 @@ TEST(Proxy, SlidesIntoAValleyEdgeThenItsCorner) {
 }
 
 TEST(Proxy, DragLagsByExactlyD) {
-  const Space space = make_space(grid_mesh({0, 10, 20, 30}, {0, 10, 20}, {0, 10, 20}, 0.2, 9), 1);
+  const auto space_owner = make_space(grid_mesh({0, 10, 20, 30}, {0, 10, 20}, {0, 10, 20}, 0.2, 9), 1);
+  const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({2, 5, 5});
   for (int i = 1; i <= 250; ++i) {
@@ -98,7 +102,8 @@ TEST(Proxy, DragLagsByExactlyD) {
 }
 
 TEST(Proxy, EntersTheCubeFromOutside) {
-  const Space space = make_space(cube_mesh(10.0), 0);
+  const auto space_owner = make_space(cube_mesh(10.0), 0);
+  const Space& space = *space_owner;
   Proxy proxy(space);
   EXPECT_EQ(proxy.reset({-5, 3, 4}), StartKind::Outside);
   proxy.step({5, 3, 4}, kDt);
@@ -111,7 +116,8 @@ TEST(Proxy, EntersTheCubeFromOutside) {
 }
 
 TEST(Proxy, RigidCubeStopsAnOutsideProxyOnItsSurface) {
-  const Space space = make_space(cube_mesh(10.0), 2);
+  const auto space_owner = make_space(cube_mesh(10.0), 2);
+  const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({-5, 3, 4});
   proxy.step({3, 3, 4}, kDt);
@@ -131,8 +137,9 @@ TEST(Proxy, RigidCubeStopsAnOutsideProxyOnItsSurface) {
 // only on their rims. Aimed into a tet that has no boundary face at that
 // vertex, it used to miss them all and pass into the mesh as OUTSIDE.
 TEST(Proxy, EntersExactlyThroughABoundaryVertexIntoAnInnerTet) {
-  const Space space =
+  const auto space_owner =
       make_space(grid_mesh({0, 5, 10}, {0, 5, 10}, {0, 5, 10}, 0.3, 21), std::int32_t{0});
+  const Space& space = *space_owner;
   const TetMesh& mesh = space.mesh();
   int checked = 0;
   for (std::int32_t v = 0; v < mesh.vertex_count(); ++v) {
@@ -164,7 +171,8 @@ TEST(Proxy, EntersExactlyThroughABoundaryVertexIntoAnInnerTet) {
 
 TEST(Proxy, EdgeFanPicksTheTetTowardP) {
   const MeshData mesh = edge_fan_mesh(12);
-  const Space space = make_space(mesh, 0);
+  const auto space_owner = make_space(mesh, 0);
+  const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({0.5, 0.2, 0.3});
   // Put the proxy on the axis edge, owned by tet 0.
@@ -182,7 +190,8 @@ TEST(Proxy, IcosahedronVertexSlidesAlongARigidNeighbourhood) {
   const MeshData mesh = icosahedron_mesh(10.0);
   std::vector<std::int32_t> materials(20, 2);
   materials[7] = 0;
-  const Space space = make_space(mesh, materials);
+  const auto space_owner = make_space(mesh, materials);
+  const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({50, 0, 0});
   proxy.set_place({ProxyState::Vertex, 7, 0, {0, 0, 0}});
@@ -202,11 +211,12 @@ TEST(Proxy, IcosahedronVertexSlidesAlongARigidNeighbourhood) {
 }
 
 TEST(Proxy, StartInsideRigidIsPushedToTheNearestFreeFace) {
-  const Space space = make_space(grid_mesh({0, 10, 20, 30}, {0, 10, 20, 30}, {0, 10, 20, 30}), [] {
+  const auto space_owner = make_space(grid_mesh({0, 10, 20, 30}, {0, 10, 20, 30}, {0, 10, 20, 30}), [] {
     std::vector<std::int32_t> m(27 * 6, 0);
     for (int t = 13 * 6; t < 14 * 6; ++t) m[t] = 2;  // The middle cell is bone.
     return m;
   }());
+  const Space& space = *space_owner;
   Proxy proxy(space);
   EXPECT_EQ(proxy.reset({15, 15, 11}), StartKind::PushedOutOfRigid);
   EXPECT_EQ(proxy.place().state, ProxyState::Face);
@@ -218,7 +228,8 @@ TEST(Proxy, StartInsideRigidIsPushedToTheNearestFreeFace) {
 }
 
 TEST(Proxy, NonFiniteInputIsRejectedAndZeroesTheForce) {
-  const Space space = make_space(two_tets_mesh(), {0, 2});
+  const auto space_owner = make_space(two_tets_mesh(), {0, 2});
+  const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({2, 2, -1});
   proxy.step({2, 2, 3}, kDt);
@@ -236,15 +247,17 @@ TEST(Proxy, CapIsCountedAndItsForceClamped) {
   settings.max_transitions_per_tick = 3;
   settings.capped_tick_force_N = 0.5;
   const MeshData mesh = grid_mesh({0, 10, 20, 30, 40, 50}, {0, 10}, {0, 10});
-  const Space space = make_space(mesh, std::vector<std::int32_t>(mesh.tets.size(), 0),
+  const auto space_owner = make_space(mesh, std::vector<std::int32_t>(mesh.tets.size(), 0),
                                  testing::paper_materials(), settings);
+  const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({1, 5, 5});
   const TickResult r = proxy.step({49, 5, 5}, kDt);
   EXPECT_TRUE(r.capped);
   EXPECT_EQ(r.transitions, 3);
   EXPECT_EQ(proxy.counters().capped_ticks, 1u);
-  EXPECT_NEAR(norm(proxy.force_N()), 0.5, 1e-12);
+  // Unfinished: the last finished force is held (zero, in free air), no jump.
+  EXPECT_EQ(proxy.force_N(), Vec3(0, 0, 0));
   EXPECT_EQ(proxy.check_invariants(), "");
   for (int i = 0; i < 20 && proxy.q() != Vec3(49, 5, 5); ++i) proxy.step({49, 5, 5}, kDt);
   EXPECT_EQ(proxy.q(), Vec3(49, 5, 5));  // It catches up over the following ticks.
