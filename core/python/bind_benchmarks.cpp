@@ -46,9 +46,9 @@ void bind_benchmarks(nb::module_& m) {
         }
         if (state < 0 || state >= kProxyStateCount || tet < kNoTet || tet > INT32_MAX ||
             local < INT8_MIN || local > INT8_MAX) {
-          throw std::invalid_argument("time_transition: state " + std::to_string(state) +
-                                      ", tet " + std::to_string(tet) + ", local " +
-                                      std::to_string(local) + " out of range");
+          throw std::invalid_argument("time_transition: state " + std::to_string(state) + ", tet " +
+                                      std::to_string(tet) + ", local " + std::to_string(local) +
+                                      " out of range");
         }
         const ProxyPlace start{static_cast<ProxyState>(state), static_cast<std::int32_t>(tet),
                                static_cast<std::int8_t>(local), vec3_from(q_array)};

@@ -59,9 +59,11 @@ nb::tuple mesh_to_arrays(const MeshData& data) {
   return nb::make_tuple(from_points(data.vertices_mm), tets);
 }
 
-std::shared_ptr<Space> make_space(const PointsIn& vertices, const TetsIn& tets, const IndicesIn& tet_materials,
-                 const nb::list& materials, double stiffness_N_per_mm, double servo_rate_Hz,
-                 int max_transitions_per_tick, double capped_tick_force_N, double tolerance_mm) {
+std::shared_ptr<Space> make_space(const PointsIn& vertices, const TetsIn& tets,
+                                  const IndicesIn& tet_materials, const nb::list& materials,
+                                  double stiffness_N_per_mm, double servo_rate_Hz,
+                                  int max_transitions_per_tick, double capped_tick_force_N,
+                                  double tolerance_mm) {
   const MeshData data = to_mesh_data(vertices, tets);
   std::vector<std::int32_t> labels(tet_materials.data(),
                                    tet_materials.data() + tet_materials.shape(0));

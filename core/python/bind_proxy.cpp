@@ -116,7 +116,6 @@ Pose pose_from(const nb::ndarray<const double, nb::shape<7>, nb::device::cpu>& a
   return {{a(0), a(1), a(2)}, {a(3), a(4), a(5), a(6)}};
 }
 
-
 nb::dict tick_dict(const BladeTick& t) {
   nb::dict d;
   d["force_N"] = from_vec3(t.force_N);
@@ -344,12 +343,13 @@ void bind_proxy(nb::module_& m) {
             if (state < 0 || state >= kProxyStateCount || tet < kNoTet || tet > INT32_MAX ||
                 local < INT8_MIN || local > INT8_MAX) {
               throw std::invalid_argument("set_place: state " + std::to_string(state) + ", tet " +
-                                          std::to_string(tet) + ", local " +
-                                          std::to_string(local) + " out of range");
+                                          std::to_string(tet) + ", local " + std::to_string(local) +
+                                          " out of range");
             }
-            s.proxies[static_cast<std::size_t>(i)].set_place(
-                {static_cast<ProxyState>(state), static_cast<std::int32_t>(tet),
-                 static_cast<std::int8_t>(local), {q(0), q(1), q(2)}});
+            s.proxies[static_cast<std::size_t>(i)].set_place({static_cast<ProxyState>(state),
+                                                              static_cast<std::int32_t>(tet),
+                                                              static_cast<std::int8_t>(local),
+                                                              {q(0), q(1), q(2)}});
           },
           nb::arg("index"), nb::arg("state"), nb::arg("tet"), nb::arg("local"), nb::arg("q"),
           "Put proxy i in a given state (tests and benchmarks of single transitions); "
@@ -468,7 +468,8 @@ void bind_proxy(nb::module_& m) {
           "last_tick", [](const PyBlade& b) { return tick_dict(b.blade.last_tick()); },
           nb::rv_policy::move)
       .def_prop_ro(
-          "blade_counters", [](const PyBlade& b) { return blade_counters_dict(b.blade.counters()); },
+          "blade_counters",
+          [](const PyBlade& b) { return blade_counters_dict(b.blade.counters()); },
           nb::rv_policy::move)
       .def_prop_ro(
           "counters", [](const PyBlade& b) { return counters_dict(b.blade.proxies()); },

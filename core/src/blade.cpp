@@ -25,8 +25,6 @@ Quaternion Quaternion::normalized() const {
 
 namespace {
 
-enum class PoseCheck : std::uint8_t { Fine, NotFinite, ZeroRotation, OutOfWorkspace };
-
 const char* pose_check_message(PoseCheck check) {
   switch (check) {
     case PoseCheck::Fine:
@@ -41,18 +39,13 @@ const char* pose_check_message(PoseCheck check) {
   return "?";
 }
 
-PoseCheck check_pose(const Space& space, const std::vector<Vec3>& tool_points, const Pose& pose) {
+PoseCheck check_rotation(const Pose& pose) {
   const Quaternion& r = pose.rotation;
   if (!is_finite(pose.position_mm) || !std::isfinite(r.w) || !std::isfinite(r.x) ||
       !std::isfinite(r.y) || !std::isfinite(r.z)) {
     return PoseCheck::NotFinite;
   }
-  if (!r.valid()) return PoseCheck::ZeroRotation;
-  const Quaternion unit = r.normalized();
-  for (const Vec3& t : tool_points) {
-    if (!space.in_workspace(pose.position_mm + unit.rotate(t))) return PoseCheck::OutOfWorkspace;
-  }
-  return PoseCheck::Fine;
+  return r.valid() ? PoseCheck::Fine : PoseCheck::ZeroRotation;
 }
 
 }  // namespace
@@ -62,8 +55,8 @@ Blade::Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
     : space_(std::move(space)), shading_(std::move(shading)) {
   if (!space_) throw std::invalid_argument("a Blade needs a Space");
   if (spec.points < 1 || spec.points > kMaxPoints) {
-    throw std::invalid_argument("a blade has 1.." + std::to_string(kMaxPoints) +
-                                " points, got " + std::to_string(spec.points));
+    throw std::invalid_argument("a blade has 1.." + std::to_string(kMaxPoints) + " points, got " +
+                                std::to_string(spec.points));
   }
   if (!is_finite(spec.start_mm) || !is_finite(spec.end_mm)) {
     throw std::invalid_argument("blade '" + spec.name + "': start_mm and end_mm must be finite");
@@ -79,17 +72,23 @@ Blade::Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
   point_ticks_.assign(tool_points_.size(), TickResult{});
 }
 
-void Blade::place_points(const Pose& pose) {
+// Checks the pose and places the points in one pass; on a refused pose the
+// proxies are untouched (world_points() then shows the refused sample).
+PoseCheck Blade::place_checked(const Pose& pose) {
+  const PoseCheck check = check_rotation(pose);
+  if (check != PoseCheck::Fine) return check;
   const Quaternion r = pose.rotation.normalized();
+  bool inside = true;
   for (std::size_t i = 0; i < tool_points_.size(); ++i) {
     world_points_[i] = pose.position_mm + r.rotate(tool_points_[i]);
+    inside = inside && space_->in_workspace(world_points_[i]);
   }
+  return inside ? PoseCheck::Fine : PoseCheck::OutOfWorkspace;
 }
 
 void Blade::reset(const Pose& pose) {
-  const PoseCheck check = check_pose(*space_, tool_points_, pose);
+  const PoseCheck check = place_checked(pose);
   if (check != PoseCheck::Fine) throw std::invalid_argument(pose_check_message(check));
-  place_points(pose);
   for (std::size_t i = 0; i < proxies_.size(); ++i) proxies_[i].reset(world_points_[i]);
   std::fill(point_ticks_.begin(), point_ticks_.end(), TickResult{});
   first_ = 0;
@@ -129,13 +128,26 @@ BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& sett
   ++tick_index_;
   ++counters_.ticks;
   if (!settings.valid()) return reject(false);
-  const PoseCheck check = check_pose(*space_, tool_points_, pose);
+  const PoseCheck check = place_checked(pose);
   if (check != PoseCheck::Fine) return reject(check == PoseCheck::OutOfWorkspace);
-  place_points(pose);
   const std::size_t n = proxies_.size();
   int remaining = settings.blade_budget(static_cast<int>(n));
   const int cap = settings.max_transitions_per_tick;
+  const ForceShading* shading = settings.force_shading ? shading_.get() : nullptr;
+  BladeTick tick;
   auto index = [&](std::size_t k) { return first_ + k < n ? first_ + k : first_ + k - n; };
+  // A point's tick is over (finished, capped for good, or deferred): add its force.
+  auto account = [&](std::size_t i) {
+    const TickResult& r = point_ticks_[i];
+    const Vec3 f = proxies_[i].force_N();
+    tick.force_N += f;
+    tick.torque_N_mm += cross(world_points_[i] - pose.position_mm, f);
+    tick.capped_points += r.capped || r.deferred ? 1 : 0;
+    tick.deferred_points += r.deferred ? 1 : 0;
+    tick.max_transitions = std::max(tick.max_transitions, r.transitions);
+    tick.transitions += r.transitions;
+  };
+  int capped_in_first_pass = 0;
   for (std::size_t k = 0; k < n; ++k) {
     const std::size_t i = index(k);
     TickResult& r = point_ticks_[i];
@@ -144,39 +156,42 @@ BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& sett
     ++proxy.counters_.ticks;
     if (remaining <= 0) {
       proxy.defer_tick(r, settings);
+      account(i);
       continue;
     }
     proxy.begin_tick(world_points_[i], dt_s, settings);
     proxy.walk(std::min(cap, remaining), r);
     remaining -= r.transitions;
+    if (r.capped) {
+      ++capped_in_first_pass;
+      continue;
+    }
+    proxy.finish_tick(r, settings, shading);
+    account(i);
   }
-  for (std::size_t k = 0; k < n && remaining > 0; ++k) {
+  for (std::size_t k = 0; k < n && capped_in_first_pass > 0; ++k) {
     const std::size_t i = index(k);
     TickResult& r = point_ticks_[i];
     if (!r.capped) continue;
-    const int before = r.transitions;
-    proxies_[i].walk(before + remaining, r);
-    remaining -= r.transitions - before;
+    --capped_in_first_pass;
+    if (remaining > 0) {
+      const int before = r.transitions;
+      proxies_[i].walk(before + remaining, r);
+      remaining -= r.transitions - before;
+    }
+    proxies_[i].finish_tick(r, settings, shading);
+    account(i);
   }
-  BladeTick tick;
-  const ForceShading* shading = settings.force_shading ? shading_.get() : nullptr;
-  std::size_t next_first = n;
-  for (std::size_t k = 0; k < n; ++k) {
-    const std::size_t i = index(k);
-    TickResult& r = point_ticks_[i];
-    Proxy& proxy = proxies_[i];
-    if (!r.deferred) proxy.finish_tick(r, settings, shading);
-    const Vec3 f = proxy.force_N();
-    tick.force_N += f;
-    tick.torque_N_mm += cross(world_points_[i] - pose.position_mm, f);
-    const bool unfinished = r.capped || r.deferred;
-    tick.capped_points += unfinished ? 1 : 0;
-    tick.deferred_points += r.deferred ? 1 : 0;
-    tick.max_transitions = std::max(tick.max_transitions, r.transitions);
-    tick.transitions += r.transitions;
-    if (unfinished && next_first == n) next_first = i;
+  if (tick.capped_points > 0) {
+    // The next tick starts at the first point left unfinished.
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t i = index(k);
+      if (point_ticks_[i].capped || point_ticks_[i].deferred) {
+        first_ = i;
+        break;
+      }
+    }
   }
-  if (next_first != n) first_ = next_first;
   counters_.unfinished_ticks += tick.capped_points > 0 ? 1 : 0;
   counters_.capped_points += static_cast<std::uint64_t>(tick.capped_points);
   counters_.deferred_points += static_cast<std::uint64_t>(tick.deferred_points);

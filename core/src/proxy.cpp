@@ -116,10 +116,9 @@ void Proxy::set_place(const ProxyPlace& place) {
         " proxy: expected " +
         (outside ? std::string("-1") : "0.." + std::to_string(space_->mesh().tet_count() - 1)));
   }
-  const int locals = place.state == ProxyState::Edge ? 6 : place.state == ProxyState::Face ||
-                                                                   place.state == ProxyState::Vertex
-                                                               ? 4
-                                                               : 1;
+  const int locals = place.state == ProxyState::Edge                                        ? 6
+                     : place.state == ProxyState::Face || place.state == ProxyState::Vertex ? 4
+                                                                                            : 1;
   if (place.local < 0 || place.local >= locals) {
     throw std::invalid_argument("local index " + std::to_string(place.local) + " for a " +
                                 proxy_state_name(place.state) + " proxy: expected 0.." +

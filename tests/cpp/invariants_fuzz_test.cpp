@@ -123,7 +123,8 @@ std::vector<std::int32_t> random_materials(std::size_t tets, std::uint64_t seed,
 TEST(Invariants, JitteredGridWithSliversAndAllMaterials) {
   const MeshData mesh =
       grid_mesh({0, 7, 15, 16, 30, 41}, {0, 9, 12, 25, 33}, {0, 10, 19, 20.5, 32}, 0.45, 11);
-  const auto space_owner = make_space(mesh, random_materials(mesh.tets.size(), 3, 5), all_materials());
+  const auto space_owner =
+      make_space(mesh, random_materials(mesh.tets.size(), 3, 5), all_materials());
   const Space& space = *space_owner;
   EXPECT_LT(space.mesh().stats().min_dihedral_deg, 5.0) << "the mesh should contain slivers";
   EXPECT_GE(space.mesh().stats().max_tets_per_vertex, 20);
@@ -133,7 +134,8 @@ TEST(Invariants, JitteredGridWithSliversAndAllMaterials) {
 TEST(Invariants, EdgeSharedBySixteenTetsAndFlatSlivers) {
   for (double half_height : {10.0, 0.05}) {
     const MeshData mesh = edge_fan_mesh(16, 10.0, half_height);
-    const auto space_owner = make_space(mesh, random_materials(mesh.tets.size(), 5, 5), all_materials());
+    const auto space_owner =
+        make_space(mesh, random_materials(mesh.tets.size(), 5, 5), all_materials());
     const Space& space = *space_owner;
     EXPECT_EQ(space.mesh().stats().max_tets_per_edge, 16);
     run_walk(space, mesh, steps_per_scenario(150000), 202, /*expect_vertex=*/false);
@@ -142,7 +144,8 @@ TEST(Invariants, EdgeSharedBySixteenTetsAndFlatSlivers) {
 
 TEST(Invariants, IcosahedronCentreSharedByTwentyTets) {
   const MeshData mesh = icosahedron_mesh(10.0);
-  const auto space_owner = make_space(mesh, random_materials(mesh.tets.size(), 9, 5), all_materials());
+  const auto space_owner =
+      make_space(mesh, random_materials(mesh.tets.size(), 9, 5), all_materials());
   const Space& space = *space_owner;
   EXPECT_EQ(space.mesh().stats().max_tets_per_vertex, 20);
   run_walk(space, mesh, steps_per_scenario(150000), 303);

@@ -87,7 +87,8 @@ TEST(Proxy, SlidesIntoAValleyEdgeThenItsCorner) {
 }
 
 TEST(Proxy, DragLagsByExactlyD) {
-  const auto space_owner = make_space(grid_mesh({0, 10, 20, 30}, {0, 10, 20}, {0, 10, 20}, 0.2, 9), 1);
+  const auto space_owner =
+      make_space(grid_mesh({0, 10, 20, 30}, {0, 10, 20}, {0, 10, 20}, 0.2, 9), 1);
   const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({2, 5, 5});
@@ -211,11 +212,12 @@ TEST(Proxy, IcosahedronVertexSlidesAlongARigidNeighbourhood) {
 }
 
 TEST(Proxy, StartInsideRigidIsPushedToTheNearestFreeFace) {
-  const auto space_owner = make_space(grid_mesh({0, 10, 20, 30}, {0, 10, 20, 30}, {0, 10, 20, 30}), [] {
-    std::vector<std::int32_t> m(27 * 6, 0);
-    for (int t = 13 * 6; t < 14 * 6; ++t) m[t] = 2;  // The middle cell is bone.
-    return m;
-  }());
+  const auto space_owner =
+      make_space(grid_mesh({0, 10, 20, 30}, {0, 10, 20, 30}, {0, 10, 20, 30}), [] {
+        std::vector<std::int32_t> m(27 * 6, 0);
+        for (int t = 13 * 6; t < 14 * 6; ++t) m[t] = 2;  // The middle cell is bone.
+        return m;
+      }());
   const Space& space = *space_owner;
   Proxy proxy(space);
   EXPECT_EQ(proxy.reset({15, 15, 11}), StartKind::PushedOutOfRigid);
@@ -248,7 +250,7 @@ TEST(Proxy, CapIsCountedAndItsForceClamped) {
   settings.capped_tick_force_N = 0.5;
   const MeshData mesh = grid_mesh({0, 10, 20, 30, 40, 50}, {0, 10}, {0, 10});
   const auto space_owner = make_space(mesh, std::vector<std::int32_t>(mesh.tets.size(), 0),
-                                 testing::paper_materials(), settings);
+                                      testing::paper_materials(), settings);
   const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({1, 5, 5});

@@ -42,9 +42,8 @@ std::shared_ptr<const Space> bone_floor(EngineSettings settings = {}) {
 
 // A free bar of 10 mm cells along x: a long move crosses many faces.
 std::shared_ptr<const Space> free_bar(EngineSettings settings = {}) {
-  return make_space(grid_mesh({0, 10, 20, 30, 40, 50}, {0, 10}, {0, 10}), std::vector<std::int32_t>(
-                                                                               30, 0),
-                    testing::paper_materials(), settings);
+  return make_space(grid_mesh({0, 10, 20, 30, 40, 50}, {0, 10}, {0, 10}),
+                    std::vector<std::int32_t>(30, 0), testing::paper_materials(), settings);
 }
 
 TEST(SettingsPerTick, StiffnessChangesBetweenTicksWithoutANewSpace) {

@@ -36,7 +36,8 @@ PRELUDE = """
     import numpy as np
     from hapticut import _core
     vertices, tets = _core.grid_mesh([0, 10, 20], [0, 10, 20], [0, 10, 20], 0.0, 5)
-    space = _core.Space(vertices, tets, np.zeros(len(tets), np.int32), [{"name": "a", "model": "free"}])
+    labels = np.zeros(len(tets), np.int32)
+    space = _core.Space(vertices, tets, labels, [{"name": "a", "model": "free"}])
 """
 
 
@@ -48,10 +49,14 @@ PRELUDE = """
         ("s.set_place(0, _core.ProxyState.FACE, 0, 7, np.zeros(3))", "ValueError"),
         ("s.set_place(0, _core.ProxyState.EDGE, -5, 0, np.zeros(3))", "ValueError"),
         ("s.set_place(0, _core.ProxyState.OUTSIDE, 3, 0, np.zeros(3))", "ValueError"),
-        ("_core.time_transition(space, _core.ProxyState.TET, 10**6, 0, np.zeros(3), np.ones(3))",
-         "ValueError"),
-        ("_core.time_transition(space, _core.ProxyState.VERTEX, 0, 9, np.zeros(3), np.ones(3))",
-         "ValueError"),
+        (
+            "_core.time_transition(space, _core.ProxyState.TET, 10**6, 0, np.zeros(3), np.ones(3))",
+            "ValueError",
+        ),
+        (
+            "_core.time_transition(space, _core.ProxyState.VERTEX, 0, 9, np.zeros(3), np.ones(3))",
+            "ValueError",
+        ),
     ],
 )
 def test_indices_out_of_range_raise_instead_of_crashing(call, error):

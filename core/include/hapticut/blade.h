@@ -39,6 +39,9 @@ struct Pose {
   Quaternion rotation;
 };
 
+// Whether a pose can be used, and why not.
+enum class PoseCheck : std::uint8_t { Fine, NotFinite, ZeroRotation, OutOfWorkspace };
+
 struct BladeTick {
   Vec3 force_N;      // Sum of the points' forces (k (q_i - p_i), shaded when asked).
   Vec3 torque_N_mm;  // Sum of (p_i - origin) x f_i.
@@ -128,9 +131,7 @@ class Blade {
   void clear_counters();
 
  private:
-  // Why a pose is refused, or nullptr when it is fine (static strings, no allocation).
-  const char* pose_problem(const Pose& pose) const;
-  void place_points(const Pose& pose);
+  PoseCheck place_checked(const Pose& pose);
   BladeTick reject(bool out_of_workspace);
 
   std::shared_ptr<const Space> space_;

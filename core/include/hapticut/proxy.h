@@ -158,7 +158,7 @@ class Proxy {
   Vec3 last_p_;
   bool has_last_p_ = false;
   Vec3 force_N_;
-  Vec3 finished_force_N_;     // The force of the last finished tick, held on a capped one.
+  Vec3 finished_force_N_;      // The force of the last finished tick, held on a capped one.
   int unfinished_in_row_ = 0;  // Capped or deferred ticks since the last finished one.
   Vec3 tick_p_;                // The p of the tick under way.
   MoveContext tick_context_;

@@ -148,7 +148,8 @@ TEST(NoAllocation, AMillionProxySteps) {
   const std::uint64_t count = allocations_of([&] {
     for (std::size_t i = 0; i < path.size(); ++i) {
       Proxy& proxy = proxies[i % proxies.size()];
-      const TickResult r = (i & 1U) != 0 ? proxy.step(path[i], kDt) : proxy.step(path[i], kDt, other);
+      const TickResult r =
+          (i & 1U) != 0 ? proxy.step(path[i], kDt) : proxy.step(path[i], kDt, other);
       rejected += r.rejected ? 1 : 0;
     }
   });
