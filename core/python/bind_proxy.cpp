@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -24,6 +25,16 @@ namespace {
 std::shared_ptr<const ForceShading> shading_for(const std::shared_ptr<const Space>& space,
                                                 const RuntimeSettings& settings) {
   return settings.force_shading ? std::make_shared<const ForceShading>(*space) : nullptr;
+}
+
+// The bindings release the GIL while they step, so two Python threads could
+// reach one ProxySet or Blade at once: each call claims the object first and
+// raises RuntimeError if another thread is using it, never racing.
+template <class Owner>
+std::unique_lock<std::mutex> claim(const Owner& owner) {
+  std::unique_lock<std::mutex> lock(owner.busy, std::try_to_lock);
+  if (!lock.owns_lock()) throw std::runtime_error("in use by another thread");
+  return lock;
 }
 
 // N proxies in one Space, which they keep alive (shared ownership), with the
@@ -56,6 +67,7 @@ struct ProxySet {
   std::vector<TickResult> last;
   RuntimeSettings settings;
   std::shared_ptr<const ForceShading> shading;
+  mutable std::mutex busy;
 };
 
 // A Blade with the settings its steps use (the C++ Blade takes them per tick).
@@ -64,6 +76,7 @@ struct PyBlade {
       : settings(space->runtime_settings()), blade(std::move(space), spec) {}
   RuntimeSettings settings;
   Blade blade;
+  mutable std::mutex busy;
 };
 
 nb::dict counters_dict(const std::vector<Proxy>& proxies) {
@@ -200,14 +213,26 @@ void bind_proxy(nb::module_& m) {
                        "N proxies in one Space (which they keep alive), stepped together.")
       .def(nb::init<std::shared_ptr<const Space>, std::size_t>(), nb::arg("space"),
            nb::arg("count"))
-      .def("__len__", [](const ProxySet& s) { return s.proxies.size(); })
+      .def("__len__",
+           [](const ProxySet& s) {
+             const auto busy = claim(s);
+             return s.proxies.size();
+           })
       .def_prop_rw(
-          "settings", [](const ProxySet& s) { return s.settings; },
-          [](ProxySet& s, const RuntimeSettings& settings) { s.set_settings(settings); },
+          "settings",
+          [](const ProxySet& s) {
+            const auto busy = claim(s);
+            return s.settings;
+          },
+          [](ProxySet& s, const RuntimeSettings& settings) {
+            const auto busy = claim(s);
+            s.set_settings(settings);
+          },
           "Settings of every step (a copy; assign a RuntimeSettings to change them).")
       .def(
           "reset",
           [](ProxySet& s, const PointsIn& points) {
+            const auto busy = claim(s);
             s.check_count(points.shape(0));
             auto kinds = new_array<std::uint8_t>({points.shape(0)});
             for (std::size_t i = 0; i < s.proxies.size(); ++i) {
@@ -223,6 +248,7 @@ void bind_proxy(nb::module_& m) {
       .def(
           "step",
           [](ProxySet& s, const PointsIn& points, double dt_s) {
+            const auto busy = claim(s);
             s.check_count(points.shape(0));
             const nb::gil_scoped_release released;
             for (std::size_t i = 0; i < s.proxies.size(); ++i) {
@@ -237,6 +263,7 @@ void bind_proxy(nb::module_& m) {
              const nb::ndarray<const double, nb::shape<-1, -1, 3>, nb::c_contig, nb::device::cpu>&
                  path,
              double dt_s) {
+            const auto busy = claim(s);
             s.check_count(path.shape(1));
             const std::size_t ticks = path.shape(0);
             auto q = new_array<double>({ticks, s.proxies.size(), 3});
@@ -262,18 +289,21 @@ void bind_proxy(nb::module_& m) {
       .def_prop_ro(
           "q",
           [](const ProxySet& s) {
+            const auto busy = claim(s);
             return gather_points(s.proxies, [](const Proxy& p) { return p.q(); });
           },
           nb::rv_policy::move)
       .def_prop_ro(
           "force_N",
           [](const ProxySet& s) {
+            const auto busy = claim(s);
             return gather_points(s.proxies, [](const Proxy& p) { return p.force_N(); });
           },
           "Each proxy's force, shaded when settings.force_shading is on.", nb::rv_policy::move)
       .def_prop_ro(
           "state",
           [](const ProxySet& s) {
+            const auto busy = claim(s);
             return per_proxy<std::uint8_t>(s.proxies.size(), [&](std::size_t i) {
               return static_cast<std::uint8_t>(s.proxies[i].place().state);
             });
@@ -282,6 +312,7 @@ void bind_proxy(nb::module_& m) {
       .def_prop_ro(
           "tet",
           [](const ProxySet& s) {
+            const auto busy = claim(s);
             return per_proxy<std::int32_t>(s.proxies.size(),
                                            [&](std::size_t i) { return s.proxies[i].place().tet; });
           },
@@ -289,6 +320,7 @@ void bind_proxy(nb::module_& m) {
       .def_prop_ro(
           "local",
           [](const ProxySet& s) {
+            const auto busy = claim(s);
             return per_proxy<std::int8_t>(
                 s.proxies.size(), [&](std::size_t i) { return s.proxies[i].place().local; });
           },
@@ -297,6 +329,7 @@ void bind_proxy(nb::module_& m) {
       .def_prop_ro(
           "last_transitions",
           [](const ProxySet& s) {
+            const auto busy = claim(s);
             return per_proxy<std::int32_t>(s.proxies.size(),
                                            [&](std::size_t i) { return s.last[i].transitions; });
           },
@@ -304,6 +337,7 @@ void bind_proxy(nb::module_& m) {
       .def_prop_ro(
           "last_capped",
           [](const ProxySet& s) {
+            const auto busy = claim(s);
             return per_proxy<bool>(s.proxies.size(),
                                    [&](std::size_t i) { return s.last[i].capped; });
           },
@@ -311,20 +345,27 @@ void bind_proxy(nb::module_& m) {
       .def_prop_ro(
           "last_rejected",
           [](const ProxySet& s) {
+            const auto busy = claim(s);
             return per_proxy<bool>(s.proxies.size(),
                                    [&](std::size_t i) { return s.last[i].rejected; });
           },
           nb::rv_policy::move)
       .def_prop_ro(
-          "counters", [](const ProxySet& s) { return counters_dict(s.proxies); },
+          "counters",
+          [](const ProxySet& s) {
+            const auto busy = claim(s);
+            return counters_dict(s.proxies);
+          },
           nb::rv_policy::move)
       .def("clear_counters",
            [](ProxySet& s) {
+             const auto busy = claim(s);
              for (Proxy& p : s.proxies) p.clear_counters();
            })
       .def(
           "check_invariants",
           [](const ProxySet& s, double factor) {
+            const auto busy = claim(s);
             std::vector<std::string> problems;
             for (const Proxy& p : s.proxies) problems.push_back(p.check_invariants(factor));
             return problems;
@@ -335,6 +376,7 @@ void bind_proxy(nb::module_& m) {
           "set_place",
           [](ProxySet& s, std::int64_t i, int state, std::int64_t tet, int local,
              const nb::ndarray<const double, nb::shape<3>, nb::device::cpu>& q) {
+            const auto busy = claim(s);
             if (i < 0 || i >= static_cast<std::int64_t>(s.proxies.size())) {
               throw nb::index_error(("proxy index " + std::to_string(i) + " out of range 0.." +
                                      std::to_string(s.proxies.size() - 1))
@@ -376,11 +418,20 @@ void bind_proxy(nb::module_& m) {
           },
           nb::arg("space"), nb::arg("start_mm"), nb::arg("end_mm"), nb::arg("points") = 50)
       .def_prop_ro(
-          "point_count", [](const PyBlade& b) { return b.blade.point_count(); },
+          "point_count",
+          [](const PyBlade& b) {
+            const auto busy = claim(b);
+            return b.blade.point_count();
+          },
           nb::rv_policy::move)
       .def_prop_rw(
-          "settings", [](const PyBlade& b) { return b.settings; },
+          "settings",
+          [](const PyBlade& b) {
+            const auto busy = claim(b);
+            return b.settings;
+          },
           [](PyBlade& b, const RuntimeSettings& settings) {
+            const auto busy = claim(b);
             settings.validate();
             b.settings = settings;
           },
@@ -388,6 +439,7 @@ void bind_proxy(nb::module_& m) {
       .def(
           "reset",
           [](PyBlade& b, const nb::ndarray<const double, nb::shape<7>, nb::device::cpu>& pose) {
+            const auto busy = claim(b);
             b.blade.reset(pose_from(pose));
           },
           nb::arg("pose"),
@@ -396,7 +448,10 @@ void bind_proxy(nb::module_& m) {
       .def(
           "step",
           [](PyBlade& b, const nb::ndarray<const double, nb::shape<7>, nb::device::cpu>& pose,
-             double dt_s) { return tick_dict(b.blade.step(pose_from(pose), dt_s, b.settings)); },
+             double dt_s) {
+            const auto busy = claim(b);
+            return tick_dict(b.blade.step(pose_from(pose), dt_s, b.settings));
+          },
           nb::arg("pose"), nb::arg("dt_s") = 0.001)
       .def(
           "run",
@@ -404,6 +459,7 @@ void bind_proxy(nb::module_& m) {
              const nb::ndarray<const double, nb::shape<-1, 7>, nb::c_contig, nb::device::cpu>&
                  poses,
              double dt_s) {
+            const auto busy = claim(b);
             const std::size_t n = poses.shape(0);
             auto force = new_array<double>({n, 3});
             auto torque = new_array<double>({n, 3});
@@ -442,41 +498,60 @@ void bind_proxy(nb::module_& m) {
           "Step along an (M, 7) path of poses in one call (the GIL is released meanwhile); "
           "forces and torques per tick.")
       .def_prop_ro(
-          "p", [](const PyBlade& b) { return from_points(b.blade.world_points()); },
+          "p",
+          [](const PyBlade& b) {
+            const auto busy = claim(b);
+            return from_points(b.blade.world_points());
+          },
           nb::rv_policy::move)
       .def_prop_ro(
           "q",
           [](const PyBlade& b) {
+            const auto busy = claim(b);
             return gather_points(b.blade.proxies(), [](const Proxy& p) { return p.q(); });
           },
           nb::rv_policy::move)
       .def_prop_ro(
           "force_N",
           [](const PyBlade& b) {
+            const auto busy = claim(b);
             return gather_points(b.blade.proxies(), [](const Proxy& p) { return p.force_N(); });
           },
           "Each point's force of the last tick.", nb::rv_policy::move)
       .def_prop_ro(
           "state",
           [](const PyBlade& b) {
+            const auto busy = claim(b);
             return per_proxy<std::uint8_t>(b.blade.proxies().size(), [&](std::size_t i) {
               return static_cast<std::uint8_t>(b.blade.proxies()[i].place().state);
             });
           },
           nb::rv_policy::move)
       .def_prop_ro(
-          "last_tick", [](const PyBlade& b) { return tick_dict(b.blade.last_tick()); },
+          "last_tick",
+          [](const PyBlade& b) {
+            const auto busy = claim(b);
+            return tick_dict(b.blade.last_tick());
+          },
           nb::rv_policy::move)
       .def_prop_ro(
           "blade_counters",
-          [](const PyBlade& b) { return blade_counters_dict(b.blade.counters()); },
+          [](const PyBlade& b) {
+            const auto busy = claim(b);
+            return blade_counters_dict(b.blade.counters());
+          },
           nb::rv_policy::move)
       .def_prop_ro(
-          "counters", [](const PyBlade& b) { return counters_dict(b.blade.proxies()); },
+          "counters",
+          [](const PyBlade& b) {
+            const auto busy = claim(b);
+            return counters_dict(b.blade.proxies());
+          },
           nb::rv_policy::move)
       .def(
           "snapshot",
           [](const PyBlade& b) {
+            const auto busy = claim(b);
             const std::size_t n = static_cast<std::size_t>(b.blade.point_count());
             std::vector<ProxySnapshot> points(n);
             BladeSnapshotHeader header;

@@ -159,14 +159,12 @@ BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& sett
       account(i);
       continue;
     }
-    proxy.begin_tick(world_points_[i], dt_s, settings);
-    proxy.walk(std::min(cap, remaining), r);
+    proxy.tick_within(world_points_[i], dt_s, settings, std::min(cap, remaining), shading, true, r);
     remaining -= r.transitions;
     if (r.capped) {
       ++capped_in_first_pass;
       continue;
     }
-    proxy.finish_tick(r, settings, shading);
     account(i);
   }
   for (std::size_t k = 0; k < n && capped_in_first_pass > 0; ++k) {
@@ -174,12 +172,14 @@ BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& sett
     TickResult& r = point_ticks_[i];
     if (!r.capped) continue;
     --capped_in_first_pass;
+    Proxy& proxy = proxies_[i];
+    const Vec3& p = world_points_[i];
     if (remaining > 0) {
       const int before = r.transitions;
-      proxies_[i].walk(before + remaining, r);
+      proxy.walk(p, proxy.context_for(p, dt_s, settings), before + remaining, r);
       remaining -= r.transitions - before;
     }
-    proxies_[i].finish_tick(r, settings, shading);
+    proxy.finish_tick(p, r, settings, shading);
     account(i);
   }
   if (tick.capped_points > 0) {

@@ -9,13 +9,6 @@
 
 namespace hapticut {
 
-bool RuntimeSettings::valid() const {
-  return std::isfinite(stiffness_N_per_mm) && stiffness_N_per_mm > 0.0 &&
-         max_transitions_per_tick >= 1 && max_transitions_per_tick <= kMaxTransitionsPerTick &&
-         std::isfinite(capped_tick_force_N) && capped_tick_force_N >= 0.0 &&
-         blade_transition_budget >= 0;
-}
-
 void RuntimeSettings::validate() const {
   if (!(std::isfinite(stiffness_N_per_mm) && stiffness_N_per_mm > 0.0)) {
     throw std::invalid_argument("stiffness_N_per_mm must be finite and > 0, got " +

@@ -196,8 +196,15 @@ def test_long_calls_release_the_gil():
     worker.start()
     inside.wait()
     beats = 0
+    refused = 0
     while not done.is_set():
         beats += 1
+        try:
+            blade.q  # noqa: B018 (the access is the test)
+        except RuntimeError as error:
+            assert "in use by another thread" in str(error)
+            refused += 1
         done.wait(0.0005)
     worker.join()
     assert beats > 20, f"the main thread ran only {beats} times during Blade.run"
+    assert refused > 0, "a second thread reached the blade while it ran"

@@ -126,13 +126,17 @@ class Proxy {
 
  private:
   friend class Blade;  // Runs the pieces of step below under its work budget.
-  // The pieces of step: refuse an input; start a tick at p; walk until
-  // converged or `limit` transitions in all this tick (exact, see step); end
-  // the tick (counters, force).
+  // The pieces of step: refuse an input; the tick's move context; walk
+  // toward p until converged or `limit` transitions in all this tick (exact,
+  // see step); end the tick at p (counters, force). tick_within walks and
+  // ends the tick unless the walk is capped and `keep_capped_open` (the Blade
+  // then walks on with what its budget has left, then ends it).
   void reject_input(bool out_of_workspace, TickResult& result);
-  void begin_tick(const Vec3& p, double dt_s, const RuntimeSettings& settings);
-  void walk(int limit, TickResult& result);
-  void finish_tick(TickResult& result, const RuntimeSettings& settings,
+  void tick_within(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
+                   const ForceShading* shading, bool keep_capped_open, TickResult& result);
+  MoveContext context_for(const Vec3& p, double dt_s, const RuntimeSettings& settings) const;
+  void walk(const Vec3& p, const MoveContext& context, int limit, TickResult& result);
+  void finish_tick(const Vec3& p, TickResult& result, const RuntimeSettings& settings,
                    const ForceShading* shading);
   void defer_tick(TickResult& result, const RuntimeSettings& settings);
   // An unfinished tick: the last finished force, limited from the second in a row on.
@@ -160,8 +164,6 @@ class Proxy {
   Vec3 force_N_;
   Vec3 finished_force_N_;      // The force of the last finished tick, held on a capped one.
   int unfinished_in_row_ = 0;  // Capped or deferred ticks since the last finished one.
-  Vec3 tick_p_;                // The p of the tick under way.
-  MoveContext tick_context_;
   ProxyCounters counters_;
 };
 

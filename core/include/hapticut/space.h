@@ -47,7 +47,14 @@ struct RuntimeSettings {
   // Whether every field is in range (k finite and > 0, caps >= 1 and at most
   // kMaxTransitionsPerTick per point, capped force finite and >= 0, budget >= 0).
   // A tick given settings out of range is rejected (zero force, counted).
-  bool valid() const;
+  bool valid() const {
+    // Written so that NaN fails every comparison.
+    return stiffness_N_per_mm > 0.0 && stiffness_N_per_mm <= kMaxFinite &&
+           max_transitions_per_tick >= 1 && max_transitions_per_tick <= kMaxTransitionsPerTick &&
+           capped_tick_force_N >= 0.0 && capped_tick_force_N <= kMaxFinite &&
+           blade_transition_budget >= 0;
+  }
+  static constexpr double kMaxFinite = 1.7976931348623157e308;
   // Throws std::invalid_argument naming the first field out of range.
   void validate() const;
   // The budget a blade of `points` points gets under these settings.
@@ -90,7 +97,11 @@ class Space : public std::enable_shared_from_this<Space> {
   // Blade::step reject it (zero force, state kept, counted).
   static constexpr double kWorkspaceMargin = 10.0;
   const Aabb& workspace() const { return workspace_; }
-  bool in_workspace(const Vec3& p) const { return workspace_.contains(p, 0.0); }
+  bool in_workspace(const Vec3& p) const {
+    const Vec3& lo = workspace_.lo;
+    const Vec3& hi = workspace_.hi;
+    return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
+  }
 
  private:
   TetMesh mesh_;
