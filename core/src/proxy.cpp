@@ -100,8 +100,9 @@ const char* proxy_state_name(ProxyState state) {
   return "?";
 }
 
-Proxy::Proxy(std::shared_ptr<const Space> space) : space_(std::move(space)) {
-  if (!space_) throw std::invalid_argument("a Proxy needs a Space");
+Proxy::Proxy(std::shared_ptr<const Space> space)
+    : space_(space.get()), space_owner_(std::move(space)) {
+  if (space_ == nullptr) throw std::invalid_argument("a Proxy needs a Space");
 }
 
 void Proxy::set_place(const ProxyPlace& place) {

@@ -157,7 +157,9 @@ class Proxy {
   Outcome settle_at(const Vec3& q);
   StartKind push_out_of_rigid(std::int32_t start_tet, const Vec3& p);
 
-  std::shared_ptr<const Space> space_;
+  // The Space through a plain pointer on the hot path; space_owner_ (last,
+  // away from the hot members) keeps it alive.
+  const Space* space_;
   ProxyPlace place_;
   Vec3 last_p_;
   bool has_last_p_ = false;
@@ -165,6 +167,7 @@ class Proxy {
   Vec3 finished_force_N_;      // The force of the last finished tick, held on a capped one.
   int unfinished_in_row_ = 0;  // Capped or deferred ticks since the last finished one.
   ProxyCounters counters_;
+  std::shared_ptr<const Space> space_owner_;
 };
 
 }  // namespace hapticut
