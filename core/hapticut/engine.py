@@ -7,8 +7,14 @@
     result = blade.run(poses, dt_s=0.001)      # one C++ call for the whole stroke
     result["force_N"]                          # (ticks, 3) summed force per tick
 
+    settings = blade.settings                  # settings per tick (RuntimeSettings)
+    settings.force_shading = True              # changed between ticks, no new Space
+    blade.settings = settings
+
 The C++ classes (``hapticut._core``) are re-exported: ``Space``, ``ProxySet``,
-``Blade``, ``ProxyState``.
+``Blade``, ``ProxyState``, ``RuntimeSettings``. A ProxySet or Blade keeps its
+Space alive; their long calls (``run``, ``step`` of many points) release the GIL,
+and one object is used by one thread at a time (another gets RuntimeError).
 """
 
 from __future__ import annotations
@@ -25,6 +31,7 @@ Space = _core.Space
 ProxySet = _core.ProxySet
 Blade = _core.Blade
 ProxyState = _core.ProxyState
+RuntimeSettings = _core.RuntimeSettings
 MeshError = _core.MeshError
 STATE_NAMES = _core.STATE_NAMES
 IDENTITY_ROTATION = (1.0, 0.0, 0.0, 0.0)
@@ -51,8 +58,14 @@ def load_space(path: str | os.PathLike) -> tuple[Scene, _core.Space]:
     return scene, space_from_scene(scene)
 
 
-def make_blade(space: _core.Space, spec: BladeSpec) -> _core.Blade:
-    return _core.Blade(space, list(spec.start_mm), list(spec.end_mm), spec.points)
+def make_blade(
+    space: _core.Space, spec: BladeSpec, settings: _core.RuntimeSettings | None = None
+) -> _core.Blade:
+    """A blade of the scene's spec; settings per tick default to the scene's own."""
+    blade = _core.Blade(space, list(spec.start_mm), list(spec.end_mm), spec.points)
+    if settings is not None:
+        blade.settings = settings
+    return blade
 
 
 def straight_stroke(

@@ -1,9 +1,16 @@
 // Timing loops of `hapticut bench`, in C++ so no Python overhead is measured.
 // They return raw figures; the Python side prints the tables.
+#include <nanobind/stl/optional.h>
+#include <nanobind/stl/shared_ptr.h>
 #include <nanobind/stl/vector.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "arrays.h"
@@ -29,17 +36,30 @@ Vec3 vec3_from(const nb::ndarray<const double, nb::shape<3>, nb::device::cpu>& a
 void bind_benchmarks(nb::module_& m) {
   m.def(
       "time_transition",
-      [](const Space& space, ProxyState state, std::int32_t tet, int local,
+      [](std::shared_ptr<const Space> space, int state, std::int64_t tet, int local,
          const nb::ndarray<const double, nb::shape<3>, nb::device::cpu>& q_array,
          const nb::ndarray<const double, nb::shape<3>, nb::device::cpu>& p_array, int repeats,
          int batches) {
-        const ProxyPlace start{state, tet, static_cast<std::int8_t>(local), vec3_from(q_array)};
+        if (repeats < 1 || batches < 1) {
+          throw std::invalid_argument("repeats and batches must be >= 1, got " +
+                                      std::to_string(repeats) + " and " + std::to_string(batches));
+        }
+        if (state < 0 || state >= kProxyStateCount || tet < kNoTet || tet > INT32_MAX ||
+            local < INT8_MIN || local > INT8_MAX) {
+          throw std::invalid_argument("time_transition: state " + std::to_string(state) + ", tet " +
+                                      std::to_string(tet) + ", local " + std::to_string(local) +
+                                      " out of range");
+        }
+        const ProxyPlace start{static_cast<ProxyState>(state), static_cast<std::int32_t>(tet),
+                               static_cast<std::int8_t>(local), vec3_from(q_array)};
         const Vec3 p = vec3_from(p_array);
+        if (!is_finite(p)) throw std::invalid_argument("time_transition: p is not finite");
         MoveContext context;
-        context.stiffness_N_per_mm = space.settings().stiffness_N_per_mm;
-        context.tolerance_mm = space.tolerance();
+        context.stiffness_N_per_mm = space->settings().stiffness_N_per_mm;
+        context.tolerance_mm = space->tolerance();
         Proxy proxy(space);
-        proxy.set_place(start);
+        proxy.set_place(start);  // Throws naming a tet or local index out of range.
+        const nb::gil_scoped_release released;
         const Transition kind = proxy.transition(p, context);
         const ProxyPlace after = proxy.place();
         std::vector<double> per_call;
@@ -63,6 +83,7 @@ void bind_benchmarks(nb::module_& m) {
           per_call.push_back(std::max(0.0, elapsed_ns(t0) - empty_ns) / repeats);
         }
         std::sort(per_call.begin(), per_call.end());
+        const nb::gil_scoped_acquire acquired;
         nb::dict d;
         d["ns"] = per_call[per_call.size() / 2];
         d["ns_min"] = per_call.front();
@@ -82,10 +103,13 @@ void bind_benchmarks(nb::module_& m) {
 
   m.def(
       "time_blade",
-      [](const Space& space, const std::vector<double>& start_mm, const std::vector<double>& end_mm,
-         int points,
+      [](std::shared_ptr<const Space> space, const std::vector<double>& start_mm,
+         const std::vector<double>& end_mm, int points,
          const nb::ndarray<const double, nb::shape<-1, 7>, nb::c_contig, nb::device::cpu>& poses,
-         double dt_s) {
+         double dt_s, std::optional<RuntimeSettings> settings_in) {
+        if (poses.shape(0) < 1) throw std::invalid_argument("time_blade needs at least one pose");
+        const RuntimeSettings settings = settings_in ? *settings_in : space->runtime_settings();
+        settings.validate();
         Blade blade(space, {"bench",
                             {start_mm.at(0), start_mm.at(1), start_mm.at(2)},
                             {end_mm.at(0), end_mm.at(1), end_mm.at(2)},
@@ -98,26 +122,37 @@ void bind_benchmarks(nb::module_& m) {
         blade.reset(pose_at(0));
         auto tick_ns = new_array<double>({n});
         auto transitions = new_array<std::int32_t>({n});
+        auto tick_transitions = new_array<std::int32_t>({n});
         auto capped = new_array<std::int32_t>({n});
-        for (std::size_t k = 0; k < n; ++k) {
-          const auto t0 = Clock::now();
-          const BladeTick t = blade.step(pose_at(k), dt_s);
-          tick_ns.data()[k] = elapsed_ns(t0);
-          transitions.data()[k] = t.max_transitions;
-          capped.data()[k] = t.capped_points;
+        auto deferred = new_array<std::int32_t>({n});
+        {
+          const nb::gil_scoped_release released;
+          for (std::size_t k = 0; k < n; ++k) {
+            const auto t0 = Clock::now();
+            const BladeTick t = blade.step(pose_at(k), dt_s, settings);
+            tick_ns.data()[k] = elapsed_ns(t0);
+            transitions.data()[k] = t.max_transitions;
+            tick_transitions.data()[k] = t.transitions;
+            capped.data()[k] = t.capped_points;
+            deferred.data()[k] = t.deferred_points;
+          }
         }
         nb::dict d;
         d["tick_ns"] = tick_ns;
         d["max_transitions"] = transitions;
+        d["tick_transitions"] = tick_transitions;
         d["capped_points"] = capped;
+        d["deferred_points"] = deferred;
         d["counters"] = nb::none();
-        std::uint64_t total = 0;
-        for (const Proxy& p : blade.proxies()) total += p.counters().total_transitions;
-        d["total_transitions"] = total;
+        d["total_transitions"] = blade.counters().total_transitions;
+        d["unfinished_ticks"] = blade.counters().unfinished_ticks;
+        d["budget"] = settings.blade_budget(blade.point_count());
         return d;
       },
       nb::arg("space"), nb::arg("start_mm"), nb::arg("end_mm"), nb::arg("points"), nb::arg("poses"),
-      nb::arg("dt_s") = 0.001, "Run a blade along (M, 7) poses; wall-clock ns of every tick.");
+      nb::arg("dt_s") = 0.001, nb::arg("settings") = nb::none(),
+      "Run a blade along (M, 7) poses; wall-clock ns of every tick (GIL released). "
+      "settings: a RuntimeSettings, default the Space's own.");
 }
 
 }  // namespace hapticut::python

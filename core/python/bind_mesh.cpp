@@ -1,5 +1,6 @@
 // Bindings: materials, Space (a TetMesh with its materials) and the
 // reference meshes of the paper's set-ups.
+#include <nanobind/stl/shared_ptr.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/tuple.h>
 #include <nanobind/stl/vector.h>
@@ -58,9 +59,11 @@ nb::tuple mesh_to_arrays(const MeshData& data) {
   return nb::make_tuple(from_points(data.vertices_mm), tets);
 }
 
-Space make_space(const PointsIn& vertices, const TetsIn& tets, const IndicesIn& tet_materials,
-                 const nb::list& materials, double stiffness_N_per_mm, double servo_rate_Hz,
-                 int max_transitions_per_tick, double capped_tick_force_N, double tolerance_mm) {
+std::shared_ptr<Space> make_space(const PointsIn& vertices, const TetsIn& tets,
+                                  const IndicesIn& tet_materials, const nb::list& materials,
+                                  double stiffness_N_per_mm, double servo_rate_Hz,
+                                  int max_transitions_per_tick, double capped_tick_force_N,
+                                  double tolerance_mm) {
   const MeshData data = to_mesh_data(vertices, tets);
   std::vector<std::int32_t> labels(tet_materials.data(),
                                    tet_materials.data() + tet_materials.shape(0));
@@ -68,8 +71,12 @@ Space make_space(const PointsIn& vertices, const TetsIn& tets, const IndicesIn& 
   for (nb::handle h : materials) table.push_back(material_from_dict(nb::cast<nb::dict>(h)));
   EngineSettings settings{stiffness_N_per_mm, servo_rate_Hz, max_transitions_per_tick,
                           capped_tick_force_N};
-  return Space(TetMesh(data.vertices_mm, data.tets, std::move(labels), tolerance_mm),
-               std::move(table), settings);
+  // Building the mesh's fans and trees can take a while: other Python threads
+  // (Blender's UI) run meanwhile.
+  nb::gil_scoped_release released;
+  return std::const_pointer_cast<Space>(
+      Space::create(TetMesh(data.vertices_mm, data.tets, std::move(labels), tolerance_mm),
+                    std::move(table), settings));
 }
 
 }  // namespace

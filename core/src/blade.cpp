@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace hapticut {
 
@@ -12,61 +13,206 @@ Vec3 Quaternion::rotate(const Vec3& v) const {
   return v + t * w + cross(u, t);
 }
 
+bool Quaternion::valid() const {
+  const double n = std::sqrt(w * w + x * x + y * y + z * z);
+  return std::isfinite(n) && n >= kMinNorm;
+}
+
 Quaternion Quaternion::normalized() const {
   const double n = std::sqrt(w * w + x * x + y * y + z * z);
-  if (!(n > 0.0) || !std::isfinite(n)) return {};
   return {w / n, x / n, y / n, z / n};
 }
 
-Blade::Blade(const Space& space, const BladeSpec& spec) {
-  if (spec.points < 1) throw std::invalid_argument("a blade needs at least one point");
+namespace {
+
+const char* pose_check_message(PoseCheck check) {
+  switch (check) {
+    case PoseCheck::Fine:
+      return "";
+    case PoseCheck::NotFinite:
+      return "blade pose is not finite";
+    case PoseCheck::ZeroRotation:
+      return "blade rotation quaternion has (near) zero norm";
+    case PoseCheck::OutOfWorkspace:
+      return "a blade point is outside the scene's workspace";
+  }
+  return "?";
+}
+
+PoseCheck check_rotation(const Pose& pose) {
+  const Quaternion& r = pose.rotation;
+  if (!is_finite(pose.position_mm) || !std::isfinite(r.w) || !std::isfinite(r.x) ||
+      !std::isfinite(r.y) || !std::isfinite(r.z)) {
+    return PoseCheck::NotFinite;
+  }
+  return r.valid() ? PoseCheck::Fine : PoseCheck::ZeroRotation;
+}
+
+}  // namespace
+
+Blade::Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
+             std::shared_ptr<const ForceShading> shading)
+    : space_(std::move(space)), shading_(std::move(shading)) {
+  if (!space_) throw std::invalid_argument("a Blade needs a Space");
+  if (spec.points < 1 || spec.points > kMaxPoints) {
+    throw std::invalid_argument("a blade has 1.." + std::to_string(kMaxPoints) + " points, got " +
+                                std::to_string(spec.points));
+  }
+  if (!is_finite(spec.start_mm) || !is_finite(spec.end_mm)) {
+    throw std::invalid_argument("blade '" + spec.name + "': start_mm and end_mm must be finite");
+  }
+  if (!shading_) shading_ = std::make_shared<const ForceShading>(*space_);
   tool_points_.reserve(spec.points);
   for (int i = 0; i < spec.points; ++i) {
     const double s = spec.points == 1 ? 0.0 : double(i) / double(spec.points - 1);
     tool_points_.push_back(spec.start_mm + (spec.end_mm - spec.start_mm) * s);
   }
   world_points_ = tool_points_;
-  proxies_.assign(tool_points_.size(), Proxy(space));
+  proxies_.assign(tool_points_.size(), Proxy(space_));
+  point_ticks_.assign(tool_points_.size(), TickResult{});
 }
 
-void Blade::place_points(const Pose& pose) {
+// Checks the pose and places the points in one pass; on a refused pose the
+// proxies are untouched (world_points() then shows the refused sample).
+PoseCheck Blade::place_checked(const Pose& pose) {
+  const PoseCheck check = check_rotation(pose);
+  if (check != PoseCheck::Fine) return check;
   const Quaternion r = pose.rotation.normalized();
+  bool inside = true;
   for (std::size_t i = 0; i < tool_points_.size(); ++i) {
     world_points_[i] = pose.position_mm + r.rotate(tool_points_[i]);
+    inside = inside && space_->in_workspace(world_points_[i]);
   }
-}
-
-static bool pose_is_finite(const Pose& pose) {
-  const Quaternion& r = pose.rotation;
-  return is_finite(pose.position_mm) && std::isfinite(r.w) && std::isfinite(r.x) &&
-         std::isfinite(r.y) && std::isfinite(r.z);
+  return inside ? PoseCheck::Fine : PoseCheck::OutOfWorkspace;
 }
 
 void Blade::reset(const Pose& pose) {
-  if (!pose_is_finite(pose)) throw std::invalid_argument("blade pose is not finite");
-  place_points(pose);
+  const PoseCheck check = place_checked(pose);
+  if (check != PoseCheck::Fine) throw std::invalid_argument(pose_check_message(check));
   for (std::size_t i = 0; i < proxies_.size(); ++i) proxies_[i].reset(world_points_[i]);
+  std::fill(point_ticks_.begin(), point_ticks_.end(), TickResult{});
+  first_ = 0;
+  tick_index_ = 0;
   last_tick_ = {};
 }
 
-BladeTick Blade::step(const Pose& pose, double dt_s) {
+void Blade::clear_counters() {
+  counters_ = {};
+  for (Proxy& p : proxies_) p.clear_counters();
+}
+
+BladeTick Blade::reject(bool out_of_workspace) {
   BladeTick tick;
-  if (!pose_is_finite(pose)) {
-    tick.rejected = true;
-    last_tick_ = tick;
-    return tick;
-  }
-  place_points(pose);
+  tick.rejected = true;
+  ++counters_.rejected_ticks;
+  counters_.out_of_workspace_ticks += out_of_workspace ? 1 : 0;
   for (std::size_t i = 0; i < proxies_.size(); ++i) {
-    const TickResult r = proxies_[i].step(world_points_[i], dt_s);
-    const Vec3 f = proxies_[i].force_N();
-    tick.force_N += f;
-    tick.torque_N_mm += cross(world_points_[i] - pose.position_mm, f);
-    tick.capped_points += r.capped ? 1 : 0;
-    tick.max_transitions = std::max(tick.max_transitions, r.transitions);
+    point_ticks_[i] = {};
+    ++proxies_[i].counters_.ticks;
+    proxies_[i].reject_input(out_of_workspace, point_ticks_[i]);
   }
   last_tick_ = tick;
   return tick;
+}
+
+BladeTick Blade::step(const Pose& pose, double dt_s) {
+  return step(pose, dt_s, space_->runtime_settings());
+}
+
+// The work budget (docs/decisions.md, "Work budget per tick"): a first pass
+// gives each point up to max_transitions_per_tick of what is left, in a round
+// robin that starts where the last tick left points unfinished; a second pass
+// lets the points still capped go on with the rest. A point the budget does
+// not reach keeps its place and its force and catches up next tick.
+BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& settings) {
+  ++tick_index_;
+  ++counters_.ticks;
+  if (!settings.valid()) return reject(false);
+  const PoseCheck check = place_checked(pose);
+  if (check != PoseCheck::Fine) return reject(check == PoseCheck::OutOfWorkspace);
+  const std::size_t n = proxies_.size();
+  int remaining = settings.blade_budget(static_cast<int>(n));
+  const int cap = settings.max_transitions_per_tick;
+  const ForceShading* shading = settings.force_shading ? shading_.get() : nullptr;
+  BladeTick tick;
+  auto index = [&](std::size_t k) { return first_ + k < n ? first_ + k : first_ + k - n; };
+  // A point's tick is over (finished, capped for good, or deferred): add its force.
+  auto account = [&](std::size_t i) {
+    const TickResult& r = point_ticks_[i];
+    const Vec3 f = proxies_[i].force_N();
+    tick.force_N += f;
+    tick.torque_N_mm += cross(world_points_[i] - pose.position_mm, f);
+    tick.capped_points += r.capped || r.deferred ? 1 : 0;
+    tick.deferred_points += r.deferred ? 1 : 0;
+    tick.max_transitions = std::max(tick.max_transitions, r.transitions);
+    tick.transitions += r.transitions;
+  };
+  int capped_in_first_pass = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t i = index(k);
+    TickResult& r = point_ticks_[i];
+    r = {};
+    Proxy& proxy = proxies_[i];
+    ++proxy.counters_.ticks;
+    if (remaining <= 0) {
+      proxy.defer_tick(r, settings);
+      account(i);
+      continue;
+    }
+    proxy.tick_within(world_points_[i], dt_s, settings, std::min(cap, remaining), shading, true, r);
+    remaining -= r.transitions;
+    if (r.capped) {
+      ++capped_in_first_pass;
+      continue;
+    }
+    account(i);
+  }
+  for (std::size_t k = 0; k < n && capped_in_first_pass > 0; ++k) {
+    const std::size_t i = index(k);
+    TickResult& r = point_ticks_[i];
+    if (!r.capped) continue;
+    --capped_in_first_pass;
+    Proxy& proxy = proxies_[i];
+    const Vec3& p = world_points_[i];
+    if (remaining > 0) {
+      const int before = r.transitions;
+      proxy.walk(p, proxy.context_for(p, dt_s, settings), before + remaining, r);
+      remaining -= r.transitions - before;
+    }
+    proxy.finish_tick(p, r, settings, shading);
+    account(i);
+  }
+  if (tick.capped_points > 0) {
+    // The next tick starts at the first point left unfinished.
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t i = index(k);
+      if (point_ticks_[i].capped || point_ticks_[i].deferred) {
+        first_ = i;
+        break;
+      }
+    }
+  }
+  counters_.unfinished_ticks += tick.capped_points > 0 ? 1 : 0;
+  counters_.capped_points += static_cast<std::uint64_t>(tick.capped_points);
+  counters_.deferred_points += static_cast<std::uint64_t>(tick.deferred_points);
+  counters_.total_transitions += static_cast<std::uint64_t>(tick.transitions);
+  counters_.max_transitions_in_tick =
+      std::max(counters_.max_transitions_in_tick, static_cast<std::uint32_t>(tick.transitions));
+  last_tick_ = tick;
+  return tick;
+}
+
+std::size_t Blade::snapshot(BladeSnapshotHeader& header, std::span<ProxySnapshot> points) const {
+  const std::size_t count = std::min(points.size(), proxies_.size());
+  for (std::size_t i = 0; i < count; ++i) {
+    points[i] = {proxies_[i].place(), world_points_[i], proxies_[i].force_N(), point_ticks_[i]};
+  }
+  header.tick_index = tick_index_;
+  header.tick = last_tick_;
+  header.counters = counters_;
+  header.point_count = static_cast<std::int32_t>(proxies_.size());
+  header.points_written = static_cast<std::int32_t>(count);
+  return count;
 }
 
 }  // namespace hapticut

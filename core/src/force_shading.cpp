@@ -64,7 +64,7 @@ RigidSurface extract_rigid_surface(const Space& space) {
   return surface;
 }
 
-ForceShading::ForceShading(const Space& space) : space_(&space) {
+ForceShading::ForceShading(const Space& space) : space_(owner_of(space)) {
   const TetMesh& mesh = space.mesh();
   vertex_normals_.assign(mesh.vertex_count(), Vec3{});
   surface_edge_.assign(mesh.edge_count(), 0);

@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "hapticut/force_shading.h"
 #include "hapticut/geometry.h"
 
 namespace hapticut {
@@ -112,10 +113,36 @@ const char* proxy_state_name(ProxyState state) {
   return "?";
 }
 
-Proxy::Proxy(const Space& space)
-    : space_(&space),
-      reach_box_(reach_box(space.mesh())),
-      mesh_box_(mesh_box(space.mesh(), space.tolerance())) {}
+Proxy::Proxy(std::shared_ptr<const Space> space)
+    : space_(space.get()), space_owner_(std::move(space)) {
+  if (space_ == nullptr) throw std::invalid_argument("a Proxy needs a Space");
+  reach_box_ = reach_box(space_->mesh());
+  mesh_box_ = mesh_box(space_->mesh(), space_->tolerance());
+}
+
+void Proxy::set_place(const ProxyPlace& place) {
+  const auto state = static_cast<int>(place.state);
+  if (state < 0 || state >= kProxyStateCount) {
+    throw std::invalid_argument("proxy state " + std::to_string(state) + " is not a state (0-4)");
+  }
+  const bool outside = place.state == ProxyState::Outside;
+  if (outside ? place.tet != kNoTet : place.tet < 0 || place.tet >= space_->mesh().tet_count()) {
+    throw std::invalid_argument(
+        "tet " + std::to_string(place.tet) + " for a " + proxy_state_name(place.state) +
+        " proxy: expected " +
+        (outside ? std::string("-1") : "0.." + std::to_string(space_->mesh().tet_count() - 1)));
+  }
+  const int locals = place.state == ProxyState::Edge                                        ? 6
+                     : place.state == ProxyState::Face || place.state == ProxyState::Vertex ? 4
+                                                                                            : 1;
+  if (place.local < 0 || place.local >= locals) {
+    throw std::invalid_argument("local index " + std::to_string(place.local) + " for a " +
+                                proxy_state_name(place.state) + " proxy: expected 0.." +
+                                std::to_string(locals - 1));
+  }
+  if (!is_finite(place.q)) throw std::invalid_argument("proxy q is not finite");
+  place_ = place;
+}
 
 // (b-2) of TET and FACE: q moved within its tet or face and stopped where
 // the material put it. Called again, the material (same target, q now at
@@ -139,8 +166,15 @@ Proxy::Outcome Proxy::go(ProxyState to, std::int32_t tet, int local, const Vec3&
 
 StartKind Proxy::reset(const Vec3& p) {
   if (!is_finite(p)) throw std::invalid_argument("proxy start point is not finite");
+  if (!space_->in_workspace(p)) {
+    throw std::invalid_argument("proxy start point (" + std::to_string(p.x) + ", " +
+                                std::to_string(p.y) + ", " + std::to_string(p.z) +
+                                ") mm is outside the scene's workspace");
+  }
   const TetMesh& mesh = space_->mesh();
   force_N_ = {};
+  finished_force_N_ = {};
+  unfinished_in_row_ = 0;
   last_p_ = p;
   has_last_p_ = true;
   const std::int32_t t = mesh.locate(p);
@@ -193,55 +227,117 @@ StartKind Proxy::push_out_of_rigid(std::int32_t start_tet, const Vec3& p) {
   }
   place_ = best;
   force_N_ = (place_.q - p) * space_->settings().stiffness_N_per_mm;
+  finished_force_N_ = force_N_;
   return StartKind::PushedOutOfRigid;
 }
 
 TickResult Proxy::step(const Vec3& p, double dt_s) {
+  return step(p, dt_s, space_->runtime_settings());
+}
+
+TickResult Proxy::step(const Vec3& p, double dt_s, const RuntimeSettings& settings,
+                       const ForceShading* shading) {
   TickResult result;
   ++counters_.ticks;
-  if (!is_finite(p)) {
-    ++counters_.rejected_inputs;
-    force_N_ = {};
-    result.rejected = true;
+  if (!is_finite(p) || !space_->in_workspace(p) || !settings.valid()) {
+    reject_input(is_finite(p) && !space_->in_workspace(p), result);
     return result;
   }
-  const EngineSettings& settings = space_->settings();
+  tick_within(p, dt_s, settings, settings.max_transitions_per_tick, shading, false, result);
+  return result;
+}
+
+void Proxy::tick_within(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
+                        const ForceShading* shading, bool keep_capped_open, TickResult& result) {
+  walk(p, context_for(p, dt_s, settings), limit, result);
+  if (!result.capped || !keep_capped_open) finish_tick(p, result, settings, shading);
+}
+
+void Proxy::reject_input(bool out_of_workspace, TickResult& result) {
+  ++counters_.rejected_inputs;
+  counters_.out_of_workspace_inputs += out_of_workspace ? 1 : 0;
+  force_N_ = {};
+  finished_force_N_ = {};
+  result.rejected = true;
+}
+
+MoveContext Proxy::context_for(const Vec3& p, double dt_s, const RuntimeSettings& settings) const {
   MoveContext context;
   context.stiffness_N_per_mm = settings.stiffness_N_per_mm;
   context.tolerance_mm = space_->tolerance();
   if (space_->uses_speed() && has_last_p_ && dt_s > 0.0 && std::isfinite(dt_s)) {
     context.target_speed_mm_per_s = norm(p - last_p_) / dt_s;
   }
+  return context;
+}
+
+void Proxy::walk(const Vec3& p, const MoveContext& context, int limit, TickResult& result) {
+  int transitions = result.transitions;  // A local: no store-to-load round trip per transition.
+  bool capped = false;
   for (;;) {
-    if (result.transitions == settings.max_transitions_per_tick) {
-      result.capped = true;
+    if (transitions >= limit) {
+      // The cap is exact: capped only if one more transition would still
+      // change something. That probe is undone; the next walk redoes it.
+      const ProxyPlace before = place_;
+      if (advance(p, context) != Outcome::Unchanged) {
+        place_ = before;
+        capped = true;
+      }
       break;
     }
     const ProxyState from = place_.state;
     const std::int32_t from_tet = place_.tet;
     const Outcome outcome = advance(p, context);
     if (outcome == Outcome::Unchanged) break;
-    ++result.transitions;
+    ++transitions;
     ++counters_.transitions[static_cast<int>(from)][static_cast<int>(place_.state)]
                            [is_neighbour(from_tet, place_.tet)];
     if (outcome == Outcome::Settled) break;
   }
-  counters_.total_transitions += static_cast<std::uint64_t>(result.transitions);
-  counters_.max_transitions_in_tick =
-      std::max(counters_.max_transitions_in_tick, static_cast<std::uint32_t>(result.transitions));
-  Vec3 force = (place_.q - p) * settings.stiffness_N_per_mm;  // Eq. (15).
-  if (result.capped) {
-    // The proxy is valid but behind: its lag is the computation's, not the
-    // material's, so the hand must not feel it in full.
-    ++counters_.capped_ticks;
-    const double magnitude = norm(force);
-    if (magnitude > settings.capped_tick_force_N)
-      force = force * (settings.capped_tick_force_N / magnitude);
+  result.transitions = transitions;
+  result.capped = capped;
+}
+
+void Proxy::finish_tick(const Vec3& p, TickResult& result, const RuntimeSettings& settings,
+                        const ForceShading* shading) {
+  // A branch, not std::max: GCC vectorised the max through a 16-byte reload of
+  // a 4-byte store, a store-forwarding stall that cost 15 ns per step.
+  const auto transitions = static_cast<std::uint32_t>(result.transitions);
+  counters_.total_transitions += transitions;
+  if (transitions > counters_.max_transitions_in_tick) {
+    counters_.max_transitions_in_tick = transitions;
   }
-  force_N_ = is_finite(force) ? force : Vec3{};
   last_p_ = p;
   has_last_p_ = true;
-  return result;
+  if (result.capped) {
+    // The proxy is valid but behind: its lag is the computation's, not the
+    // material's. The hand keeps feeling the last finished force while the
+    // proxy catches up; a proxy that stays behind is limited to the capped force.
+    ++counters_.capped_ticks;
+    hold_force(settings);
+    return;
+  }
+  Vec3 force = (place_.q - p) * settings.stiffness_N_per_mm;  // Eq. (15).
+  if (shading != nullptr && settings.force_shading) force = shading->shade(place_, force);
+  force_N_ = is_finite(force) ? force : Vec3{};
+  finished_force_N_ = force_N_;
+  unfinished_in_row_ = 0;
+}
+
+void Proxy::defer_tick(TickResult& result, const RuntimeSettings& settings) {
+  ++counters_.deferred_ticks;
+  result.deferred = true;
+  hold_force(settings);
+}
+
+void Proxy::hold_force(const RuntimeSettings& settings) {
+  ++unfinished_in_row_;
+  Vec3 held = finished_force_N_;
+  const double magnitude = norm(held);
+  if (unfinished_in_row_ > 1 && magnitude > settings.capped_tick_force_N) {
+    held = held * (settings.capped_tick_force_N / magnitude);
+  }
+  force_N_ = held;
 }
 
 Transition Proxy::transition(const Vec3& p, const MoveContext& context) {

@@ -121,7 +121,8 @@ TEST(ForceShading, RigidSurfaceOfABlockIsClosedAndNormalsAreUnit) {
     for (std::int32_t v : tet) c += data.vertices_mm[v] * 0.25;
     labels.push_back(std::abs(c.x) < 5 && std::abs(c.y) < 5 && std::abs(c.z) < 5 ? 2 : 0);
   }
-  const Space space = testing::make_space(data, labels);
+  const auto space_owner = testing::make_space(data, labels);
+  const Space& space = *space_owner;
   const RigidSurface surface = extract_rigid_surface(space);
   double volume = 0.0;
   for (const auto& t : surface.triangles) {
@@ -153,7 +154,8 @@ TEST(ForceShading, PressingTheCentreOfABlockFaceKeepsTheFaceNormal) {
     for (std::int32_t v : tet) c += data.vertices_mm[v] * 0.25;
     labels.push_back(std::abs(c.x) < 5 && std::abs(c.y) < 5 && std::abs(c.z) < 5 ? 2 : 0);
   }
-  const Space space = testing::make_space(data, labels);
+  const auto space_owner = testing::make_space(data, labels);
+  const Space& space = *space_owner;
   const ForceShading shading(space);
   Proxy proxy(space);
   proxy.reset({0.0, 0.0, 8.0});
@@ -212,7 +214,8 @@ TEST(ForceShading, PrecomputedFaceFieldMatchesTheDirectInterpolation) {
     for (std::int32_t v : tet) c += data.vertices_mm[v] * 0.25;
     labels.push_back(std::abs(c.x) < 5 && std::abs(c.y) < 5 && std::abs(c.z) < 5 ? 2 : 0);
   }
-  const Space space = testing::make_space(data, labels);
+  const auto space_owner = testing::make_space(data, labels);
+  const Space& space = *space_owner;
   const ForceShading shading(space);
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> across(-4.9, 4.9);

@@ -11,7 +11,8 @@ namespace hapticut {
 namespace {
 
 TEST(Blade, PointsFollowThePose) {
-  const Space space = testing::make_space(cube_mesh(100.0), 0);
+  const auto space_owner = testing::make_space(cube_mesh(100.0), 0);
+  const Space& space = *space_owner;
   Blade blade(space, {"b", {0, 0, 0}, {10, 0, 0}, 11});
   // A quarter turn about z: the blade now points along +y.
   const double h = std::sqrt(0.5);
@@ -31,7 +32,8 @@ TEST(Blade, ForceIsTheSumAndTorqueIsAboutTheToolOrigin) {
     for (std::int32_t v : mesh.tets[t]) z += mesh.vertices_mm[v].z * 0.25;
     if (z < 0) m[t] = 2;
   }
-  const Space space = testing::make_space(mesh, m);
+  const auto space_owner = testing::make_space(mesh, m);
+  const Space& space = *space_owner;
   Blade blade(space, {"b", {0, 0, 0}, {10, 0, 0}, 5});
   blade.reset({{-5, 0, 5}, {}});
   BladeTick tick{};
@@ -45,7 +47,8 @@ TEST(Blade, ForceIsTheSumAndTorqueIsAboutTheToolOrigin) {
 }
 
 TEST(Blade, NonFinitePoseIsRejected) {
-  const Space space = testing::make_space(cube_mesh(100.0), 0);
+  const auto space_owner = testing::make_space(cube_mesh(100.0), 0);
+  const Space& space = *space_owner;
   Blade blade(space, {"b", {0, 0, 0}, {10, 0, 0}, 3});
   blade.reset({{50, 50, 50}, {}});
   const BladeTick tick =

@@ -243,7 +243,9 @@ std::vector<std::int32_t> random_materials(std::size_t tets, std::uint64_t seed,
 TEST(Invariants, JitteredGridWithSliversAndAllMaterials) {
   const MeshData mesh =
       grid_mesh({0, 7, 15, 16, 30, 41}, {0, 9, 12, 25, 33}, {0, 10, 19, 20.5, 32}, 0.45, 11);
-  const Space space = make_space(mesh, random_materials(mesh.tets.size(), 3, 5), all_materials());
+  const auto space_owner =
+      make_space(mesh, random_materials(mesh.tets.size(), 3, 5), all_materials());
+  const Space& space = *space_owner;
   EXPECT_LT(space.mesh().stats().min_dihedral_deg, 5.0) << "the mesh should contain slivers";
   EXPECT_GE(space.mesh().stats().max_tets_per_vertex, 20);
   run_walk(space, mesh, steps_per_scenario(400000), 101);
@@ -252,7 +254,9 @@ TEST(Invariants, JitteredGridWithSliversAndAllMaterials) {
 TEST(Invariants, EdgeSharedBySixteenTetsAndFlatSlivers) {
   for (double half_height : {10.0, 0.05}) {
     const MeshData mesh = edge_fan_mesh(16, 10.0, half_height);
-    const Space space = make_space(mesh, random_materials(mesh.tets.size(), 5, 5), all_materials());
+    const auto space_owner =
+        make_space(mesh, random_materials(mesh.tets.size(), 5, 5), all_materials());
+    const Space& space = *space_owner;
     EXPECT_EQ(space.mesh().stats().max_tets_per_edge, 16);
     run_walk(space, mesh, steps_per_scenario(150000), 202, /*expect_vertex=*/false);
   }
@@ -260,7 +264,9 @@ TEST(Invariants, EdgeSharedBySixteenTetsAndFlatSlivers) {
 
 TEST(Invariants, IcosahedronCentreSharedByTwentyTets) {
   const MeshData mesh = icosahedron_mesh(10.0);
-  const Space space = make_space(mesh, random_materials(mesh.tets.size(), 9, 5), all_materials());
+  const auto space_owner =
+      make_space(mesh, random_materials(mesh.tets.size(), 9, 5), all_materials());
+  const Space& space = *space_owner;
   EXPECT_EQ(space.mesh().stats().max_tets_per_vertex, 20);
   run_walk(space, mesh, steps_per_scenario(150000), 303);
 }
@@ -270,7 +276,8 @@ TEST(Invariants, MostlyRigidGridKeepsProxiesOut) {
   std::mt19937_64 rng(17);
   std::vector<std::int32_t> m(mesh.tets.size());
   for (auto& x : m) x = (rng() % 10 < 6) ? 2 : int(rng() % 2);
-  const Space space = make_space(mesh, m);
+  const auto space_owner = make_space(mesh, m);
+  const Space& space = *space_owner;
   run_walk(space, mesh, steps_per_scenario(200000), 404);
 }
 
@@ -285,7 +292,8 @@ TEST(Invariants, ThinRigidLayerIsNeverCrossed) {
       for (std::int32_t v : mesh.tets[t]) z += mesh.vertices_mm[v].z * 0.25;
       if (z > 10 && z < 10 + w) m[t] = 2;
     }
-    const Space space = make_space(mesh, m);
+    const auto space_owner = make_space(mesh, m);
+    const Space& space = *space_owner;
     std::mt19937_64 rng(99);
     std::uniform_real_distribution<double> xy(0.5, 29.5);
     std::uniform_real_distribution<double> below(-5.0, 9.9);

@@ -46,7 +46,8 @@ bool inside_rigid(const Space& space, const Vec3& q) {
 }
 
 TEST(Proxy, WalksIntoTheNeighbourThroughTheSharedFace) {
-  const Space space = make_space(two_tets_mesh(), 0);
+  const auto space_owner = make_space(two_tets_mesh(), 0);
+  const Space& space = *space_owner;
   Proxy proxy(space);
   EXPECT_EQ(proxy.reset({2, 2, -1}), StartKind::InsideTet);
   const std::int32_t start_tet = proxy.place().tet;
@@ -63,7 +64,8 @@ TEST(Proxy, WalksIntoTheNeighbourThroughTheSharedFace) {
 TEST(Proxy, RigidNeighbourHoldsTheProxyOnTheFaceAndLetsItSlide) {
   const MeshData mesh = two_tets_mesh();
   // Tet 1 (above z = 0) is bone.
-  const Space space = make_space(mesh, {0, 2});
+  const auto space_owner = make_space(mesh, {0, 2});
+  const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({2, 2, -1});
   proxy.step({2, 2, 3}, kDt);
@@ -93,7 +95,8 @@ TEST(Proxy, SlidesIntoAValleyEdgeThenItsCorner) {
     for (std::int32_t v : mesh.tets[t]) c += mesh.vertices_mm[v] * 0.25;
     if (c.z < 10 || (c.z < 20 && (c.x > 20 || c.y > 20))) m[t] = 2;
   }
-  const Space space = make_space(mesh, m);
+  const auto space_owner = make_space(mesh, m);
+  const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({15, 15, 15});
   proxy.step({25, 15, 5}, kDt);
@@ -111,7 +114,9 @@ TEST(Proxy, SlidesIntoAValleyEdgeThenItsCorner) {
 }
 
 TEST(Proxy, DragLagsByExactlyD) {
-  const Space space = make_space(grid_mesh({0, 10, 20, 30}, {0, 10, 20}, {0, 10, 20}, 0.2, 9), 1);
+  const auto space_owner =
+      make_space(grid_mesh({0, 10, 20, 30}, {0, 10, 20}, {0, 10, 20}, 0.2, 9), 1);
+  const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({2, 5, 5});
   for (int i = 1; i <= 250; ++i) {
@@ -125,7 +130,8 @@ TEST(Proxy, DragLagsByExactlyD) {
 }
 
 TEST(Proxy, EntersTheCubeFromOutside) {
-  const Space space = make_space(cube_mesh(10.0), 0);
+  const auto space_owner = make_space(cube_mesh(10.0), 0);
+  const Space& space = *space_owner;
   Proxy proxy(space);
   EXPECT_EQ(proxy.reset({-5, 3, 4}), StartKind::Outside);
   proxy.step({5, 3, 4}, kDt);
@@ -138,7 +144,8 @@ TEST(Proxy, EntersTheCubeFromOutside) {
 }
 
 TEST(Proxy, RigidCubeStopsAnOutsideProxyOnItsSurface) {
-  const Space space = make_space(cube_mesh(10.0), 2);
+  const auto space_owner = make_space(cube_mesh(10.0), 2);
+  const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({-5, 3, 4});
   proxy.step({3, 3, 4}, kDt);
@@ -158,8 +165,9 @@ TEST(Proxy, RigidCubeStopsAnOutsideProxyOnItsSurface) {
 // only on their rims. Aimed into a tet that has no boundary face at that
 // vertex, it used to miss them all and pass into the mesh as OUTSIDE.
 TEST(Proxy, EntersExactlyThroughABoundaryVertexIntoAnInnerTet) {
-  const Space space =
+  const auto space_owner =
       make_space(grid_mesh({0, 5, 10}, {0, 5, 10}, {0, 5, 10}, 0.3, 21), std::int32_t{0});
+  const Space& space = *space_owner;
   const TetMesh& mesh = space.mesh();
   int checked = 0;
   for (std::int32_t v = 0; v < mesh.vertex_count(); ++v) {
@@ -202,7 +210,8 @@ TEST(Proxy, EnteringThroughABoundaryVertexAlongAnInnerFacePlaneStopsAtTheBone) {
   for (std::int32_t t = 0; t < shape.tet_count(); ++t) {
     if (!has_boundary_face(shape, t)) materials[t] = 2;
   }
-  const Space space = make_space(data, materials);
+  const auto space_owner = make_space(data, materials);
+  const Space& space = *space_owner;
   const TetMesh& mesh = space.mesh();
   int paths = 0;
   int between_rigid = 0;
@@ -278,7 +287,8 @@ TEST(Proxy, ARimPassedByOutsideLeavesTheSearchToTheRimBeyond) {
       for (std::int32_t t = 0; t < shape.tet_count(); ++t) {
         if (!has_boundary_face(shape, t)) materials[t] = 2;
       }
-      const Space space = make_space(both, materials);
+      const auto space_owner = make_space(both, materials);
+      const Space& space = *space_owner;
       Proxy proxy(space);
       ASSERT_EQ(proxy.reset(shape.vertex(v) - along_face * 1.5), StartKind::Outside);
       const Vec3 p = shape.vertex(v) + along_face * 0.5;
@@ -298,7 +308,8 @@ TEST(Proxy, ARimPassedByOutsideLeavesTheSearchToTheRimBeyond) {
 // boundary is fine.
 TEST(Proxy, CheckInvariantsRejectsAnOutsideProxyInsideTheMesh) {
   const MeshData data = grid_mesh({0, 10, 20}, {0, 10, 20}, {0, 10, 20});
-  const Space space = make_space(data, 0);
+  const auto space_owner = make_space(data, 0);
+  const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({-5, 5, 5});
   proxy.set_place({ProxyState::Outside, kNoTet, 0, {10, 10, 10}});  // The inner vertex.
@@ -315,7 +326,8 @@ TEST(Proxy, CheckInvariantsRejectsAnOutsideProxyInsideTheMesh) {
 
 // Issue 8, defect 2: the rigid message was overwritten by the OUTSIDE one.
 TEST(Proxy, CheckInvariantsNamesTheRigidTet) {
-  const Space space = make_space(two_tets_mesh(), {0, 2});
+  const auto space_owner = make_space(two_tets_mesh(), {0, 2});
+  const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({2, 2, -1});
   const Vec3 in_bone = centroid(space.mesh(), 1);
@@ -329,7 +341,8 @@ TEST(Proxy, CheckInvariantsNamesTheRigidTet) {
 // (corrupt) OUTSIDE place inside the mesh no entry can be found; the proxy
 // must hold rather than follow p through the bone.
 TEST(Proxy, OutsideNeverSetsQToAPointInsideTheMesh) {
-  const Space space = make_space(two_tets_mesh(), {0, 2});
+  const auto space_owner = make_space(two_tets_mesh(), {0, 2});
+  const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({2, 2, -1});
   const Vec3 start = centroid(space.mesh(), 0);
@@ -352,7 +365,8 @@ TEST(Proxy, AFaceSlideEndingOnAnEdgeLetsTheEdgeFanDecide) {
     for (std::int32_t v : data.tets[t]) c += data.vertices_mm[v] * 0.25;
     if (c.x > 0 && c.y > 0) materials[t] = 2;
   }
-  const Space space = make_space(data, materials);
+  const auto space_owner = make_space(data, materials);
+  const Space& space = *space_owner;
   for (const Vec3& start : {Vec3{-1, -1, 0}, Vec3{-1, -3, 1}}) {
     Proxy proxy(space);
     proxy.reset(start);
@@ -378,8 +392,9 @@ TEST(Proxy, AFaceSlideEndingOnAnEdgeLetsTheEdgeFanDecide) {
 // for good. The entry search now runs on the segment clipped to the mesh's
 // reach, so the way back gives the same place and force as no glitch at all.
 TEST(Proxy, AHugeJumpOutAndBackEntersExactly) {
-  const Space space = Space::from_scene(load_scene(std::string(HAPTICUT_TEST_DATA_DIR) +
-                                                   "/../../examples/sphere80.hapticut.msgpack"));
+  const auto space_owner = Space::from_scene(load_scene(
+      std::string(HAPTICUT_TEST_DATA_DIR) + "/../../examples/sphere80.hapticut.msgpack"));
+  const Space& space = *space_owner;
   Proxy direct(space);
   direct.reset({0, 0, 40});
   direct.step({0, 0, 0}, kDt);
@@ -388,7 +403,13 @@ TEST(Proxy, AHugeJumpOutAndBackEntersExactly) {
     for (const Vec3& away : {Vec3{0, 0, far}, Vec3{far, -far, far}, Vec3{-far, 0, 0}}) {
       Proxy proxy(space);
       proxy.reset({0, 0, 40});
-      proxy.step(away, kDt);
+      // Proxy::step rejects such a sample as a device fault (out of the
+      // workspace); the walk itself must still handle it exactly, so drive
+      // the transitions directly.
+      EXPECT_TRUE(proxy.step(away, kDt).rejected);
+      const MoveContext context{space.settings().stiffness_N_per_mm, 0.0, space.tolerance()};
+      for (int i = 0; i < 64 && proxy.transition(away, context).changed; ++i) {
+      }
       EXPECT_EQ(proxy.place().state, ProxyState::Outside);
       proxy.step({0, 0, 0}, kDt);
       EXPECT_FALSE(inside_rigid(space, proxy.q())) << "far " << far;
@@ -415,7 +436,8 @@ TEST(Proxy, HugeJumpsOnASliverGridNeverEndInTheBone) {
     for (std::int32_t v : data.tets[t]) c += data.vertices_mm[v] * 0.25;
     if (norm(c - middle) < 9.0) materials[t] = 2;
   }
-  const Space space = make_space(data, materials);
+  const auto space_owner = make_space(data, materials);
+  const Space& space = *space_owner;
   for (const double far : {1e15, 1e18, 1e200}) {
     for (int axis = 0; axis < 3; ++axis) {
       for (const double sign : {-1.0, 1.0}) {
@@ -439,7 +461,8 @@ TEST(Proxy, HugeJumpsOnASliverGridNeverEndInTheBone) {
 
 TEST(Proxy, EdgeFanPicksTheTetTowardP) {
   const MeshData mesh = edge_fan_mesh(12);
-  const Space space = make_space(mesh, 0);
+  const auto space_owner = make_space(mesh, 0);
+  const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({0.5, 0.2, 0.3});
   // Put the proxy on the axis edge, owned by tet 0.
@@ -457,7 +480,8 @@ TEST(Proxy, IcosahedronVertexSlidesAlongARigidNeighbourhood) {
   const MeshData mesh = icosahedron_mesh(10.0);
   std::vector<std::int32_t> materials(20, 2);
   materials[7] = 0;
-  const Space space = make_space(mesh, materials);
+  const auto space_owner = make_space(mesh, materials);
+  const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({50, 0, 0});
   proxy.set_place({ProxyState::Vertex, 7, 0, {0, 0, 0}});
@@ -477,11 +501,13 @@ TEST(Proxy, IcosahedronVertexSlidesAlongARigidNeighbourhood) {
 }
 
 TEST(Proxy, StartInsideRigidIsPushedToTheNearestFreeFace) {
-  const Space space = make_space(grid_mesh({0, 10, 20, 30}, {0, 10, 20, 30}, {0, 10, 20, 30}), [] {
-    std::vector<std::int32_t> m(27 * 6, 0);
-    for (int t = 13 * 6; t < 14 * 6; ++t) m[t] = 2;  // The middle cell is bone.
-    return m;
-  }());
+  const auto space_owner =
+      make_space(grid_mesh({0, 10, 20, 30}, {0, 10, 20, 30}, {0, 10, 20, 30}), [] {
+        std::vector<std::int32_t> m(27 * 6, 0);
+        for (int t = 13 * 6; t < 14 * 6; ++t) m[t] = 2;  // The middle cell is bone.
+        return m;
+      }());
+  const Space& space = *space_owner;
   Proxy proxy(space);
   EXPECT_EQ(proxy.reset({15, 15, 11}), StartKind::PushedOutOfRigid);
   EXPECT_EQ(proxy.place().state, ProxyState::Face);
@@ -493,7 +519,8 @@ TEST(Proxy, StartInsideRigidIsPushedToTheNearestFreeFace) {
 }
 
 TEST(Proxy, NonFiniteInputIsRejectedAndZeroesTheForce) {
-  const Space space = make_space(two_tets_mesh(), {0, 2});
+  const auto space_owner = make_space(two_tets_mesh(), {0, 2});
+  const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({2, 2, -1});
   proxy.step({2, 2, 3}, kDt);
@@ -511,15 +538,17 @@ TEST(Proxy, CapIsCountedAndItsForceClamped) {
   settings.max_transitions_per_tick = 3;
   settings.capped_tick_force_N = 0.5;
   const MeshData mesh = grid_mesh({0, 10, 20, 30, 40, 50}, {0, 10}, {0, 10});
-  const Space space = make_space(mesh, std::vector<std::int32_t>(mesh.tets.size(), 0),
-                                 testing::paper_materials(), settings);
+  const auto space_owner = make_space(mesh, std::vector<std::int32_t>(mesh.tets.size(), 0),
+                                      testing::paper_materials(), settings);
+  const Space& space = *space_owner;
   Proxy proxy(space);
   proxy.reset({1, 5, 5});
   const TickResult r = proxy.step({49, 5, 5}, kDt);
   EXPECT_TRUE(r.capped);
   EXPECT_EQ(r.transitions, 3);
   EXPECT_EQ(proxy.counters().capped_ticks, 1u);
-  EXPECT_NEAR(norm(proxy.force_N()), 0.5, 1e-12);
+  // Unfinished: the last finished force is held (zero, in free air), no jump.
+  EXPECT_EQ(proxy.force_N(), Vec3(0, 0, 0));
   EXPECT_EQ(proxy.check_invariants(), "");
   for (int i = 0; i < 20 && proxy.q() != Vec3(49, 5, 5); ++i) proxy.step({49, 5, 5}, kDt);
   EXPECT_EQ(proxy.q(), Vec3(49, 5, 5));  // It catches up over the following ticks.

@@ -1,6 +1,7 @@
 // Shared helpers of the C++ tests: a Space from reference geometry.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include "hapticut/reference_meshes.h"
@@ -21,14 +22,15 @@ inline std::vector<Material> paper_materials() {
   return {free_material(), drag_material(1.0), rigid_material()};
 }
 
-inline Space make_space(const MeshData& data, std::vector<std::int32_t> tet_materials,
-                        std::vector<Material> materials = paper_materials(),
-                        EngineSettings settings = {}) {
-  return Space(TetMesh(data.vertices_mm, data.tets, std::move(tet_materials)), std::move(materials),
-               settings);
+inline std::shared_ptr<const Space> make_space(const MeshData& data,
+                                               std::vector<std::int32_t> tet_materials,
+                                               std::vector<Material> materials = paper_materials(),
+                                               EngineSettings settings = {}) {
+  return Space::create(TetMesh(data.vertices_mm, data.tets, std::move(tet_materials)),
+                       std::move(materials), settings);
 }
 
-inline Space make_space(const MeshData& data, std::int32_t material) {
+inline std::shared_ptr<const Space> make_space(const MeshData& data, std::int32_t material) {
   return make_space(data, std::vector<std::int32_t>(data.tets.size(), material));
 }
 

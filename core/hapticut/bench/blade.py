@@ -2,10 +2,16 @@
 
 The paper ran 50 points on a 0.1 m edge at about 1 kHz on its spheres (80 and
 320 faces, radius 30 mm, in a tetrahedralized cube) and a ~12k-tet mouse. Here
-the same stroke runs through the example scenes (the bunny stands in for the
-mouse) and through a generated ~12k-tet grid, timed per tick in C++. Then the
-largest number of blade points whose median tick fits in 100 µs (10% of a 1 kHz
-period on one core) is searched.
+the same stroke runs through every example scene (the bunny, ``mouse``, stands
+in for the paper's mouse) and through a generated ~12k-tet grid, timed per tick
+in C++, with the scene's own settings per tick (work budget included). The
+table shows each scene's worst tick (time, transitions of all points) and its
+capped points. Then the largest number of blade points whose median tick fits
+in 100 µs (10% of a 1 kHz period on one core) is searched.
+
+The example scenes ship in the package (``hapticut/examples``); a source tree's
+``examples/`` is used when the package has none, and ``--scenes DIR`` names
+another directory. When none is found the table says so instead of dropping them.
 """
 
 from __future__ import annotations
@@ -16,21 +22,48 @@ from pathlib import Path
 
 import numpy as np
 
+import hapticut
 from hapticut import _core, engine
 from hapticut.bench.table import format_table
 
-EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
+# Where the example scenes are looked for, in this order (see the module docstring).
+PACKAGED_EXAMPLES = Path(hapticut.__file__).resolve().parent / "examples"
+SOURCE_EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
+SCENE_PATTERN = "*.hapticut.*"
 BLADE_HALF_LENGTH_MM = 50.0  # The paper's 0.1 m edge.
 STROKE_SPEED_MM_PER_S = 100.0
 BUDGET_NS = 100_000.0
+TARGET_P99_NS = 5_000.0  # Issue 8: no tick over 5 µs p99 for a 50-point blade.
+# The paper's names for the examples; any other scene is labelled by its file name.
+LABELS = {
+    "sphere80": "sphere 80 faces",
+    "sphere320": "sphere 320 faces",
+    "mouse": "bunny (the paper's mouse)",
+}
 
 
-def _example(patterns: list[str]) -> Path | None:
-    for pattern in patterns:
-        found = sorted(EXAMPLES.glob(pattern))
+def example_scenes(scenes_dir: Path | None = None) -> tuple[list[Path], str]:
+    """The example scene files and a line saying where they came from (or that none was found).
+
+    Raises FileNotFoundError when an explicit scenes_dir does not exist."""
+    if scenes_dir is not None:
+        scenes_dir = Path(scenes_dir)
+        if not scenes_dir.is_dir():
+            raise FileNotFoundError(f"--scenes {scenes_dir}: no such directory")
+        candidates = [scenes_dir]
+    else:
+        candidates = [PACKAGED_EXAMPLES, SOURCE_EXAMPLES]
+    for directory in candidates:
+        found = sorted(directory.glob(SCENE_PATTERN)) if directory.is_dir() else []
         if found:
-            return found[0]
-    return None
+            return found, f"example scenes: {len(found)} in {directory}"
+    where = " or ".join(str(d) for d in candidates)
+    return [], f"NO EXAMPLE SCENES FOUND (looked in {where}); pass --scenes DIR"
+
+
+def _label(path: Path) -> str:
+    stem = path.name.split(".hapticut.")[0]
+    return LABELS.get(stem, stem)
 
 
 def _grid_space() -> _core.Space:
@@ -59,19 +92,16 @@ def _as_cut(scene) -> _core.Space:
     return engine.space_from_scene(replace(scene, materials=materials))
 
 
-def scenes() -> list[tuple[str, _core.Space]]:
+def scenes(paths: list[Path] | None = None) -> list[tuple[str, _core.Space]]:
     """Each example twice: cut (bodies as drag tissue, the paper's use) and as authored
-    (rigid bodies: every point that reaches the body is held on its surface, the costly case)."""
+    (rigid bodies: every point that reaches the body is held on its surface, the costly case);
+    then the generated grid. paths: the example scene files (default: example_scenes())."""
+    if paths is None:
+        paths, _ = example_scenes()
     out = []
-    for label, patterns in (
-        ("sphere 80 faces", ["sphere80*.hapticut.*"]),
-        ("sphere 320 faces", ["sphere320*.hapticut.*"]),
-        ("bunny (the paper's mouse)", ["mouse*.hapticut.*", "bunny*.hapticut.*"]),
-    ):
-        path = _example(patterns)
-        if path is None:
-            continue
+    for path in paths:
         scene, space = engine.load_space(path)
+        label = _label(path)
         out.append((f"{label}, cut (drag 1 mm)", _as_cut(scene)))
         out.append((f"{label}, as authored ({_models(scene)})", space))
     out.append(("grid ~12k tets, drag ball (generated)", _grid_space()))
@@ -121,11 +151,13 @@ def max_points_within(space: _core.Space, poses: np.ndarray, budget_ns: float = 
     return lo
 
 
-def run(find_max: bool = True, rounds: int = 3) -> str:
+def run(find_max: bool = True, rounds: int = 3, scenes_dir: Path | None = None) -> str:
     """The table. Every scene is timed once per round, in turn, and keeps its best
     round (lowest median tick; most points within the budget): this machine's slow
-    spells last seconds, and a scene timed inside one reads up to twice its cost."""
-    cases = [(label, space, stroke_poses(space)) for label, space in scenes()]
+    spells last seconds, and a scene timed inside one reads up to twice its cost.
+    The capped points and the worst tick's transitions are those of the best round."""
+    paths, found = example_scenes(scenes_dir)
+    cases = [(label, space, stroke_poses(space)) for label, space in scenes(paths)]
     best: list[dict | None] = [None] * len(cases)
     most = [0] * len(cases)
     search_s = [0.0] * len(cases)
@@ -151,7 +183,12 @@ def run(find_max: bool = True, rounds: int = 3) -> str:
             float(ticks.max()),
             float(np.median(ticks) / 50),
             int(np.max(r["max_transitions"])),
+            int(np.max(r["tick_transitions"])),
+            int(r["budget"]),
             int(np.sum(r["capped_points"])),
+            "yes"
+            if np.percentile(ticks, 99) <= TARGET_P99_NS and not np.any(r["capped_points"])
+            else "NO",
         ]
         if find_max:
             row.append(most[k])
@@ -165,13 +202,19 @@ def run(find_max: bool = True, rounds: int = 3) -> str:
         "p99 ns",
         "max ns",
         "ns/point",
-        "max transitions",
+        "max transitions (point)",
+        "worst tick transitions",
+        "budget",
         "capped points",
+        "target met",
     ]
     if find_max:
         headers += ["points in 100 µs", "search time"]
     paper = (
         "Paper (Pentium Pro 200 MHz): 50 points at about 1 kHz, i.e. about 1 ms per tick.\n"
-        "Targets: 50-point tick on ~12k tets <= 5 µs median; >= 2000 points within 100 µs.\n"
+        "Targets: 50-point tick on ~12k tets <= 5 µs median; >= 2000 points within 100 µs;\n"
+        'every example scene: no capped point and p99 <= 5 µs ("target met").\n'
+        "Worst tick: max ns, and the transitions of all points in the busiest tick (budget:\n"
+        "the blade's work budget per tick; a point it does not reach is capped).\n"
     )
-    return paper + format_table(headers, rows)
+    return paper + found + "\n" + format_table(headers, rows)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import platform
+import sys
+from pathlib import Path
 
 NAME = "bench"
 HELP = "Print the engine's benchmark tables (Table 2 transitions, blade ticks)."
@@ -22,6 +24,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--no-max-points", action="store_true", help="blade: skip the points-in-100-µs search"
     )
+    parser.add_argument(
+        "--scenes",
+        type=Path,
+        default=None,
+        help="blade: directory of example scenes (default: those shipped in the package)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -35,5 +43,9 @@ def run(args: argparse.Namespace) -> int:
     else:
         from hapticut.bench import blade
 
-        print(blade.run(find_max=not args.no_max_points, rounds=args.rounds))
+        try:
+            print(blade.run(not args.no_max_points, args.rounds, args.scenes))
+        except FileNotFoundError as error:
+            print(f"hapticut bench blade: {error}", file=sys.stderr)
+            return 2
     return 0

@@ -1,23 +1,37 @@
 // Blade: N points spread evenly on a segment in the tool frame, placed in the
 // world by the tool's pose; one Proxy per point. The device gets the summed
 // force and the torque about the tool origin (beyond the paper).
+//
+// Per tick (docs/decisions.md): settings come with the tick (RuntimeSettings,
+// space.h); the points share a work budget of transitions; force shading is
+// applied when the settings ask; snapshot() copies the tick into caller
+// storage. step() and snapshot() never allocate; the constructor and reset do.
 #pragma once
 
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <span>
 #include <vector>
 
+#include "hapticut/force_shading.h"
 #include "hapticut/proxy.h"
 #include "hapticut/scene.h"
 
 namespace hapticut {
 
-// Unit quaternion (w, x, y, z) rotating the tool frame into the world.
+// Quaternion (w, x, y, z) rotating the tool frame into the world; normalised
+// on use. One whose norm is not finite or below kMinNorm is refused.
 struct Quaternion {
   double w = 1.0;
   double x = 0.0;
   double y = 0.0;
   double z = 0.0;
+  static constexpr double kMinNorm = 1e-6;
   Vec3 rotate(const Vec3& v) const;
+  // The unit quaternion; only for a valid() one.
   Quaternion normalized() const;
+  bool valid() const;
 };
 
 struct Pose {
@@ -25,34 +39,111 @@ struct Pose {
   Quaternion rotation;
 };
 
+// Whether a pose can be used, and why not.
+enum class PoseCheck : std::uint8_t { Fine, NotFinite, ZeroRotation, OutOfWorkspace };
+
 struct BladeTick {
-  Vec3 force_N;      // Sum of k (q_i - p_i).
+  Vec3 force_N;      // Sum of the points' forces (k (q_i - p_i), shaded when asked).
   Vec3 torque_N_mm;  // Sum of (p_i - origin) x f_i.
+  // Points left unfinished when the work budget ran out: their proxies keep
+  // their last valid place and force and catch up next tick.
   int capped_points = 0;
-  int max_transitions = 0;
-  bool rejected = false;  // Pose not finite: nothing moved, force zero.
+  int deferred_points = 0;  // Of those, the points that did not move at all.
+  int max_transitions = 0;  // Most transitions of one point.
+  int transitions = 0;      // All points together (<= the budget).
+  // Input refused, nothing moved, force zero: pose or rotation not finite, a
+  // rotation of (near) zero norm, a point outside the Space's workspace, or
+  // settings out of range.
+  bool rejected = false;
+};
+
+struct BladeCounters {
+  std::uint64_t ticks = 0;
+  std::uint64_t rejected_ticks = 0;
+  std::uint64_t out_of_workspace_ticks = 0;  // The part of rejected_ticks far outside.
+  std::uint64_t unfinished_ticks = 0;        // Ticks with a capped point.
+  std::uint64_t capped_points = 0;           // Summed over ticks.
+  std::uint64_t deferred_points = 0;         // Summed over ticks.
+  std::uint64_t total_transitions = 0;
+  std::uint32_t max_transitions_in_tick = 0;  // Most in one tick, all points together.
+};
+
+// One point of a snapshot.
+struct ProxySnapshot {
+  ProxyPlace place;
+  Vec3 p;  // The device point.
+  Vec3 force_N;
+  TickResult tick;
+};
+
+struct BladeSnapshotHeader {
+  std::uint64_t tick_index = 0;  // Blade ticks stepped since reset (rejected ones included).
+  BladeTick tick;
+  BladeCounters counters;
+  std::int32_t point_count = 0;  // Points of the blade (the snapshot may hold fewer).
+  std::int32_t points_written = 0;
+};
+
+// A whole tick in one trivially copyable value, for a blade of at most N
+// points: what the servo thread publishes (server/latest_value.h) and another
+// thread reads.
+template <std::size_t N>
+struct BladeSnapshot {
+  BladeSnapshotHeader header;
+  std::array<ProxySnapshot, N> points;
 };
 
 class Blade {
  public:
-  Blade(const Space& space, const BladeSpec& spec);
+  static constexpr int kMaxPoints = 10000;
 
+  // Throws std::invalid_argument naming the value when spec.points is outside
+  // 1..kMaxPoints or an end is not finite. Builds its own ForceShading from
+  // the Space unless one is given (shared between blades of one Space).
+  Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
+        std::shared_ptr<const ForceShading> shading = nullptr);
+  Blade(const Space& space, const BladeSpec& spec) : Blade(owner_of(space), spec) {}
+
+  // Places every proxy (may allocate). Throws std::invalid_argument for a pose
+  // Blade::step would reject.
   void reset(const Pose& pose);
+  // One tick with the Space's settings, or with the given ones. Never allocates.
   BladeTick step(const Pose& pose, double dt_s);
+  BladeTick step(const Pose& pose, double dt_s, const RuntimeSettings& settings);
+
+  // Copies the last tick into caller storage, up to points.size() points;
+  // never allocates. Returns the points written.
+  std::size_t snapshot(BladeSnapshotHeader& header, std::span<ProxySnapshot> points) const;
+  template <std::size_t N>
+  void snapshot(BladeSnapshot<N>& out) const {
+    snapshot(out.header, std::span<ProxySnapshot>(out.points));
+  }
 
   int point_count() const { return static_cast<int>(proxies_.size()); }
+  const Space& space() const { return *space_; }
+  const ForceShading& shading() const { return *shading_; }
   const std::vector<Vec3>& tool_points() const { return tool_points_; }
   const std::vector<Vec3>& world_points() const { return world_points_; }
   const std::vector<Proxy>& proxies() const { return proxies_; }
+  const std::vector<TickResult>& point_ticks() const { return point_ticks_; }
   const BladeTick& last_tick() const { return last_tick_; }
+  const BladeCounters& counters() const { return counters_; }
+  void clear_counters();
 
  private:
-  void place_points(const Pose& pose);
+  PoseCheck place_checked(const Pose& pose);
+  BladeTick reject(bool out_of_workspace);
 
+  std::shared_ptr<const Space> space_;
+  std::shared_ptr<const ForceShading> shading_;
   std::vector<Vec3> tool_points_;
   std::vector<Vec3> world_points_;
   std::vector<Proxy> proxies_;
+  std::vector<TickResult> point_ticks_;
+  std::size_t first_ = 0;  // Where the next tick starts: the budget's round robin.
+  std::uint64_t tick_index_ = 0;
   BladeTick last_tick_;
+  BladeCounters counters_;
 };
 
 }  // namespace hapticut

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "hapticut/proxy.h"
@@ -75,7 +76,7 @@ class ForceShading {
   // Fills shaded_faces_ and face_record_ from face_normals_.
   void build_shaded_faces();
 
-  const Space* space_;
+  std::shared_ptr<const Space> space_;  // Shared ownership (space.h, "Who owns a Space").
   std::vector<Vec3> vertex_normals_;
   // What the FACE path interpolates over a face: the unit vertex normal, or
   // with a source surface the source's interpolated normal at the vertex's

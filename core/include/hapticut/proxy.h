@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 
 #include "hapticut/aabb_tree.h"
@@ -51,17 +52,27 @@ struct ProxyCounters {
   std::array<std::array<std::array<std::uint64_t, 2>, kProxyStateCount>, kProxyStateCount>
       transitions{};
   std::uint64_t ticks = 0;
-  std::uint64_t capped_ticks = 0;     // Ticks that hit max_transitions_per_tick.
-  std::uint64_t rejected_inputs = 0;  // Ticks whose p was not finite (state kept).
+  // Ticks that ended unfinished: the cap was reached and one more transition
+  // would still have changed something (a walk that converges exactly at the
+  // cap is not capped).
+  std::uint64_t capped_ticks = 0;
+  // Ticks whose input was refused (state kept, force zero): p not finite or
+  // outside the Space's workspace, or settings out of range.
+  std::uint64_t rejected_inputs = 0;
+  std::uint64_t out_of_workspace_inputs = 0;  // The part of rejected_inputs far outside.
+  std::uint64_t deferred_ticks = 0;           // Blade ticks skipped by the work budget.
   std::uint32_t max_transitions_in_tick = 0;
   std::uint64_t total_transitions = 0;
 };
 
 struct TickResult {
   int transitions = 0;
-  bool capped = false;
-  bool rejected = false;  // p was NaN/inf: nothing moved, force zero.
+  bool capped = false;    // Unfinished: q is valid but behind p; the force is held.
+  bool rejected = false;  // p not finite or outside the workspace: nothing moved, force zero.
+  bool deferred = false;  // Blade only: the tick's work budget ran out before this point.
 };
+
+class ForceShading;
 
 // How a reset went: where the proxy started.
 enum class StartKind : std::uint8_t {
@@ -72,22 +83,40 @@ enum class StartKind : std::uint8_t {
 
 class Proxy {
  public:
-  explicit Proxy(const Space& space);
+  // The proxy shares ownership of its Space (space.h, "Who owns a Space").
+  explicit Proxy(std::shared_ptr<const Space> space);
+  explicit Proxy(const Space& space) : Proxy(owner_of(space)) {}
 
   // Places the proxy for device point p (ALGORITHM.md repair 6; docs/decisions.md).
+  // May allocate (the search out of rigid material). Throws std::invalid_argument
+  // when p is not finite or outside the Space's workspace.
   StartKind reset(const Vec3& p);
   // One servo tick: transitions until nothing changes or the cap is hit.
-  // dt_s is the tick's duration (for the viscous material's speed).
+  // dt_s is the tick's duration (for the viscous material's speed). The
+  // settings are the Space's (Space::runtime_settings()) unless given; a
+  // shading, when given and settings.force_shading is on, shades the force.
+  // Never allocates. Rejects (state kept, force zero, counted) a p that is not
+  // finite or lies outside the Space's workspace, and settings out of range.
+  // Capped (exact): max_transitions_per_tick transitions were made and one
+  // more would still change something. On a capped tick the proxy keeps its
+  // valid place (and catches up next tick) and the force of the last finished
+  // tick is held, no jump; from the second unfinished tick in a row on, the
+  // held force is limited to capped_tick_force_N.
   TickResult step(const Vec3& p, double dt_s);
+  TickResult step(const Vec3& p, double dt_s, const RuntimeSettings& settings,
+                  const ForceShading* shading = nullptr);
   // A single transition of Table 1 (one pass of (a) then (b) for the current state).
   Transition transition(const Vec3& p, const MoveContext& context);
 
   const ProxyPlace& place() const { return place_; }
-  void set_place(const ProxyPlace& place) { place_ = place; }
+  // Puts the proxy at a given place (tests and benchmarks). Throws
+  // std::invalid_argument naming the value when the state, tet, local index or
+  // q is out of range (tet must be kNoTet exactly when OUTSIDE).
+  void set_place(const ProxyPlace& place);
   const Vec3& q() const { return place_.q; }
   const Vec3& last_p() const { return last_p_; }
-  // Force on the device point, eq. (15); on a capped tick clamped to
-  // capped_tick_force_N. Zero after a rejected input.
+  // Force on the device point, eq. (15), shaded when asked; on a capped tick
+  // the held force (see step). Zero after a rejected input.
   Vec3 force_N() const { return force_N_; }
   const ProxyCounters& counters() const { return counters_; }
   void clear_counters() { counters_ = {}; }
@@ -98,6 +127,23 @@ class Proxy {
   std::string check_invariants(double tolerance_factor = 100.0) const;
 
  private:
+  friend class Blade;  // Runs the pieces of step below under its work budget.
+  // The pieces of step: refuse an input; the tick's move context; walk
+  // toward p until converged or `limit` transitions in all this tick (exact,
+  // see step); end the tick at p (counters, force). tick_within walks and
+  // ends the tick unless the walk is capped and `keep_capped_open` (the Blade
+  // then walks on with what its budget has left, then ends it).
+  void reject_input(bool out_of_workspace, TickResult& result);
+  void tick_within(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
+                   const ForceShading* shading, bool keep_capped_open, TickResult& result);
+  MoveContext context_for(const Vec3& p, double dt_s, const RuntimeSettings& settings) const;
+  void walk(const Vec3& p, const MoveContext& context, int limit, TickResult& result);
+  void finish_tick(const Vec3& p, TickResult& result, const RuntimeSettings& settings,
+                   const ForceShading* shading);
+  void defer_tick(TickResult& result, const RuntimeSettings& settings);
+  // An unfinished tick: the last finished force, limited from the second in a row on.
+  void hold_force(const RuntimeSettings& settings);
+
   // What one step of a state did: nothing, moved (the tick goes on), or
   // moved within its tet or face and settled (the tick ends; see settle_at).
   enum class Outcome : std::uint8_t { Unchanged, Changed, Settled };
@@ -116,6 +162,8 @@ class Proxy {
   Outcome settle_at(const Vec3& q);
   StartKind push_out_of_rigid(std::int32_t start_tet, const Vec3& p);
 
+  // The Space through a plain pointer on the hot path; space_owner_ (last,
+  // away from the hot members) keeps it alive.
   const Space* space_;
   // The mesh's box grown by its diagonal: OUTSIDE clips its entry search to it.
   Aabb reach_box_;
@@ -125,7 +173,10 @@ class Proxy {
   Vec3 last_p_;
   bool has_last_p_ = false;
   Vec3 force_N_;
+  Vec3 finished_force_N_;      // The force of the last finished tick, held on a capped one.
+  int unfinished_in_row_ = 0;  // Capped or deferred ticks since the last finished one.
   ProxyCounters counters_;
+  std::shared_ptr<const Space> space_owner_;
 };
 
 }  // namespace hapticut

@@ -1,27 +1,84 @@
 // Space: a TetMesh with the materials its tets refer to and the engine's
 // settings. Proxies and blades step inside one Space; it never changes after
 // construction, so any number of proxies may share it.
+//
+// Who owns a Space (docs/decisions.md): a Space is neither copyable nor
+// movable and exists only behind a std::shared_ptr<const Space> made by
+// Space::create or Space::from_scene. Every Proxy, Blade and ForceShading keeps
+// such a pointer, so the Space lives as long as the last of them: loading a
+// new scene while proxies of the old one exist leaves no dangling pointer.
 #pragma once
 
+#include <cstdint>
+#include <memory>
 #include <vector>
 
+#include "hapticut/aabb_tree.h"
 #include "hapticut/scene.h"
 #include "hapticut/tet_mesh.h"
 
 namespace hapticut {
 
+// The scene's settings, fixed with the Space.
 struct EngineSettings {
   double stiffness_N_per_mm = 0.1;
   double servo_rate_Hz = 1000.0;
   int max_transitions_per_tick = 64;
   double capped_tick_force_N = 1.0;
+  bool force_shading = false;  // Default of RuntimeSettings::force_shading.
 };
 
-class Space {
+// Settings per tick (docs/decisions.md, "Settings per tick"): what a servo may
+// change between ticks without rebuilding the Space. Passed by value to
+// Proxy::step and Blade::step; the overloads without it use
+// Space::runtime_settings(), the scene's own values. Plain data, trivially
+// copyable, so a servo can hand it between threads through a sequence lock.
+struct RuntimeSettings {
+  double stiffness_N_per_mm = 0.1;    // k of eq. (15); > 0.
+  int max_transitions_per_tick = 64;  // Per proxy per tick (>= 1); exact (see Proxy::step).
+  double capped_tick_force_N = 1.0;   // Per-point force limit on an unfinished tick.
+  bool force_shading = false;         // Blade: shade each point's force (ForceShading).
+  // Blade: total transitions over all its points in one tick (docs/decisions.md,
+  // "Work budget per tick"); 0 means kDefaultTransitionsPerPoint per point.
+  int blade_transition_budget = 0;
+
+  static constexpr int kDefaultTransitionsPerPoint = 16;
+  static constexpr int kMaxTransitionsPerTick = 100000;
+  // Whether every field is in range (k finite and > 0, caps >= 1 and at most
+  // kMaxTransitionsPerTick per point, capped force finite and >= 0, budget >= 0).
+  // A tick given settings out of range is rejected (zero force, counted).
+  bool valid() const {
+    // Written so that NaN fails every comparison.
+    return stiffness_N_per_mm > 0.0 && stiffness_N_per_mm <= kMaxFinite &&
+           max_transitions_per_tick >= 1 && max_transitions_per_tick <= kMaxTransitionsPerTick &&
+           capped_tick_force_N >= 0.0 && capped_tick_force_N <= kMaxFinite &&
+           blade_transition_budget >= 0;
+  }
+  static constexpr double kMaxFinite = 1.7976931348623157e308;
+  // Throws std::invalid_argument naming the first field out of range.
+  void validate() const;
+  // The budget a blade of `points` points gets under these settings.
+  int blade_budget(int points) const {
+    return blade_transition_budget > 0 ? blade_transition_budget
+                                       : kDefaultTransitionsPerPoint * points;
+  }
+};
+
+class Space : public std::enable_shared_from_this<Space> {
+  struct Key {};  // Only create() constructs a Space, always behind a shared_ptr.
+
  public:
   // Throws MeshError if a tet refers to a material that does not exist.
-  Space(TetMesh mesh, std::vector<Material> materials, EngineSettings settings = {});
-  static Space from_scene(const Scene& scene);
+  static std::shared_ptr<const Space> create(TetMesh mesh, std::vector<Material> materials,
+                                             EngineSettings settings = {});
+  static std::shared_ptr<const Space> from_scene(const Scene& scene);
+
+  Space(Key, TetMesh mesh, std::vector<Material> materials, EngineSettings settings);
+  Space(const Space&) = delete;
+  Space(Space&&) = delete;
+  Space& operator=(const Space&) = delete;
+  Space& operator=(Space&&) = delete;
+  ~Space() = default;
 
   const TetMesh& mesh() const { return mesh_; }
   const std::vector<Material>& materials() const { return materials_; }
@@ -30,7 +87,21 @@ class Space {
   // Whether any material needs the device point's speed (viscous).
   bool uses_speed() const { return uses_speed_; }
   const EngineSettings& settings() const { return settings_; }
+  // The scene's values as settings per tick (the caps clamped into range).
+  const RuntimeSettings& runtime_settings() const { return runtime_settings_; }
   double tolerance() const { return mesh_.tolerance(); }
+
+  // The workspace: the mesh's bounding box enlarged on every side by
+  // kWorkspaceMargin x its diagonal. A device point outside it is a device
+  // fault (docs/decisions.md, "Absurd device samples"): Proxy::step and
+  // Blade::step reject it (zero force, state kept, counted).
+  static constexpr double kWorkspaceMargin = 10.0;
+  const Aabb& workspace() const { return workspace_; }
+  bool in_workspace(const Vec3& p) const {
+    const Vec3& lo = workspace_.lo;
+    const Vec3& hi = workspace_.hi;
+    return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
+  }
 
  private:
   TetMesh mesh_;
@@ -38,6 +109,11 @@ class Space {
   std::vector<std::uint8_t> rigid_;
   bool uses_speed_ = false;
   EngineSettings settings_;
+  RuntimeSettings runtime_settings_;
+  Aabb workspace_;
 };
+
+// The std::shared_ptr owning `space`: every Space has one (see create).
+std::shared_ptr<const Space> owner_of(const Space& space);
 
 }  // namespace hapticut

@@ -1,0 +1,44 @@
+"""`hapticut bench blade` finds the example scenes where they are, or says it found none."""
+
+from pathlib import Path
+
+import pytest
+from hapticut.bench import blade
+
+SOURCE_SCENES = sorted(
+    p.name for p in (Path(__file__).resolve().parents[2] / "examples").glob("*.hapticut.*")
+)
+
+
+def test_the_installed_package_ships_every_example_scene():
+    paths, found = blade.example_scenes()
+    assert SOURCE_SCENES, "the source tree has example scenes"
+    assert sorted(p.name for p in paths) == SOURCE_SCENES
+    assert paths[0].parent == blade.PACKAGED_EXAMPLES, found
+    assert f"{len(SOURCE_SCENES)} in" in found
+
+
+def test_a_scenes_directory_is_used_and_an_empty_one_is_reported(tmp_path):
+    paths, found = blade.example_scenes(tmp_path)
+    assert paths == []
+    assert "NO EXAMPLE SCENES FOUND" in found and str(tmp_path) in found
+    with pytest.raises(FileNotFoundError, match="no such directory"):
+        blade.example_scenes(tmp_path / "missing")
+    (tmp_path / "one.hapticut.msgpack").write_bytes(
+        (blade.PACKAGED_EXAMPLES / "sphere80.hapticut.msgpack").read_bytes()
+    )
+    paths, found = blade.example_scenes(tmp_path)
+    assert [p.name for p in paths] == ["one.hapticut.msgpack"]
+    labels = [label for label, _ in blade.scenes(paths)]
+    assert labels[0].startswith("one, cut") and labels[-1].startswith("grid")
+
+
+def test_every_example_scene_runs_a_50_point_stroke_without_a_capped_point():
+    """Defect 5: the bunny needed 70 transitions in one tick and was capped; the work budget
+    lets it finish. Counts, not times: times belong to the benchmark's table."""
+    paths, _ = blade.example_scenes()
+    for label, space in blade.scenes(paths):
+        poses = blade.stroke_poses(space)
+        result = blade.time_ticks(space, 50, poses, repeats=1)
+        assert int(result["capped_points"].sum()) == 0, label
+        assert int(result["tick_transitions"].max()) <= int(result["budget"]), label
