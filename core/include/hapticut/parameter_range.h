@@ -57,14 +57,15 @@ inline constexpr ParameterRange kServoRate{
     100000.0,
     1000.0,
     "servo ticks per second (haptic loops run at 0.5 to 10 kHz)"};
-// 0 derives the tolerance from the mesh size (1e-9 x its bounding-box diagonal);
-// above a micrometre the tolerance would let a proxy sink visibly into bone.
+// 0 derives the tolerance from the mesh size (1e-9 x its bounding-box diagonal).
+// The walk may sink 100 tolerances into rigid material (docs/decisions.md):
+// 0.1 um keeps that at 10 um, below what a haptic device resolves.
 inline constexpr ParameterRange kTolerance{
     "tolerance_mm",
     "mm",
     0.0,
     false,
-    0.001,
+    0.0001,
     0.0,
     "tolerance of the geometric tests; 0 derives it from the mesh size"};
 inline constexpr ParameterRange kMaxForce{
