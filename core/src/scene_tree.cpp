@@ -225,7 +225,8 @@ SceneTree decode_scene_tree(const std::vector<std::uint8_t>& bytes, SceneEncodin
   if (json) {
     // nlohmann's lexer takes a NUL byte for the end of the input, so text
     // after one would be ignored; JSON text never holds a raw NUL.
-    if (const void* nul = std::memchr(bytes.data(), 0, bytes.size())) {
+    const void* nul = bytes.empty() ? nullptr : std::memchr(bytes.data(), 0, bytes.size());
+    if (nul != nullptr) {
       const auto offset = static_cast<const std::uint8_t*>(nul) - bytes.data();
       throw SceneError("(root)",
                        "truncated or not valid JSON: NUL byte at offset " + std::to_string(offset));

@@ -146,6 +146,15 @@ TEST(SceneReaderLimits, InvalidUtf8IsRejectedAndNeverEchoed) {
   EXPECT_TRUE(all_printable_ascii(message));
 }
 
+// Found by the fuzzer (tests/fuzz): an empty input passed a null pointer to memchr.
+TEST(SceneReaderLimits, EmptyInputIsAnError) {
+  EXPECT_EQ(error_of({}, SceneEncoding::Json).rfind("(root): truncated or not valid JSON: ", 0),
+            0U);
+  EXPECT_EQ(error_of({}, SceneEncoding::MessagePack)
+                .rfind("(root): truncated or not valid MessagePack: ", 0),
+            0U);
+}
+
 TEST(SceneReaderLimits, NothingMayFollowTheValue) {
   Bytes text = example_text();
   EXPECT_EQ(error_of(text, SceneEncoding::Json), "no error");
