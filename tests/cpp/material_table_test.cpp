@@ -147,6 +147,23 @@ TEST(SpaceValidation, RejectsSettingsOutsideTheirRange) {
   EXPECT_EQ(space_with(settings), "max_transitions_per_tick: must be <= 10000, got 1e+09");
 }
 
+TEST(SpaceValidation, FromSceneChecksTheSafetyLimits) {
+  Scene scene;
+  const MeshData mesh = two_tets_mesh(10.0);
+  scene.vertices_mm = mesh.vertices_mm;
+  scene.tets = mesh.tets;
+  scene.tet_materials = {0, 0};
+  scene.materials = {testing::free_material()};
+  EXPECT_EQ(invalid_argument_of([&] { Space::from_scene(scene); }), "");
+  scene.safety.max_force_N = kInf;
+  EXPECT_EQ(invalid_argument_of([&] { Space::from_scene(scene); }),
+            "max_force_N: not a finite number");
+  scene.safety.max_force_N = 5.0;
+  scene.safety.ramp_time_s = -1.0;
+  EXPECT_EQ(invalid_argument_of([&] { Space::from_scene(scene); }),
+            "ramp_time_s: must be >= 0, got -1");
+}
+
 TEST(TetMeshValidation, RejectsAToleranceThatIsNotAToleranceAnyMore) {
   const MeshData mesh = two_tets_mesh(10.0);
   const auto mesh_with = [&](double tolerance_mm) {
