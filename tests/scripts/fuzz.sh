@@ -40,4 +40,4 @@ echo "fuzz: scene reader for ${seconds} s"
   echo "fuzz: the scene reader fuzzer found a problem (above; input in $out/findings/)" >&2
   exit 1
 }
-grep -E '^stat::number_of_executed_units|^stat::average_exec_per_sec|^#[0-9]+.*DONE' "$out/fuzz.log"
+grep -a -E '^stat::number_of_executed_units|^stat::average_exec_per_sec|^#[0-9]+.*DONE' "$out/fuzz.log"
