@@ -6,23 +6,15 @@
 #include <string>
 
 #include "hapticut/material.h"
+#include "hapticut/parameter_range.h"
 
 namespace hapticut {
 
 void RuntimeSettings::validate() const {
-  if (!(std::isfinite(stiffness_N_per_mm) && stiffness_N_per_mm > 0.0)) {
-    throw std::invalid_argument("stiffness_N_per_mm must be finite and > 0, got " +
-                                std::to_string(stiffness_N_per_mm));
-  }
-  if (max_transitions_per_tick < 1 || max_transitions_per_tick > kMaxTransitionsPerTick) {
-    throw std::invalid_argument("max_transitions_per_tick must be in 1.." +
-                                std::to_string(kMaxTransitionsPerTick) + ", got " +
-                                std::to_string(max_transitions_per_tick));
-  }
-  if (!(std::isfinite(capped_tick_force_N) && capped_tick_force_N >= 0.0)) {
-    throw std::invalid_argument("capped_tick_force_N must be finite and >= 0, got " +
-                                std::to_string(capped_tick_force_N));
-  }
+  check_in_range(setting_range::kStiffness, stiffness_N_per_mm, "stiffness_N_per_mm");
+  check_in_range(setting_range::kMaxTransitions, max_transitions_per_tick,
+                 "max_transitions_per_tick");
+  check_in_range(setting_range::kCappedTickForce, capped_tick_force_N, "capped_tick_force_N");
   if (blade_transition_budget < 0) {
     throw std::invalid_argument("blade_transition_budget must be >= 0 (0: automatic), got " +
                                 std::to_string(blade_transition_budget));
@@ -31,6 +23,15 @@ void RuntimeSettings::validate() const {
 
 Space::Space(Key /*key*/, TetMesh mesh, std::vector<Material> materials, EngineSettings settings)
     : mesh_(std::move(mesh)), materials_(std::move(materials)), settings_(settings) {
+  // The engine checks its own inputs (std::invalid_argument naming the value):
+  // a NaN, infinite, negative or absurd setting would reach the device.
+  check_in_range(setting_range::kStiffness, settings_.stiffness_N_per_mm, "stiffness_N_per_mm");
+  check_in_range(setting_range::kServoRate, settings_.servo_rate_Hz, "servo_rate_Hz");
+  check_in_range(setting_range::kMaxTransitions, settings_.max_transitions_per_tick,
+                 "max_transitions_per_tick");
+  check_in_range(setting_range::kCappedTickForce, settings_.capped_tick_force_N,
+                 "capped_tick_force_N");
+  for (const Material& material : materials_) validate_material(material);
   const auto material_count = static_cast<std::int32_t>(materials_.size());
   rigid_.resize(mesh_.tet_count());
   for (std::int32_t t = 0; t < mesh_.tet_count(); ++t) {
@@ -44,10 +45,8 @@ Space::Space(Key /*key*/, TetMesh mesh, std::vector<Material> materials, EngineS
   }
   for (const Material& m : materials_)
     uses_speed_ = uses_speed_ || m.model == MaterialModel::Viscous;
-  if (settings_.max_transitions_per_tick < 1) settings_.max_transitions_per_tick = 1;
   runtime_settings_.stiffness_N_per_mm = settings_.stiffness_N_per_mm;
-  runtime_settings_.max_transitions_per_tick =
-      std::min(settings_.max_transitions_per_tick, RuntimeSettings::kMaxTransitionsPerTick);
+  runtime_settings_.max_transitions_per_tick = settings_.max_transitions_per_tick;
   runtime_settings_.capped_tick_force_N = settings_.capped_tick_force_N;
   runtime_settings_.force_shading = settings_.force_shading;
   Aabb box;
@@ -62,6 +61,7 @@ std::shared_ptr<const Space> Space::create(TetMesh mesh, std::vector<Material> m
 }
 
 std::shared_ptr<const Space> Space::from_scene(const Scene& scene) {
+  check_safety_limits(scene.safety);
   EngineSettings settings;
   settings.stiffness_N_per_mm = scene.stiffness_N_per_mm;
   settings.servo_rate_Hz = scene.servo_rate_Hz;

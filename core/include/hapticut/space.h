@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "hapticut/aabb_tree.h"
+#include "hapticut/parameter_range.h"
 #include "hapticut/scene.h"
 #include "hapticut/tet_mesh.h"
 
@@ -43,18 +44,15 @@ struct RuntimeSettings {
   int blade_transition_budget = 0;
 
   static constexpr int kDefaultTransitionsPerPoint = 16;
-  static constexpr int kMaxTransitionsPerTick = 100000;
-  // Whether every field is in range (k finite and > 0, caps >= 1 and at most
-  // kMaxTransitionsPerTick per point, capped force finite and >= 0, budget >= 0).
-  // A tick given settings out of range is rejected (zero force, counted).
+  // Whether every field is in its range (parameter_range.h, setting_range: the
+  // same ranges the scene file is checked against; budget >= 0). A tick given
+  // settings out of range is rejected (zero force, counted).
   bool valid() const {
-    // Written so that NaN fails every comparison.
-    return stiffness_N_per_mm > 0.0 && stiffness_N_per_mm <= kMaxFinite &&
-           max_transitions_per_tick >= 1 && max_transitions_per_tick <= kMaxTransitionsPerTick &&
-           capped_tick_force_N >= 0.0 && capped_tick_force_N <= kMaxFinite &&
+    return in_range(setting_range::kStiffness, stiffness_N_per_mm) &&
+           in_range(setting_range::kMaxTransitions, max_transitions_per_tick) &&
+           in_range(setting_range::kCappedTickForce, capped_tick_force_N) &&
            blade_transition_budget >= 0;
   }
-  static constexpr double kMaxFinite = 1.7976931348623157e308;
   // Throws std::invalid_argument naming the first field out of range.
   void validate() const;
   // The budget a blade of `points` points gets under these settings.
