@@ -26,16 +26,25 @@ RigidSurface extract_rigid_surface(const Space& space);
 
 class ForceShading {
  public:
-  // Vertex normals from the rigid surface of the tet mesh itself (angle-weighted).
+  // Both constructors smooth the normals they interpolate at the scale of the
+  // rigid surface's own facets (docs/decisions.md, "Force shading: nearest
+  // source and smoothed normals"): each surface vertex takes the normal of a
+  // sphere fitted to the oriented points within twice its longest surface
+  // edge, which keeps a sphere or a plane exact and averages out bumps (a
+  // scanned surface) that a facet-wise interpolation would only alias.
+  //
+  // Normals from the rigid surface of the tet mesh itself: its angle-weighted
+  // vertex normals are the points fitted (what a servo has on an exported scene).
   explicit ForceShading(const Space& space);
-  // Vertex normals from the surface the scene was built from (#T by 3
-  // triangles wound outward): each rigid-surface vertex takes the source's
-  // angle-weighted vertex normals interpolated at its nearest source point.
-  // Tetrahedralization splits the source's facets; normals of the split
-  // pieces' new vertices then follow the source's smooth field instead of
-  // repeating the facet normal. The FACE path interpolates these values
-  // unnormalised (the field is linear over a source triangle, so the pieces
-  // reproduce it exactly); EDGE and VERTEX use them normalised.
+  // Normals from the surface the scene was built from (#T by 3 triangles
+  // wound outward, vertices finite; anything else throws std::invalid_argument
+  // naming it): the points fitted are the source's vertices with their
+  // angle-weighted normals, those facing the side of the source's own field at
+  // the exact nearest source point, within at least the reach of that point's
+  // triangle. Tetrahedralization splits the source's facets; the FACE path
+  // interpolates the fitted values unnormalised (on a sphere or plane they are
+  // the source's linear field, so split pieces reproduce it exactly); EDGE
+  // and VERTEX use them normalised. The source is not kept.
   ForceShading(const Space& space, const std::vector<Vec3>& source_vertices_mm,
                const std::vector<std::array<std::int32_t, 3>>& source_triangles);
 
@@ -50,8 +59,8 @@ class ForceShading {
   // Anywhere else, or a force pulling into the surface: the raw force.
   Vec3 shade(const ProxyPlace& place, const Vec3& raw_force_N) const;
 
-  // Angle-weighted unit normal of a mesh vertex out of the rigid region,
-  // zero for a vertex not on the rigid surface.
+  // Smoothed unit normal of a mesh vertex out of the rigid region, zero for a
+  // vertex not on the rigid surface.
   const Vec3& vertex_normal(std::int32_t v) const { return vertex_normals_[v]; }
   std::int32_t vertex_count() const { return static_cast<std::int32_t>(vertex_normals_.size()); }
   bool is_surface_edge(std::int32_t e) const { return surface_edge_[e] != 0; }
@@ -78,8 +87,8 @@ class ForceShading {
   const Space* space_;
   std::vector<Vec3> vertex_normals_;
   // What the FACE path interpolates over a face: the unit vertex normal, or
-  // with a source surface the source's interpolated normal at the vertex's
-  // nearest source point, not normalised (see the source constructor).
+  // with a source surface the fitted gradient, not normalised (see the
+  // source constructor).
   std::vector<Vec3> face_normals_;
   std::vector<std::uint8_t> surface_edge_;
   std::vector<ShadedFace> shaded_faces_;
