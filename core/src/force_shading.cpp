@@ -37,14 +37,18 @@ Vec3 normalized_or_zero(const Vec3& v) {
   return n > 0.0 ? v / n : Vec3{};
 }
 
-// The smoothing scale (docs/decisions.md, "Force shading: nearest source and
-// smoothed normals"): a vertex's normal is fitted to the oriented points
-// within kSmoothingReach x its reach, its reach being its longest edge on the
-// rigid surface (with a source surface, at least the distance to the nearest
-// source triangle's corners). The linear interpolation of the FACE path
-// cannot show detail finer than the facets it spans, so the fit averages out
-// detail of that size and keeps what is larger.
-constexpr double kSmoothingReach = 2.0;
+// The smoothing (docs/decisions.md, "Force shading: nearest source and
+// smoothed normals"): a normal is fitted to the oriented points within
+// kSmoothingReach x the vertex's reach, its reach being its longest edge on
+// the rigid surface (with a source surface, at least the distance to the
+// nearest source triangle's corners). The linear interpolation of the FACE
+// path cannot show detail finer than the facets it spans, so the fit
+// averages out detail of that size and keeps what is larger. Points whose
+// normal is kCreaseDegrees or more off the normal being fitted lie beyond a
+// crease (or on the other side of a thin part) and are left out, so a crease
+// sharper than that stays sharp instead of bending the facets beside it.
+constexpr double kSmoothingReach = 1.5;
+constexpr double kCreaseCosine = 0.70710678118654752;  // cos(kCreaseDegrees = 45).
 
 // What the tet mesh itself says about its rigid surface.
 struct OneRing {
@@ -92,14 +96,14 @@ OneRing one_ring_normals(const Space& space) {
   return ring;
 }
 
-// Points with unit normals, and the normal of a sphere fitted to those near a
-// position (algebraic point set surfaces, Guennebaud and Gross 2007): the
-// fit reproduces a sphere or a plane exactly, whatever the points' spacing
-// and weights, and averages out bumps smaller than its reach.
+// Weighted points with unit normals, and the normal of a sphere fitted to
+// those near a position (algebraic point set surfaces, Guennebaud and Gross
+// 2007): the fit reproduces a sphere or a plane exactly, whatever the points'
+// spacing and weights, and averages out bumps smaller than its reach.
 class OrientedPoints {
  public:
-  OrientedPoints(std::vector<Vec3> points, std::vector<Vec3> normals)
-      : points_(std::move(points)), normals_(std::move(normals)) {
+  OrientedPoints(std::vector<Vec3> points, std::vector<Vec3> normals, std::vector<double> weights)
+      : points_(std::move(points)), normals_(std::move(normals)), weights_(std::move(weights)) {
     std::vector<Aabb> boxes(points_.size());
     for (std::size_t i = 0; i < points_.size(); ++i) boxes[i].grow(points_[i]);
     tree_ = AabbTree(boxes);
@@ -107,42 +111,43 @@ class OrientedPoints {
 
   // The gradient at x of the algebraic sphere u0 + u.x + u4 |x|^2 fitted in
   // the least-squares sense to the points within `radius` of x whose normals
-  // face the same side as `facing` (the other side of a thin part is not the
-  // same surface), weighted by (1 - (d / radius)^2)^4: its direction is the
+  // lie within the crease angle of `facing` (a surface beyond a crease, or
+  // the other side of a thin part, is not the surface being fitted),
+  // weighted by their weight x (1 - (d / radius)^2)^4: its direction is the
   // smoothed normal, its length about 1 near the points. Zero when no point
   // qualifies or the fit turns away from `facing`.
   Vec3 fitted_normal(const Vec3& x, const Vec3& facing, double radius) const {
     if (!(radius > 0.0)) return {};
-    double weight = 0.0;
+    double total = 0.0;
     Vec3 mean_point;  // Relative to x.
     Vec3 mean_normal;
-    tree_.for_each_containing(x, radius, [&](std::int32_t i) {
-      const Vec3 r = points_[i] - x;
-      const double t = squared_norm(r) / (radius * radius);
-      if (t >= 1.0 || dot(normals_[i], facing) <= 0.0) return;
-      const double w = (1.0 - t) * (1.0 - t) * (1.0 - t) * (1.0 - t);
-      weight += w;
+    auto each = [&](auto&& use) {
+      tree_.for_each_containing(x, radius, [&](std::int32_t i) {
+        const Vec3 r = points_[i] - x;
+        const double t = squared_norm(r) / (radius * radius);
+        if (t >= 1.0 || !(dot(normals_[i], facing) > kCreaseCosine)) return;
+        use(i, r, weights_[i] * (1.0 - t) * (1.0 - t) * (1.0 - t) * (1.0 - t));
+      });
+    };
+    each([&](std::int32_t i, const Vec3& r, double w) {
+      total += w;
       mean_point += r * w;
       mean_normal += normals_[i] * w;
     });
-    if (!(weight > 0.0)) return {};
-    mean_point = mean_point / weight;
-    mean_normal = mean_normal / weight;
+    if (!(total > 0.0)) return {};
+    mean_point = mean_point / total;
+    mean_normal = mean_normal / total;
     // Second pass about the means: the spread of the points and how the
     // normals turn with them, both translation invariant.
     double spread = 0.0;
     double turn = 0.0;
-    tree_.for_each_containing(x, radius, [&](std::int32_t i) {
-      const Vec3 r = points_[i] - x;
-      const double t = squared_norm(r) / (radius * radius);
-      if (t >= 1.0 || dot(normals_[i], facing) <= 0.0) return;
-      const double w = (1.0 - t) * (1.0 - t) * (1.0 - t) * (1.0 - t);
+    each([&](std::int32_t i, const Vec3& r, double w) {
       const Vec3 d = r - mean_point;
       spread += w * squared_norm(d);
       turn += w * dot(d, normals_[i]);
     });
     // Points (nearly) on one spot fix no curvature: fit a plane (u4 = 0).
-    const double u4 = spread > 1e-12 * radius * radius * weight ? 0.5 * turn / spread : 0.0;
+    const double u4 = spread > 1e-12 * radius * radius * total ? 0.5 * turn / spread : 0.0;
     // grad = u + 2 u4 x with u = mean_normal - 2 u4 mean_point, at x (0 here).
     const Vec3 gradient = mean_normal - mean_point * (2.0 * u4);
     if (!(dot(gradient, facing) > 0.0) || !std::isfinite(squared_norm(gradient))) return {};
@@ -152,6 +157,7 @@ class OrientedPoints {
  private:
   std::vector<Vec3> points_;
   std::vector<Vec3> normals_;
+  std::vector<double> weights_;
   AabbTree tree_;
 };
 
@@ -274,33 +280,43 @@ ForceShading::ForceShading(const Space& space) : space_(&space) {
   const OneRing ring = one_ring_normals(space);
   surface_edge_ = ring.surface_edge;
   vertex_normals_ = ring.normals;
-  const TetMesh& mesh = space.mesh();
+  // The facets themselves are the points: centroid, unit normal, area.
+  const RigidSurface surface = extract_rigid_surface(space);
   std::vector<Vec3> points;
   std::vector<Vec3> normals;
-  for (std::int32_t v = 0; v < mesh.vertex_count(); ++v) {
-    if (ring.normals[v] == Vec3{}) continue;
-    points.push_back(mesh.vertex(v));
-    normals.push_back(ring.normals[v]);
+  std::vector<double> areas;
+  for (const auto& tri : surface.triangles) {
+    const Vec3& a = surface.vertices_mm[tri[0]];
+    const Vec3& b = surface.vertices_mm[tri[1]];
+    const Vec3& c = surface.vertices_mm[tri[2]];
+    const Vec3 n = cross(b - a, c - a);
+    if (!(norm(n) > 0.0)) continue;
+    points.push_back((a + b + c) / 3.0);
+    normals.push_back(n / norm(n));
+    areas.push_back(0.5 * norm(n));
   }
-  const OrientedPoints cloud(points, normals);
+  const OrientedPoints cloud(points, normals, areas);
+  const TetMesh& mesh = space.mesh();
   for (std::int32_t v = 0; v < mesh.vertex_count(); ++v) {
     if (ring.normals[v] == Vec3{}) continue;
     const Vec3 fitted = normalized_or_zero(
         cloud.fitted_normal(mesh.vertex(v), ring.normals[v], kSmoothingReach * ring.reach_mm[v]));
     if (fitted != Vec3{}) vertex_normals_[v] = fitted;
   }
-  face_normals_ = vertex_normals_;
-  build_shaded_faces();
+  build_shaded_faces([&](std::int32_t v, const Vec3& face_normal) {
+    const Vec3 fitted = normalized_or_zero(
+        cloud.fitted_normal(mesh.vertex(v), face_normal, kSmoothingReach * ring.reach_mm[v]));
+    return fitted != Vec3{} ? fitted : face_normal;
+  });
 }
 
 ForceShading::ForceShading(const Space& space, const std::vector<Vec3>& source_vertices_mm,
                            const std::vector<std::array<std::int32_t, 3>>& source_triangles)
     : space_(&space) {
+  check_source(source_vertices_mm, source_triangles);
   const OneRing ring = one_ring_normals(space);
   surface_edge_ = ring.surface_edge;
   vertex_normals_ = ring.normals;
-  face_normals_ = vertex_normals_;
-  check_source(source_vertices_mm, source_triangles);
   // Angle-weighted vertex normals of the source.
   std::vector<Vec3> source_normals(source_vertices_mm.size());
   std::vector<Aabb> boxes;
@@ -317,45 +333,51 @@ ForceShading::ForceShading(const Space& space, const std::vector<Vec3>& source_v
     }
     boxes.push_back(box);
   }
+  for (Vec3& n : source_normals) n = normalized_or_zero(n);
+  // Only the source's vertices that some triangle uses carry a normal.
+  std::vector<Vec3> points;
+  std::vector<Vec3> normals;
+  for (std::size_t i = 0; i < source_vertices_mm.size(); ++i) {
+    if (source_normals[i] == Vec3{}) continue;
+    points.push_back(source_vertices_mm[i]);
+    normals.push_back(source_normals[i]);
+  }
+  const OrientedPoints cloud(points, normals, std::vector<double>(points.size(), 1.0));
+  // Per surface vertex: the source's own field at its nearest source point
+  // (unsmoothed) and the fit's radius.
+  std::vector<Vec3> field(vertex_count());
+  std::vector<double> radius(vertex_count(), 0.0);
   if (!boxes.empty()) {
-    for (Vec3& n : source_normals) n = normalized_or_zero(n);
     const NearestTriangle nearest(source_vertices_mm, source_triangles, boxes);
-    // Only the source's vertices that some triangle uses carry a normal.
-    std::vector<Vec3> points;
-    std::vector<Vec3> normals;
-    for (std::size_t i = 0; i < source_vertices_mm.size(); ++i) {
-      if (source_normals[i] == Vec3{}) continue;
-      points.push_back(source_vertices_mm[i]);
-      normals.push_back(source_normals[i]);
-    }
-    const OrientedPoints cloud(points, normals);
     for (std::int32_t v = 0; v < vertex_count(); ++v) {
       if (ring.normals[v] == Vec3{}) continue;
       const Vec3& x = space.mesh().vertex(v);
       const NearestTriangle::Hit hit = nearest.find(x);
       const auto& tri = source_triangles[hit.triangle];
-      // The source's own field at the nearest source point, unsmoothed.
-      const Vec3 field = source_normals[tri[0]] * hit.weights[0] +
-                         source_normals[tri[1]] * hit.weights[1] +
-                         source_normals[tri[2]] * hit.weights[2];
-      if (normalized_or_zero(field) == Vec3{}) continue;
+      field[v] = source_normals[tri[0]] * hit.weights[0] + source_normals[tri[1]] * hit.weights[1] +
+                 source_normals[tri[2]] * hit.weights[2];
+      if (normalized_or_zero(field[v]) == Vec3{}) continue;
       // The smoothing reaches at least the nearest source triangle's corners,
       // so that a source coarser than the tet surface is fitted through its
       // own vertices rather than left unsmoothed.
       double reach = ring.reach_mm[v];
       for (int k = 0; k < 3; ++k) reach = std::max(reach, norm(source_vertices_mm[tri[k]] - x));
-      const Vec3 fitted = cloud.fitted_normal(x, field, kSmoothingReach * reach);
-      // Unnormalised: on a sphere (or plane) the fit's gradient is the linear
-      // field of the source's exact vertex normals, so pieces of a split
-      // source triangle interpolating these values reproduce it.
-      face_normals_[v] = fitted != Vec3{} ? fitted : field;
-      vertex_normals_[v] = normalized_or_zero(face_normals_[v]);
+      radius[v] = kSmoothingReach * reach;
+      const Vec3 fitted = normalized_or_zero(cloud.fitted_normal(x, field[v], radius[v]));
+      vertex_normals_[v] = fitted != Vec3{} ? fitted : normalized_or_zero(field[v]);
     }
   }
-  build_shaded_faces();
+  // Unnormalised: on a sphere (or plane) the fit's gradient is the linear
+  // field of the source's exact vertex normals, so pieces of a split source
+  // triangle interpolating these values reproduce it.
+  build_shaded_faces([&](std::int32_t v, const Vec3& face_normal) {
+    const Vec3 fitted = cloud.fitted_normal(space.mesh().vertex(v), face_normal, radius[v]);
+    if (fitted != Vec3{}) return fitted;
+    return dot(field[v], face_normal) > 0.0 ? field[v] : face_normal;
+  });
 }
 
-void ForceShading::build_shaded_faces() {
+void ForceShading::build_shaded_faces(const CornerNormal& corner_normal) {
   const TetMesh& mesh = space_->mesh();
   shaded_faces_.clear();
   face_record_.assign(4 * static_cast<std::size_t>(mesh.tet_count()), kNotShaded);
@@ -371,7 +393,7 @@ void ForceShading::build_shaded_faces() {
       int count = 0;
       for (int v = 0; v < 4; ++v) {
         if (v == f) continue;
-        normal[count] = face_normals_[mesh.tet(t)[v]];
+        normal[count] = corner_normal(mesh.tet(t)[v], face_normal);
         corner[count++] = mesh.vertex(mesh.tet(t)[v]);
       }
       const double area = dot(cross(corner[1] - corner[0], corner[2] - corner[0]), face_normal);
@@ -508,9 +530,25 @@ Vec3 ForceShading::shade(const ProxyPlace& place, const Vec3& raw_force_N) const
   return shaded_normal * norm(raw_force_N);
 }
 
+std::array<Vec3, 3> ForceShading::face_corner_normals(std::int32_t t, int f) const {
+  const std::int32_t record =
+      face_record_.at(4 * static_cast<std::size_t>(t) + static_cast<std::size_t>(f));
+  if (record == kNotShaded) return {};
+  const ShadedFace& face = shaded_faces_[record];
+  std::array<Vec3, 3> out;
+  int count = 0;
+  for (int v = 0; v < 4; ++v) {
+    if (v == f) continue;
+    const Vec3 r = space_->mesh().vertex(space_->mesh().tet(t)[v]) - face.origin;
+    out[count++] =
+        face.origin_normal + Vec3{dot(face.rows[0], r), dot(face.rows[1], r), dot(face.rows[2], r)};
+  }
+  return out;
+}
+
 std::size_t ForceShading::memory_bytes() const {
-  return (vertex_normals_.capacity() + face_normals_.capacity()) * sizeof(Vec3) +
-         surface_edge_.capacity() + shaded_faces_.capacity() * sizeof(ShadedFace) +
+  return vertex_normals_.capacity() * sizeof(Vec3) + surface_edge_.capacity() +
+         shaded_faces_.capacity() * sizeof(ShadedFace) +
          face_record_.capacity() * sizeof(std::int32_t);
 }
 
