@@ -2,7 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <utility>
 
+#include "hapticut/aabb_tree.h"
 #include "hapticut/geometry.h"
 
 namespace hapticut {
@@ -30,6 +35,213 @@ constexpr int kContactIterations = 2;
 Vec3 normalized_or_zero(const Vec3& v) {
   const double n = norm(v);
   return n > 0.0 ? v / n : Vec3{};
+}
+
+// The smoothing (docs/decisions.md, "Force shading: nearest source and
+// smoothed normals"): a normal is fitted to the oriented points within
+// kSmoothingReach x the vertex's reach, its reach being its longest edge on
+// the rigid surface (with a source surface, at least the distance to the
+// nearest source triangle's corners). The linear interpolation of the FACE
+// path cannot show detail finer than the facets it spans, so the fit
+// averages out detail of that size and keeps what is larger. Points whose
+// normal is kCreaseDegrees or more off the normal being fitted lie beyond a
+// crease (or on the other side of a thin part) and are left out, so a crease
+// sharper than that stays sharp instead of bending the facets beside it.
+constexpr double kSmoothingReach = 1.5;
+constexpr double kCreaseCosine = 0.70710678118654752;  // cos(kCreaseDegrees = 45).
+
+// What the tet mesh itself says about its rigid surface.
+struct OneRing {
+  std::vector<Vec3> normals;  // Angle-weighted unit normal per mesh vertex; zero off the surface.
+  std::vector<std::uint8_t> surface_edge;  // Per mesh edge: on the rigid surface.
+  std::vector<double> reach_mm;            // Per mesh vertex: its longest surface edge.
+};
+
+OneRing one_ring_normals(const Space& space) {
+  const TetMesh& mesh = space.mesh();
+  OneRing ring;
+  ring.normals.assign(mesh.vertex_count(), Vec3{});
+  ring.surface_edge.assign(mesh.edge_count(), 0);
+  ring.reach_mm.assign(mesh.vertex_count(), 0.0);
+  for (std::int32_t t = 0; t < mesh.tet_count(); ++t) {
+    for (int f = 0; f < 4; ++f) {
+      if (!is_rigid_surface_face(space, t, f)) continue;
+      // Out of the rigid tet: its own outward face normal.
+      const Vec3 n = mesh.face_plane(t, f).normal;
+      std::array<int, 3> local{};
+      int count = 0;
+      for (int v = 0; v < 4; ++v) {
+        if (v != f) local[count++] = v;
+      }
+      for (int k = 0; k < 3; ++k) {
+        // Angle weights (Thuermer and Wuethrich): independent of how the
+        // surface around a vertex happens to be split into triangles.
+        const Vec3& x = mesh.vertex(mesh.tet(t)[local[k]]);
+        const Vec3 e1 = normalized_or_zero(mesh.vertex(mesh.tet(t)[local[(k + 1) % 3]]) - x);
+        const Vec3 e2 = normalized_or_zero(mesh.vertex(mesh.tet(t)[local[(k + 2) % 3]]) - x);
+        const double angle = std::acos(std::clamp(dot(e1, e2), -1.0, 1.0));
+        ring.normals[mesh.tet(t)[local[k]]] += n * angle;
+      }
+      for (int e = 0; e < 6; ++e) {
+        if (kEdgeVertices[e][0] == f || kEdgeVertices[e][1] == f) continue;
+        const std::int32_t edge = mesh.edge_of(t, e);
+        ring.surface_edge[edge] = 1;
+        const auto& ends = mesh.edge_vertices(edge);
+        const double length = norm(mesh.vertex(ends[1]) - mesh.vertex(ends[0]));
+        for (const std::int32_t v : ends) ring.reach_mm[v] = std::max(ring.reach_mm[v], length);
+      }
+    }
+  }
+  for (Vec3& n : ring.normals) n = normalized_or_zero(n);
+  return ring;
+}
+
+// Weighted points with unit normals, and the normal of a sphere fitted to
+// those near a position (algebraic point set surfaces, Guennebaud and Gross
+// 2007): the fit reproduces a sphere or a plane exactly, whatever the points'
+// spacing and weights, and averages out bumps smaller than its reach.
+class OrientedPoints {
+ public:
+  OrientedPoints(std::vector<Vec3> points, std::vector<Vec3> normals, std::vector<double> weights)
+      : points_(std::move(points)), normals_(std::move(normals)), weights_(std::move(weights)) {
+    std::vector<Aabb> boxes(points_.size());
+    for (std::size_t i = 0; i < points_.size(); ++i) boxes[i].grow(points_[i]);
+    tree_ = AabbTree(boxes);
+  }
+
+  // The gradient at x of the algebraic sphere u0 + u.x + u4 |x|^2 fitted in
+  // the least-squares sense to the points within `radius` of x whose normals
+  // lie within the crease angle of `facing` (a surface beyond a crease, or
+  // the other side of a thin part, is not the surface being fitted),
+  // weighted by their weight x (1 - (d / radius)^2)^4: its direction is the
+  // smoothed normal, its length about 1 near the points. Zero when no point
+  // qualifies or the fit turns away from `facing`.
+  Vec3 fitted_normal(const Vec3& x, const Vec3& facing, double radius) const {
+    if (!(radius > 0.0)) return {};
+    double total = 0.0;
+    Vec3 mean_point;  // Relative to x.
+    Vec3 mean_normal;
+    auto each = [&](auto&& use) {
+      tree_.for_each_containing(x, radius, [&](std::int32_t i) {
+        const Vec3 r = points_[i] - x;
+        const double t = squared_norm(r) / (radius * radius);
+        if (t >= 1.0 || !(dot(normals_[i], facing) > kCreaseCosine)) return;
+        use(i, r, weights_[i] * (1.0 - t) * (1.0 - t) * (1.0 - t) * (1.0 - t));
+      });
+    };
+    each([&](std::int32_t i, const Vec3& r, double w) {
+      total += w;
+      mean_point += r * w;
+      mean_normal += normals_[i] * w;
+    });
+    if (!(total > 0.0)) return {};
+    mean_point = mean_point / total;
+    mean_normal = mean_normal / total;
+    // Second pass about the means: the spread of the points and how the
+    // normals turn with them, both translation invariant.
+    double spread = 0.0;
+    double turn = 0.0;
+    each([&](std::int32_t i, const Vec3& r, double w) {
+      const Vec3 d = r - mean_point;
+      spread += w * squared_norm(d);
+      turn += w * dot(d, normals_[i]);
+    });
+    // Points (nearly) on one spot fix no curvature: fit a plane (u4 = 0).
+    const double u4 = spread > 1e-12 * radius * radius * total ? 0.5 * turn / spread : 0.0;
+    // grad = u + 2 u4 x with u = mean_normal - 2 u4 mean_point, at x (0 here).
+    const Vec3 gradient = mean_normal - mean_point * (2.0 * u4);
+    if (!(dot(gradient, facing) > 0.0) || !std::isfinite(squared_norm(gradient))) return {};
+    return gradient;
+  }
+
+ private:
+  std::vector<Vec3> points_;
+  std::vector<Vec3> normals_;
+  std::vector<double> weights_;
+  AabbTree tree_;
+};
+
+// The exact nearest point of a triangle soup to a position.
+class NearestTriangle {
+ public:
+  struct Hit {
+    std::int32_t triangle = -1;
+    std::array<double, 3> weights{};  // Barycentric weights of the nearest point.
+  };
+
+  NearestTriangle(const std::vector<Vec3>& vertices,
+                  const std::vector<std::array<std::int32_t, 3>>& triangles,
+                  const std::vector<Aabb>& boxes)
+      : vertices_(vertices), triangles_(triangles), tree_(boxes) {
+    Aabb all;
+    for (const Aabb& box : boxes) all.grow(box);
+    diagonal_ = norm(all.hi - all.lo);
+  }
+
+  // Boxes within a growing pad until one holds a triangle, then once more
+  // with the best distance as the pad: a triangle nearer than the best has
+  // its box within that distance, wherever the first pad stopped.
+  Hit find(const Vec3& x) const {
+    Hit hit;
+    double best = std::numeric_limits<double>::infinity();
+    auto visit = [&](std::int32_t t) {
+      const auto& tri = triangles_[t];
+      const Vec3& a = vertices_[tri[0]];
+      const Vec3& b = vertices_[tri[1]];
+      const Vec3& c = vertices_[tri[2]];
+      const Vec3 y = closest_point_on_triangle(x, a, b, c);
+      const double d = norm(y - x);
+      if (d >= best) return;
+      best = d;
+      hit.triangle = t;
+      const Vec3 n = cross(b - a, c - a);
+      const double area = dot(n, n);
+      if (!(area > 0.0)) {
+        hit.weights = {1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0};
+        return;
+      }
+      hit.weights[0] = dot(cross(b - y, c - y), n) / area;
+      hit.weights[1] = dot(cross(c - y, a - y), n) / area;
+      hit.weights[2] = 1.0 - hit.weights[0] - hit.weights[1];
+    };
+    // Triangle 0's box is within this distance: the pad never needs more.
+    const double enough = norm(x - vertices_[triangles_[0][0]]);
+    for (double pad = 1e-4 * (diagonal_ + enough);; pad *= 4.0) {
+      const double clamped = std::min(pad, enough);
+      tree_.for_each_containing(x, clamped, visit);
+      if (hit.triangle >= 0 || clamped >= enough) break;
+    }
+    if (std::isfinite(best)) tree_.for_each_containing(x, best, visit);
+    return hit;
+  }
+
+ private:
+  const std::vector<Vec3>& vertices_;
+  const std::vector<std::array<std::int32_t, 3>>& triangles_;
+  AabbTree tree_;
+  double diagonal_ = 0.0;
+};
+
+// A source surface the constructor can use: finite vertices, triangles that
+// index them.
+void check_source(const std::vector<Vec3>& vertices,
+                  const std::vector<std::array<std::int32_t, 3>>& triangles) {
+  for (std::size_t i = 0; i < vertices.size(); ++i) {
+    const Vec3& x = vertices[i];
+    if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z)) {
+      throw std::invalid_argument("ForceShading: source vertex " + std::to_string(i) +
+                                  " is not finite");
+    }
+  }
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    for (const std::int32_t v : triangles[t]) {
+      if (v < 0 || static_cast<std::size_t>(v) >= vertices.size()) {
+        throw std::invalid_argument("ForceShading: source triangle " + std::to_string(t) +
+                                    " uses vertex " + std::to_string(v) + ", outside [0, " +
+                                    std::to_string(vertices.size()) + ")");
+      }
+    }
+  }
 }
 
 }  // namespace
@@ -65,50 +277,52 @@ RigidSurface extract_rigid_surface(const Space& space) {
 }
 
 ForceShading::ForceShading(const Space& space) : space_(owner_of(space)) {
-  const TetMesh& mesh = space.mesh();
-  vertex_normals_.assign(mesh.vertex_count(), Vec3{});
-  surface_edge_.assign(mesh.edge_count(), 0);
-  for (std::int32_t t = 0; t < mesh.tet_count(); ++t) {
-    for (int f = 0; f < 4; ++f) {
-      if (!is_rigid_surface_face(space, t, f)) continue;
-      // Out of the rigid tet: its own outward face normal.
-      const Vec3 n = mesh.face_plane(t, f).normal;
-      std::array<int, 3> local{};
-      int count = 0;
-      for (int v = 0; v < 4; ++v) {
-        if (v != f) local[count++] = v;
-      }
-      for (int k = 0; k < 3; ++k) {
-        // Angle weights (Thuermer and Wuethrich): independent of how the
-        // surface around a vertex happens to be split into triangles.
-        const Vec3& x = mesh.vertex(mesh.tet(t)[local[k]]);
-        const Vec3 e1 = normalized_or_zero(mesh.vertex(mesh.tet(t)[local[(k + 1) % 3]]) - x);
-        const Vec3 e2 = normalized_or_zero(mesh.vertex(mesh.tet(t)[local[(k + 2) % 3]]) - x);
-        const double angle = std::acos(std::clamp(dot(e1, e2), -1.0, 1.0));
-        vertex_normals_[mesh.tet(t)[local[k]]] += n * angle;
-      }
-      for (int e = 0; e < 6; ++e) {
-        if (kEdgeVertices[e][0] != f && kEdgeVertices[e][1] != f) {
-          surface_edge_[mesh.edge_of(t, e)] = 1;
-        }
-      }
-    }
+  const OneRing ring = one_ring_normals(space);
+  surface_edge_ = ring.surface_edge;
+  vertex_normals_ = ring.normals;
+  // The facets themselves are the points: centroid, unit normal, area.
+  const RigidSurface surface = extract_rigid_surface(space);
+  std::vector<Vec3> points;
+  std::vector<Vec3> normals;
+  std::vector<double> areas;
+  for (const auto& tri : surface.triangles) {
+    const Vec3& a = surface.vertices_mm[tri[0]];
+    const Vec3& b = surface.vertices_mm[tri[1]];
+    const Vec3& c = surface.vertices_mm[tri[2]];
+    const Vec3 n = cross(b - a, c - a);
+    if (!(norm(n) > 0.0)) continue;
+    points.push_back((a + b + c) / 3.0);
+    normals.push_back(n / norm(n));
+    areas.push_back(0.5 * norm(n));
   }
-  for (Vec3& n : vertex_normals_) n = normalized_or_zero(n);
-  face_normals_ = vertex_normals_;
-  build_shaded_faces();
+  const OrientedPoints cloud(points, normals, areas);
+  const TetMesh& mesh = space.mesh();
+  for (std::int32_t v = 0; v < mesh.vertex_count(); ++v) {
+    if (ring.normals[v] == Vec3{}) continue;
+    const Vec3 fitted = normalized_or_zero(
+        cloud.fitted_normal(mesh.vertex(v), ring.normals[v], kSmoothingReach * ring.reach_mm[v]));
+    if (fitted != Vec3{}) vertex_normals_[v] = fitted;
+  }
+  build_shaded_faces([&](std::int32_t v, const Vec3& face_normal) {
+    const Vec3 fitted = normalized_or_zero(
+        cloud.fitted_normal(mesh.vertex(v), face_normal, kSmoothingReach * ring.reach_mm[v]));
+    return fitted != Vec3{} ? fitted : face_normal;
+  });
 }
 
 ForceShading::ForceShading(const Space& space, const std::vector<Vec3>& source_vertices_mm,
                            const std::vector<std::array<std::int32_t, 3>>& source_triangles)
-    : ForceShading(space) {
+    : space_(owner_of(space)) {
+  check_source(source_vertices_mm, source_triangles);
+  const OneRing ring = one_ring_normals(space);
+  surface_edge_ = ring.surface_edge;
+  vertex_normals_ = ring.normals;
   // Angle-weighted vertex normals of the source.
   std::vector<Vec3> source_normals(source_vertices_mm.size());
   std::vector<Aabb> boxes;
-  Aabb all;
   for (const auto& tri : source_triangles) {
-    const std::array<Vec3, 3> x{source_vertices_mm.at(tri[0]), source_vertices_mm.at(tri[1]),
-                                source_vertices_mm.at(tri[2])};
+    const std::array<Vec3, 3> x{source_vertices_mm[tri[0]], source_vertices_mm[tri[1]],
+                                source_vertices_mm[tri[2]]};
     const Vec3 n = normalized_or_zero(cross(x[1] - x[0], x[2] - x[0]));
     Aabb box;
     for (int k = 0; k < 3; ++k) {
@@ -118,49 +332,52 @@ ForceShading::ForceShading(const Space& space, const std::vector<Vec3>& source_v
       box.grow(x[k]);
     }
     boxes.push_back(box);
-    all.grow(box);
   }
-  if (boxes.empty()) return;
   for (Vec3& n : source_normals) n = normalized_or_zero(n);
-  const AabbTree tree(boxes);
-  const double diagonal = norm(all.hi - all.lo);
-  for (std::int32_t v = 0; v < vertex_count(); ++v) {
-    if (vertex_normals_[v] == Vec3{}) continue;
-    const Vec3& x = space.mesh().vertex(v);
-    // Nearest source triangle: search boxes within a growing pad.
-    double best = 1e300;
-    Vec3 best_normal;
-    for (double pad = 1e-4 * diagonal; best == 1e300 && pad < 4.0 * diagonal; pad *= 4.0) {
-      tree.for_each_containing(x, pad, [&](std::int32_t t) {
-        const auto& tri = source_triangles[t];
-        const Vec3& a = source_vertices_mm[tri[0]];
-        const Vec3& b = source_vertices_mm[tri[1]];
-        const Vec3& c = source_vertices_mm[tri[2]];
-        const Vec3 y = closest_point_on_triangle(x, a, b, c);
-        const double d = norm(y - x);
-        if (d >= best) return;
-        best = d;
-        // Barycentric weights of y in abc.
-        const Vec3 n = cross(b - a, c - a);
-        const double area = dot(n, n);
-        const double wa = dot(cross(b - y, c - y), n) / area;
-        const double wb = dot(cross(c - y, a - y), n) / area;
-        const double wc = 1.0 - wa - wb;
-        best_normal =
-            source_normals[tri[0]] * wa + source_normals[tri[1]] * wb + source_normals[tri[2]] * wc;
-      });
-    }
-    const Vec3 n = normalized_or_zero(best_normal);
-    if (n == Vec3{}) continue;
-    vertex_normals_[v] = n;
-    // Unnormalised: the source's field is linear over each source triangle,
-    // so pieces of a split triangle interpolating these values reproduce it.
-    face_normals_[v] = best_normal;
+  // Only the source's vertices that some triangle uses carry a normal.
+  std::vector<Vec3> points;
+  std::vector<Vec3> normals;
+  for (std::size_t i = 0; i < source_vertices_mm.size(); ++i) {
+    if (source_normals[i] == Vec3{}) continue;
+    points.push_back(source_vertices_mm[i]);
+    normals.push_back(source_normals[i]);
   }
-  build_shaded_faces();
+  const OrientedPoints cloud(points, normals, std::vector<double>(points.size(), 1.0));
+  // Per surface vertex: the source's own field at its nearest source point
+  // (unsmoothed) and the fit's radius.
+  std::vector<Vec3> field(vertex_count());
+  std::vector<double> radius(vertex_count(), 0.0);
+  if (!boxes.empty()) {
+    const NearestTriangle nearest(source_vertices_mm, source_triangles, boxes);
+    for (std::int32_t v = 0; v < vertex_count(); ++v) {
+      if (ring.normals[v] == Vec3{}) continue;
+      const Vec3& x = space.mesh().vertex(v);
+      const NearestTriangle::Hit hit = nearest.find(x);
+      const auto& tri = source_triangles[hit.triangle];
+      field[v] = source_normals[tri[0]] * hit.weights[0] + source_normals[tri[1]] * hit.weights[1] +
+                 source_normals[tri[2]] * hit.weights[2];
+      if (normalized_or_zero(field[v]) == Vec3{}) continue;
+      // The smoothing reaches at least the nearest source triangle's corners,
+      // so that a source coarser than the tet surface is fitted through its
+      // own vertices rather than left unsmoothed.
+      double reach = ring.reach_mm[v];
+      for (int k = 0; k < 3; ++k) reach = std::max(reach, norm(source_vertices_mm[tri[k]] - x));
+      radius[v] = kSmoothingReach * reach;
+      const Vec3 fitted = normalized_or_zero(cloud.fitted_normal(x, field[v], radius[v]));
+      vertex_normals_[v] = fitted != Vec3{} ? fitted : normalized_or_zero(field[v]);
+    }
+  }
+  // Unnormalised: on a sphere (or plane) the fit's gradient is the linear
+  // field of the source's exact vertex normals, so pieces of a split source
+  // triangle interpolating these values reproduce it.
+  build_shaded_faces([&](std::int32_t v, const Vec3& face_normal) {
+    const Vec3 fitted = cloud.fitted_normal(space.mesh().vertex(v), face_normal, radius[v]);
+    if (fitted != Vec3{}) return fitted;
+    return dot(field[v], face_normal) > 0.0 ? field[v] : face_normal;
+  });
 }
 
-void ForceShading::build_shaded_faces() {
+void ForceShading::build_shaded_faces(const CornerNormal& corner_normal) {
   const TetMesh& mesh = space_->mesh();
   shaded_faces_.clear();
   face_record_.assign(4 * static_cast<std::size_t>(mesh.tet_count()), kNotShaded);
@@ -176,7 +393,7 @@ void ForceShading::build_shaded_faces() {
       int count = 0;
       for (int v = 0; v < 4; ++v) {
         if (v == f) continue;
-        normal[count] = face_normals_[mesh.tet(t)[v]];
+        normal[count] = corner_normal(mesh.tet(t)[v], face_normal);
         corner[count++] = mesh.vertex(mesh.tet(t)[v]);
       }
       const double area = dot(cross(corner[1] - corner[0], corner[2] - corner[0]), face_normal);
@@ -313,9 +530,25 @@ Vec3 ForceShading::shade(const ProxyPlace& place, const Vec3& raw_force_N) const
   return shaded_normal * norm(raw_force_N);
 }
 
+std::array<Vec3, 3> ForceShading::face_corner_normals(std::int32_t t, int f) const {
+  const std::int32_t record =
+      face_record_.at(4 * static_cast<std::size_t>(t) + static_cast<std::size_t>(f));
+  if (record == kNotShaded) return {};
+  const ShadedFace& face = shaded_faces_[record];
+  std::array<Vec3, 3> out;
+  int count = 0;
+  for (int v = 0; v < 4; ++v) {
+    if (v == f) continue;
+    const Vec3 r = space_->mesh().vertex(space_->mesh().tet(t)[v]) - face.origin;
+    out[count++] =
+        face.origin_normal + Vec3{dot(face.rows[0], r), dot(face.rows[1], r), dot(face.rows[2], r)};
+  }
+  return out;
+}
+
 std::size_t ForceShading::memory_bytes() const {
-  return (vertex_normals_.capacity() + face_normals_.capacity()) * sizeof(Vec3) +
-         surface_edge_.capacity() + shaded_faces_.capacity() * sizeof(ShadedFace) +
+  return vertex_normals_.capacity() * sizeof(Vec3) + surface_edge_.capacity() +
+         shaded_faces_.capacity() * sizeof(ShadedFace) +
          face_record_.capacity() * sizeof(std::int32_t);
 }
 

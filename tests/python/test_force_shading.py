@@ -69,3 +69,30 @@ def test_force_shading_follows_the_source_field_across_split_faces():
             n = field(p + n * (depth / n[2]))
         expected = n / np.linalg.norm(n) * 0.1 * depth
         np.testing.assert_allclose(method.force_N[0], expected, atol=1e-12)
+
+
+def test_shading_is_never_worse_than_the_plain_proxy_on_the_scanned_bunny():
+    # Issue 8: the mouse example (the bunny scan simplified, meshed by fTetWild)
+    # has bumps finer than its facets and a sharp crease where its holes were
+    # closed. Shading must not err more than the plain proxy, mean and p95,
+    # with normals from its own rigid surface or from the scan.
+    from hapticut.evaluation import example_shading
+
+    (row,) = example_shading.run_example_shading(
+        quick=True, repeats=0, scenes=("mouse",), log=lambda *_: None
+    )
+    figures = {k: round(v, 2) for k, v in row.items() if k.endswith("_deg")}
+    assert row["contact_updates"] > 3000, figures
+    assert example_shading.never_worse(row), figures
+
+
+def test_shading_source_and_nearest_triangle_are_checked():
+    axis = np.linspace(-45.0, 45.0, 7)
+    scene = meshes.grid_scene("block", axis, axis, axis, ((-15, -15, -15), (15, 15, 15)))
+    space = scene.space()
+    vertices = np.array([[0.0, 0.0, 20.0], [1.0, 0.0, 20.0], [0.0, 1.0, 20.0]])
+    with pytest.raises(ValueError, match="source triangle 0 uses vertex 3"):
+        _core.ForceShading(space, vertices, np.array([[0, 1, 3]], np.int32))
+    vertices[1, 2] = np.nan
+    with pytest.raises(ValueError, match="source vertex 1 is not finite"):
+        _core.ForceShading(space, vertices, np.array([[0, 1, 2]], np.int32))

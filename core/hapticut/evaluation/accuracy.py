@@ -50,11 +50,20 @@ def time_round_robin(
     timing every method in turn for `WARM_PASSES` passes in a row. A slow spell of
     this shared machine (they last seconds) then slows all methods of a round
     alike, and the best round of each method is one outside the spells."""
+    return time_round_robin_paths(
+        method_sets, [path] * len(method_sets), dt_s, repeats, min_seconds
+    )
+
+
+def time_round_robin_paths(
+    method_sets, paths: list[np.ndarray], dt_s: float, repeats: int, min_seconds: float = 0.0
+) -> list[float]:
+    """time_round_robin with a path of its own for each method set."""
     best = [float("inf")] * len(method_sets)
     start = time.perf_counter()
     rounds = 0
     while rounds < repeats or time.perf_counter() - start < min_seconds:
-        for k, method_set in enumerate(method_sets):
+        for k, (method_set, path) in enumerate(zip(method_sets, paths, strict=True)):
             best[k] = min(best[k], method_set.time(path, dt_s, repeats=WARM_PASSES))
         rounds += 1
     return best

@@ -114,14 +114,19 @@ def sizing_economy(
 
 # The examples' scenes (examples/build_examples.py, built by hapticut.scene.builder):
 # the bunny standing in for the paper's mouse, and the layered finger (skin, flesh, bone).
-EXAMPLES_SCRIPT = Path(__file__).resolve().parents[3] / "examples" / "build_examples.py"
+# examples/ of the source tree (not part of the installed package): beside this
+# package when it runs from the tree, else in the working directory (an installed
+# package run from the repository's root, as the test command does).
+_TREE_EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
+EXAMPLES_DIR = _TREE_EXAMPLES if _TREE_EXAMPLES.is_dir() else Path.cwd() / "examples"
+EXAMPLES_SCRIPT = EXAMPLES_DIR / "build_examples.py"
 # (example, depth of the press into its rigid surface in mm): the finger's bones are
 # capsules of 2.8 to 3.5 mm radius.
 EXAMPLE_DEPTH_MM = {"mouse": 2.0, "finger": 1.0}
 
 
-def _examples_module():
-    """examples/build_examples.py of the source tree (not part of the installed package)."""
+def examples_module():
+    """examples/build_examples.py of the source tree."""
     import importlib.util
 
     if not EXAMPLES_SCRIPT.exists():
@@ -135,6 +140,20 @@ def _examples_module():
 def _example_regions(module, name: str):
     regions, settings, _ = module.EXAMPLES[name]()
     return regions, settings
+
+
+def example_source(module, name: str):
+    """The surface an example's rigid material was built from (every rigid region
+    together): the truth of its force directions and the source of force shading."""
+    from hapticut.evaluation import surface
+
+    regions, _ = _example_regions(module, name)
+    rigid_regions = [r for r in regions if r.material.model == "rigid"]
+    offsets = np.cumsum([0] + [len(r.vertices) for r in rigid_regions[:-1]])
+    return surface.Surface(
+        np.vstack([r.vertices for r in rigid_regions]),
+        np.vstack([r.faces + o for r, o in zip(rigid_regions, offsets, strict=True)]),
+    )
 
 
 def _build_example(module, name: str, key: str, override: dict, cache: Path) -> dict:
@@ -220,19 +239,14 @@ def example_economy(
     from hapticut.evaluation import surface
 
     try:
-        module = _examples_module()
+        module = examples_module()
     except FileNotFoundError as error:
         log(f"  skipped: {error}")
         return []
     rows = []
     for name in ("mouse",) if quick else ("mouse", "finger"):
-        regions, settings = _example_regions(module, name)
-        rigid_regions = [r for r in regions if r.material.model == "rigid"]
-        offsets = np.cumsum([0] + [len(r.vertices) for r in rigid_regions[:-1]])
-        source = surface.Surface(
-            np.vstack([r.vertices for r in rigid_regions]),
-            np.vstack([r.faces + o for r, o in zip(rigid_regions, offsets, strict=True)]),
-        )
+        _, settings = _example_regions(module, name)
+        source = example_source(module, name)
         path, slide = surface.strokes(
             source, 0.001, points=points, depth_mm=EXAMPLE_DEPTH_MM[name], slide_s=0.5
         )
@@ -242,7 +256,8 @@ def example_economy(
         variants = _example_variants(settings.enclosure, near, quick)
         if not quick:
             variants += EXTRA_VARIANTS.get(name, [])
-        cases = []  # (row, method sets: tet and shaded)
+        # (row, method sets: tet, shaded from the source, shaded from its own surface)
+        cases = []
         for label, override in variants:
             built = _build_example(module, name, _key(settings, override), override, cache)
             labels = np.where(built["rigid"], meshes.RIGID, meshes.AIR).astype(np.int32)
@@ -260,8 +275,9 @@ def example_economy(
                 "max_tets_per_vertex": space.stats["max_tets_per_vertex"],
                 "mean_tets_per_vertex": space.stats["mean_tets_per_vertex"],
             }
+            own_shading = _core.ForceShading(space)
             sets = {}
-            for tag, with_shading in (("tet", None), ("shaded", shading)):
+            for tag, with_shading in (("tet", None), ("shaded", shading), ("own", own_shading)):
                 sets[tag] = _core.TetMethodSet(space, points, with_shading)
                 sets[tag].reset(np.ascontiguousarray(path[0]))
             cases.append((row, sets))
@@ -286,6 +302,7 @@ def example_economy(
                 f"  {name:7s} {row['variant']:28s} {row['tets']:7d} tets {row['build_s']:6.1f} s "
                 f"{row['tet_ns_per_update']:6.1f} ns facet {row['tet_dir_err_facet_mean_deg']:.2f} "
                 f"smooth {row['tet_dir_err_smooth_mean_deg']:.2f} "
-                f"shaded {row['shaded_dir_err_smooth_mean_deg']:.2f} deg"
+                f"shaded {row['shaded_dir_err_smooth_mean_deg']:.2f} "
+                f"own {row['own_dir_err_smooth_mean_deg']:.2f} deg"
             )
     return rows

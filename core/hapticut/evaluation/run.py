@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from hapticut.evaluation import accuracy, economy, report, stability, valence
+from hapticut.evaluation import accuracy, economy, example_shading, report, stability, valence
 
 
 def run_stability(cache: Path, *, quick: bool, families=None, log=print) -> list[dict]:
@@ -44,6 +44,8 @@ def run_all(out: Path, *, quick: bool = False, log=print) -> dict:
     log("mesh economy")
     economy_rows = economy.sizing_economy(cache, quick=quick, log=log)
     example_rows = economy.example_economy(cache, quick=quick, log=log)
+    log("force shading on the example scenes")
+    shading_rows = example_shading.run_example_shading(quick=quick, log=log)
     for name, rows in [
         ("accuracy", accuracy_rows),
         ("drag_lag", drag_rows),
@@ -52,6 +54,7 @@ def run_all(out: Path, *, quick: bool = False, log=print) -> dict:
         ("valence", valence_rows),
         ("mesh_economy", economy_rows),
         ("example_economy", example_rows),
+        ("example_shading", shading_rows),
     ]:
         report.write_csv(out / f"{name}.csv", rows)
     report.chart(accuracy_rows, out / "speed_vs_error.png")
@@ -66,6 +69,7 @@ def run_all(out: Path, *, quick: bool = False, log=print) -> dict:
         valence_share=valence_share,
         economy_rows=economy_rows,
         example_rows=example_rows,
+        shading_rows=shading_rows,
         quick=quick,
         elapsed_s=time.perf_counter() - start,
     )

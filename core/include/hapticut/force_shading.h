@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -27,23 +28,36 @@ RigidSurface extract_rigid_surface(const Space& space);
 
 class ForceShading {
  public:
-  // Vertex normals from the rigid surface of the tet mesh itself (angle-weighted).
+  // Both constructors smooth the normals they interpolate at the scale of the
+  // rigid surface's own facets (docs/decisions.md, "Force shading: nearest
+  // source and smoothed normals"): a surface vertex takes the normal of a
+  // sphere fitted to the oriented points within 1.5 x its longest surface
+  // edge, leaving out points more than 45 degrees off (beyond a crease). The
+  // fit keeps a sphere or a plane exact and averages out bumps (a scanned
+  // surface) that a facet-wise interpolation would only alias. The FACE path
+  // fits each face's corners against that face's own normal, so a face
+  // beside a crease is not bent by the surface across it; EDGE and VERTEX use
+  // the vertex's normal fitted against its one-ring normal.
+  //
+  // Normals from the rigid surface of the tet mesh itself (what a servo has on
+  // an exported scene): the points are its facets (centroid, normal, area).
   explicit ForceShading(const Space& space);
-  // Vertex normals from the surface the scene was built from (#T by 3
-  // triangles wound outward): each rigid-surface vertex takes the source's
-  // angle-weighted vertex normals interpolated at its nearest source point.
-  // Tetrahedralization splits the source's facets; normals of the split
-  // pieces' new vertices then follow the source's smooth field instead of
-  // repeating the facet normal. The FACE path interpolates these values
-  // unnormalised (the field is linear over a source triangle, so the pieces
-  // reproduce it exactly); EDGE and VERTEX use them normalised.
+  // Normals from the surface the scene was built from (#T by 3 triangles
+  // wound outward, vertices finite; anything else throws std::invalid_argument
+  // naming it): the points are the source's vertices with their angle-weighted
+  // normals, fitted within at least the reach of the triangle holding the
+  // exact nearest source point. Tetrahedralization splits the source's
+  // facets; the FACE path interpolates the fitted values unnormalised (on a
+  // sphere or plane they are the source's linear field, so split pieces
+  // reproduce it exactly); EDGE and VERTEX use them normalised. The source is
+  // not kept.
   ForceShading(const Space& space, const std::vector<Vec3>& source_vertices_mm,
                const std::vector<std::array<std::int32_t, 3>>& source_triangles);
 
   // The shaded force for a proxy at `place` whose raw force is k (q - p), eq. (15).
   // FACE on the rigid surface: the normal component keeps its size and takes
   // the direction interpolated (barycentric) from the face's vertex values
-  // (face_normals_) at the shaded contact point;
+  // at the shaded contact point;
   // the tangential component is kept. EDGE or VERTEX on the rigid surface:
   // the whole force (which lies in the feature's normal cone) takes the
   // interpolated direction; so does a FACE or EDGE not on the surface whose
@@ -51,11 +65,15 @@ class ForceShading {
   // Anywhere else, or a force pulling into the surface: the raw force.
   Vec3 shade(const ProxyPlace& place, const Vec3& raw_force_N) const;
 
-  // Angle-weighted unit normal of a mesh vertex out of the rigid region,
-  // zero for a vertex not on the rigid surface.
+  // Smoothed unit normal of a mesh vertex out of the rigid region, zero for a
+  // vertex not on the rigid surface.
   const Vec3& vertex_normal(std::int32_t v) const { return vertex_normals_[v]; }
   std::int32_t vertex_count() const { return static_cast<std::int32_t>(vertex_normals_.size()); }
   bool is_surface_edge(std::int32_t e) const { return surface_edge_[e] != 0; }
+  // What the FACE path interpolates at the corners of face f of tet t (the
+  // tet's vertices other than f, in order): zeros unless t is not rigid and
+  // the face is on the rigid surface. For tests and inspection.
+  std::array<Vec3, 3> face_corner_normals(std::int32_t t, int f) const;
   std::size_t memory_bytes() const;
 
  private:
@@ -66,22 +84,21 @@ class ForceShading {
   // product replaces three cross products per evaluation.
   struct ShadedFace {
     Vec3 origin;               // The face's first corner.
-    Vec3 origin_normal;        // n0: the vertex's face_normals_ value there.
+    Vec3 origin_normal;        // n0: the corner value there.
     std::array<Vec3, 3> rows;  // A, by rows: sum over corners of n_k (grad w_k)^T.
     Vec3 normal;               // Unit normal out of the rigid region (into the owner).
   };
 
   Vec3 edge_normal(std::int32_t e, const Vec3& q) const;
   Vec3 touching_normal(const ProxyPlace& place) const;
-  // Fills shaded_faces_ and face_record_ from face_normals_.
-  void build_shaded_faces();
+  // What the FACE path interpolates at a corner of a face: a function of
+  // the mesh vertex and the face's unit normal out of the rigid region.
+  using CornerNormal = std::function<Vec3(std::int32_t vertex, const Vec3& face_normal)>;
+  // Fills shaded_faces_ and face_record_.
+  void build_shaded_faces(const CornerNormal& corner_normal);
 
   std::shared_ptr<const Space> space_;  // Shared ownership (space.h, "Who owns a Space").
   std::vector<Vec3> vertex_normals_;
-  // What the FACE path interpolates over a face: the unit vertex normal, or
-  // with a source surface the source's interpolated normal at the vertex's
-  // nearest source point, not normalised (see the source constructor).
-  std::vector<Vec3> face_normals_;
   std::vector<std::uint8_t> surface_edge_;
   std::vector<ShadedFace> shaded_faces_;
   // Per tet face (4 t + f): its index in shaded_faces_ when the face lies on the
