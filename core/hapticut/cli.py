@@ -9,7 +9,9 @@ import sys
 from hapticut import __version__
 
 # Each module defines NAME, HELP, add_arguments(parser) and run(args) -> int.
-COMMAND_MODULES = ("bench", "mesh", "info", "evaluate", "build_request", "preview", "convert")
+COMMAND_MODULES = (
+    "bench", "mesh", "info", "materials", "evaluate", "build_request", "preview", "convert"
+)
 
 
 def build_parser() -> argparse.ArgumentParser:
