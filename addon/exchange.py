@@ -88,10 +88,9 @@ def region_material(obj, table: dict) -> dict:
     for parameter in model["parameters"]:
         name = parameter["name"]
         value = values.get(name, parameter["default"])
-        low, high = parameter["minimum"], parameter["maximum"]
-        if not (low <= value <= high):
+        if not toolkit.in_range(parameter, value):
             raise SceneProblemError(
-                obj.name, f"{name} = {value:g} is outside {low:g}..{high:g} {parameter['unit']}"
+                obj.name, f"{name} = {value:g} is outside {toolkit.range_text(parameter)}"
             )
         material[name] = float(value)
     return material

@@ -53,7 +53,9 @@ def run_quick(executable: str, *args: str) -> str:
     except (OSError, subprocess.TimeoutExpired) as error:
         raise ToolkitError(f"hapticut {' '.join(args)}: {error}") from None
     if done.returncode != 0:
-        raise ToolkitError(f"hapticut {' '.join(args)}: {last_error_line(done.stderr)}")
+        line = last_error_line(done.stderr)
+        # The toolkit's own messages start with "hapticut <command>:" already.
+        raise ToolkitError(line if line.startswith("hapticut") else f"hapticut {args[0]}: {line}")
     return done.stdout
 
 
@@ -96,3 +98,17 @@ def preset(table: dict, name: str) -> dict | None:
 
 def model(table: dict, name: str) -> dict | None:
     return next((m for m in table["models"] if m["name"] == name), None)
+
+
+def in_range(parameter: dict, value: float) -> bool:
+    """Within the table's range (its minimum exclusive when it says so)."""
+    low, high = parameter["minimum"], parameter["maximum"]
+    above = value > low if parameter.get("minimum_exclusive") else value >= low
+    return above and value <= high
+
+
+def range_text(parameter: dict) -> str:
+    """'(0, 1000] mm': the parameter's range as the table gives it."""
+    opening = "(" if parameter.get("minimum_exclusive") else "["
+    unit = f" {parameter['unit']}" if parameter.get("unit") else ""
+    return f"{opening}{parameter['minimum']:g}, {parameter['maximum']:g}]{unit}"

@@ -105,7 +105,7 @@ class HAPTICUT_PT_object(bpy.types.Panel):
             row.prop(item, "value", text=item.name)
             limits = ranges.get(item.name)
             if limits:
-                row.label(text=f"{limits['minimum']:g}..{limits['maximum']:g} {limits['unit']}")
+                row.label(text=toolkit.range_text(limits))
 
 
 class HAPTICUT_PT_build(bpy.types.Panel):

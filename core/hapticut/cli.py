@@ -10,7 +10,14 @@ from hapticut import __version__
 
 # Each module defines NAME, HELP, add_arguments(parser) and run(args) -> int.
 COMMAND_MODULES = (
-    "bench", "mesh", "info", "materials", "evaluate", "build_request", "preview", "convert"
+    "bench",
+    "mesh",
+    "info",
+    "materials",
+    "evaluate",
+    "build_request",
+    "preview",
+    "convert",
 )
 
 
