@@ -92,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
         request = read_request(args.request)
     except RequestError as error:
         return _fail(events, "", f"request {error}", 2)
-    events.emit("progress", stage="check", fraction=0.0, message="checking regions")
+    events.emit("progress", stage="validate", fraction=0.0, message="checking regions")
     problems = input_problems(request.regions)
     if not request.regions:
         problems.append(("", "no regions to build a scene from"))
