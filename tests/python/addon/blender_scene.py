@@ -67,7 +67,9 @@ def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
         if parts and parts[0] == "v":
             vertices.append([float(x) for x in parts[1:4]])
         elif parts and parts[0] == "f":
-            faces.append([int(p.split("/")[0]) - 1 for p in parts[1:4]])
+            # OBJ indices count from 1, or back from the last vertex when negative.
+            indices = [int(p.split("/")[0]) for p in parts[1:4]]
+            faces.append([i - 1 if i > 0 else len(vertices) + i for i in indices])
     return np.array(vertices), np.array(faces)
 
 

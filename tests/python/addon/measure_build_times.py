@@ -7,7 +7,7 @@ add-on inside bpy. A measurement, not a test: nothing is asserted.
 
 from __future__ import annotations
 
-import importlib.util
+import subprocess
 import sys
 import tempfile
 import time
@@ -16,7 +16,6 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import blender_scene  # noqa: E402
-import bmesh  # noqa: E402
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
@@ -35,23 +34,28 @@ def finger(work: str):
     return scene
 
 
+REPAIRED_BUNNY = """
+import sys
+import numpy as np
+sys.path.insert(0, sys.argv[1])
+from build_examples import mouse_region
+from hapticut.scene.repair import repair_surface
+region = mouse_region()
+surface, _ = repair_surface(region.name, region.vertices, region.faces, 100)
+np.savez(sys.argv[2], vertices=surface.vertices, faces=surface.faces)
+"""
+
+
 def bunny(work: str):
-    """pymeshlab's sample bunny, 120 mm long, its holes filled in Blender (the add-on refuses
-    open meshes), as the mouse example builds it."""
-    origin = importlib.util.find_spec("pymeshlab").origin
-    path = Path(origin).parent / "tests" / "sample_meshes" / "bunny10k_textured.obj"
+    """The mouse example's bunny (pymeshlab's sample, 120 mm long) with its holes closed by
+    the toolkit's repair in a child Python (the add-on refuses open meshes), as the mouse
+    example builds it."""
+    path = Path(work) / "bunny.npz"
+    examples = str(blender_scene.REPO / "examples")
+    subprocess.run([sys.executable, "-c", REPAIRED_BUNNY, examples, str(path)], check=True)
     scene = blender_scene.empty_scene(work)
-    vertices, faces = blender_scene.read_obj(path)
-    low, high = vertices.min(axis=0), vertices.max(axis=0)
-    vertices = (vertices - (low + high) / 2) * (BUNNY_LENGTH_MM / float((high - low).max()))
-    obj = blender_scene.mesh_object("Bunny", vertices, faces)
-    edit = bmesh.new()
-    edit.from_mesh(obj.data)
-    bmesh.ops.remove_doubles(edit, verts=edit.verts, dist=1e-6)
-    bmesh.ops.holes_fill(edit, edges=edit.edges, sides=0)
-    bmesh.ops.triangulate(edit, faces=edit.faces)
-    edit.to_mesh(obj.data)
-    edit.free()
+    with np.load(path) as data:
+        obj = blender_scene.mesh_object("Bunny", data["vertices"], data["faces"])
     obj.hapticut.role = "REGION"
     obj.hapticut.material_preset = "bone"
     blender_scene.knife()
