@@ -112,3 +112,43 @@ def test_a_modifier_stack_that_cannot_be_evaluated(addon, tmp_path):
     blender_scene.knife()
     found = check()
     assert found == [("Noded", "its modifier stack cannot be evaluated: it leaves no faces")]
+
+
+def test_a_failing_child_shows_its_last_error_line(addon, tmp_path):
+    # A real executable that is not the toolkit: Python itself fails on "build-request".
+    import sys
+
+    from addon import building
+
+    scene = blender_scene.empty_scene(str(tmp_path))
+    cube("Body")
+    blender_scene.knife()
+    prefs = bpy.context.preferences.addons[blender_scene.ADDON_MODULE].preferences
+    toolkit_path = prefs.toolkit_path
+    prefs.toolkit_path = sys.executable
+    try:
+        assert bpy.ops.hapticut.tetrahedralize() == {"FINISHED"}
+        while building.update(scene.name):
+            time.sleep(0.05)
+    finally:
+        prefs.toolkit_path = toolkit_path
+    assert scene.hapticut.status == "failed"
+    assert scene.hapticut.error.startswith("the build failed (exit 2): ")
+    assert "can't open file" in scene.hapticut.error and "build-request" in scene.hapticut.error
+
+
+def test_a_missing_toolkit_names_the_install_command(addon, tmp_path):
+    from addon import toolkit
+
+    prefs = bpy.context.preferences.addons[blender_scene.ADDON_MODULE].preferences
+    toolkit_path = prefs.toolkit_path
+    prefs.toolkit_path = str(tmp_path / "nowhere" / "hapticut")
+    try:
+        with pytest.raises(RuntimeError, match="is not an executable"):
+            bpy.ops.hapticut.check_toolkit()
+        assert toolkit.INSTALL_COMMAND in prefs.toolkit_error
+        assert prefs.toolkit_version == ""
+    finally:
+        prefs.toolkit_path = toolkit_path
+        assert bpy.ops.hapticut.check_toolkit() == {"FINISHED"}
+    assert prefs.toolkit_version and not prefs.toolkit_error
