@@ -13,4 +13,8 @@ bash tests/scripts/sanitizers.sh run
 echo "== Scene reader fuzzing (libFuzzer, bounded time)"
 bash tests/scripts/fuzz.sh
 echo "== Python tests (pytest)"
-python3 -m pytest -q -m "not slow" tests/python
+python3 -m pytest -q -m "not slow" tests/python --ignore=tests/python/addon
+# bpy in a pytest process of its own (it is not imported beside the other suites' modules).
+echo "== Blender add-on tests (bpy 5.0.1)"
+python3 -m pytest -q -p no:cacheprovider tests/python/addon
+bash tests/scripts/addon_oldest_blender.sh

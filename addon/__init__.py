@@ -1,0 +1,41 @@
+"""Hapticut for Blender: mark regions and blades, tetrahedralize, preview, export.
+
+Thin by design (DESIGN.md): every algorithm runs in the ``hapticut`` toolkit, a child
+process; this package is pure Python (standard library and Blender's numpy).
+"""
+
+from __future__ import annotations
+
+import bpy
+
+from . import build_job, operators, preferences, properties, toolkit, ui
+
+classes = (*properties.classes, *preferences.classes, *operators.classes, *ui.classes)
+
+
+def register() -> None:
+    for cls in classes:
+        bpy.utils.register_class(cls)
+    properties.attach()
+    if not bpy.app.background:  # Read the material table once, soon after startup.
+        bpy.app.timers.register(_read_material_table, first_interval=1.0)
+
+
+def _read_material_table():
+    """A one-shot timer: a missing toolkit shows in the preferences, not as an error here."""
+    prefs = preferences.preferences()
+    try:
+        preferences.material_table()
+    except toolkit.ToolkitError as error:
+        if prefs is not None:
+            prefs.toolkit_error = str(error)
+    return None
+
+
+def unregister() -> None:
+    if bpy.app.timers.is_registered(_read_material_table):
+        bpy.app.timers.unregister(_read_material_table)
+    build_job.cancel_all()
+    properties.detach()
+    for cls in reversed(classes):
+        bpy.utils.unregister_class(cls)
