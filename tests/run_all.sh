@@ -8,4 +8,8 @@ bash tests/scripts/lint.sh
 echo "== C++ tests (ctest)"
 ctest --test-dir build/tests --output-on-failure -j 2
 echo "== Python tests (pytest)"
-python3 -m pytest -q -m "not slow" tests/python
+python3 -m pytest -q -m "not slow" tests/python --ignore=tests/python/addon
+# bpy in a pytest process of its own (it is not imported beside the other suites' modules).
+echo "== Blender add-on tests (bpy 5.0.1)"
+python3 -m pytest -q -p no:cacheprovider tests/python/addon
+bash tests/scripts/addon_oldest_blender.sh

@@ -6,12 +6,25 @@ import argparse
 import importlib
 import sys
 
+from hapticut import __version__
+
 # Each module defines NAME, HELP, add_arguments(parser) and run(args) -> int.
-COMMAND_MODULES = ("bench", "mesh", "info", "evaluate", "serve")
+COMMAND_MODULES = (
+    "bench",
+    "mesh",
+    "info",
+    "materials",
+    "evaluate",
+    "build_request",
+    "preview",
+    "convert",
+    "serve",
+)
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="hapticut", description=__doc__)
+    parser.add_argument("--version", action="version", version=f"hapticut {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     for name in COMMAND_MODULES:
         try:

@@ -8,6 +8,8 @@
 #include <string>
 
 #include "arrays.h"
+#include "hapticut/material_table.h"
+#include "hapticut/parameter_range.h"
 #include "hapticut/reference_meshes.h"
 #include "hapticut/space.h"
 
@@ -16,28 +18,111 @@ namespace hapticut::python {
 namespace {
 
 MaterialModel model_from_name(const std::string& name) {
-  for (MaterialModel m : {MaterialModel::Free, MaterialModel::Drag, MaterialModel::Rigid,
-                          MaterialModel::Viscous, MaterialModel::Membrane}) {
-    if (name == material_model_name(m)) return m;
+  std::string names;
+  for (const MaterialModelSpec& spec : material_models()) {
+    if (name == spec.name) return spec.model;
+    names += (names.empty() ? "" : ", ") + std::string(spec.name);
   }
-  throw std::invalid_argument("unknown material model '" + name +
-                              "' (expected free, drag, rigid, viscous, membrane)");
+  throw std::invalid_argument("unknown material model '" + name + "' (expected " + names + ")");
 }
 
-double get_number(const nb::dict& d, const char* key, double fallback) {
-  return d.contains(key) ? nb::cast<double>(d[key]) : fallback;
+bool is_parameter_name(std::string_view key) {
+  for (const MaterialParameterSpec& parameter : material_parameters()) {
+    if (parameter.range.name == key) return true;
+  }
+  return false;
 }
 
 // A material from a dict of the scene file's fields ({"name", "model", ...}).
+// Parameters of other models are ignored (dataclasses.asdict lists them all);
+// unknown keys, missing required parameters and values out of the table's
+// range raise ValueError (Space's own check).
 Material material_from_dict(const nb::dict& d) {
   Material m;
   m.name = d.contains("name") ? nb::cast<std::string>(d["name"]) : "";
+  if (!d.contains("model")) throw std::invalid_argument("material '" + m.name + "': no model");
   m.model = model_from_name(nb::cast<std::string>(d["model"]));
-  m.drag_distance_mm = get_number(d, "drag_distance_mm", 0.0);
-  m.viscosity_N_s_per_mm = get_number(d, "viscosity_N_s_per_mm", 0.0);
-  m.max_lag_mm = get_number(d, "max_lag_mm", 50.0);
-  m.break_force_N = get_number(d, "break_force_N", 0.0);
+  for (auto [key, value] : d) {
+    const auto text = nb::cast<std::string>(nb::str(key));
+    if (text != "name" && text != "model" && !is_parameter_name(text)) {
+      throw std::invalid_argument("material '" + m.name + "': unknown field '" + text + "'");
+    }
+  }
+  for (const MaterialParameterSpec& parameter : material_model_spec(m.model).parameters) {
+    const char* key = parameter.range.name.data();  // The table's names are literals.
+    if (d.contains(key)) {
+      m.*(parameter.field) = nb::cast<double>(d[key]);
+    } else if (parameter.required) {
+      throw std::invalid_argument("material '" + m.name + "' (" +
+                                  std::string(material_model_spec(m.model).name) + "): " + key +
+                                  " required");
+    } else {
+      m.*(parameter.field) = parameter.range.default_value;
+    }
+  }
   return m;
+}
+
+nb::dict range_dict(const ParameterRange& range) {
+  nb::dict out;
+  out["name"] = std::string(range.name);
+  out["unit"] = std::string(range.unit);
+  out["minimum"] = range.minimum;
+  out["minimum_exclusive"] = range.minimum_exclusive;
+  out["maximum"] = range.maximum;
+  out["default"] = range.default_value;
+  out["summary"] = std::string(range.summary);
+  return out;
+}
+
+// The material table as plain values (the shape `hapticut materials --json` prints).
+nb::dict material_table_dict() {
+  nb::list models;
+  for (const MaterialModelSpec& spec : material_models()) {
+    nb::list parameters;
+    for (const MaterialParameterSpec& parameter : spec.parameters) {
+      nb::dict item = range_dict(parameter.range);
+      item["required"] = parameter.required;
+      parameters.append(item);
+    }
+    nb::dict model;
+    model["name"] = std::string(spec.name);
+    model["summary"] = std::string(spec.summary);
+    model["parameters"] = parameters;
+    models.append(model);
+  }
+  nb::list presets;
+  for (const MaterialPreset& preset : material_presets()) {
+    const Material material = preset_material(preset);
+    nb::dict values;
+    for (const MaterialParameterSpec& parameter : material_model_spec(preset.model).parameters) {
+      values[nb::str(parameter.range.name.data(), parameter.range.name.size())] =
+          material.*(parameter.field);
+    }
+    nb::dict item;
+    item["name"] = std::string(preset.name);
+    item["label"] = std::string(preset.label);
+    item["model"] = std::string(material_model_spec(preset.model).name);
+    item["parameters"] = values;
+    presets.append(item);
+  }
+  nb::dict out;
+  out["version"] = kMaterialTableVersion;
+  out["models"] = models;
+  out["presets"] = presets;
+  return out;
+}
+
+// The engine settings' ranges, keyed by their scene-file names.
+nb::dict setting_ranges_dict() {
+  nb::dict out;
+  for (const ParameterRange* range :
+       {&setting_range::kStiffness, &setting_range::kServoRate, &setting_range::kTolerance,
+        &setting_range::kMaxForce, &setting_range::kMaxTorque, &setting_range::kRampTime,
+        &setting_range::kMaxTransitions, &setting_range::kCappedTickForce}) {
+    out[nb::str(range->name.data(), range->name.size())] = range_dict(*range);
+  }
+  return out;
 }
 
 MeshData to_mesh_data(const PointsIn& vertices, const TetsIn& tets) {
@@ -170,6 +255,11 @@ void bind_mesh(nb::module_& m) {
           },
           nb::arg("points"), "The tet containing each point, or -1 outside the mesh.");
 
+  m.def("material_table", &material_table_dict,
+        "The material models (parameters with unit, range, default, summary) and the named "
+        "presets, as plain dicts and lists (the C++ table, material_table.h).");
+  m.def("setting_ranges", &setting_ranges_dict,
+        "The range of each engine setting, keyed by its scene-file name (parameter_range.h).");
   m.def(
       "two_tets_mesh", [](double size) { return mesh_to_arrays(two_tets_mesh(size)); },
       nb::arg("size_mm") = 10.0, "Two tets sharing a face (Table 2's TET/FACE set-up).");

@@ -1,6 +1,10 @@
 #include "hapticut/material.h"
 
 #include <algorithm>
+#include <stdexcept>
+#include <string>
+
+#include "hapticut/material_table.h"
 
 namespace hapticut {
 
@@ -16,6 +20,19 @@ MoveResult trail(const Vec3& target, const Vec3& q, double lag_mm, double tolera
 }
 
 }  // namespace
+
+void validate_material(const Material& material) {
+  if (static_cast<int>(material.model) > static_cast<int>(MaterialModel::Membrane)) {
+    throw std::invalid_argument("material '" + material.name + "': unknown model " +
+                                std::to_string(static_cast<int>(material.model)));
+  }
+  const MaterialModelSpec& spec = material_model_spec(material.model);
+  for (const MaterialParameterSpec& parameter : spec.parameters) {
+    check_in_range(parameter.range, material.*(parameter.field),
+                   "material '" + material.name + "' (" + std::string(spec.name) + ") " +
+                       std::string(parameter.range.name));
+  }
+}
 
 double lag_distance_mm(const Material& material, const MoveContext& context) {
   switch (material.model) {

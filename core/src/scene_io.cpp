@@ -20,6 +20,9 @@
 #include <unordered_map>
 #include <utility>
 
+#include "hapticut/material_table.h"
+#include "hapticut/parameter_range.h"
+
 #if defined(__unix__) || defined(__APPLE__)
 #include <unistd.h>
 #endif
@@ -31,7 +34,6 @@ namespace {
 using Json = nlohmann::ordered_json;
 
 constexpr std::string_view kFormatName = "hapticut.scene";
-constexpr std::string_view kModelList = "free, drag, rigid, viscous, membrane";
 constexpr std::int64_t kMaxInt32 = std::numeric_limits<std::int32_t>::max();
 // Same test as TetMesh: a tet with |6 V| below this fraction of (longest edge)^3 has no volume.
 constexpr double kZeroVolumeRatio = 1e-12;
@@ -75,6 +77,16 @@ class Path {
 [[noreturn]] void fail(const Path& path, const std::string& reason) {
   std::string pointer = path.pointer();
   throw SceneError(pointer.empty() ? "(root)" : std::move(pointer), reason);
+}
+
+// "free, drag, rigid, viscous, membrane", from the material table.
+std::string model_list() {
+  std::string out;
+  for (const MaterialModelSpec& spec : material_models()) {
+    if (!out.empty()) out += ", ";
+    out += spec.name;
+  }
+  return out;
 }
 
 std::string in_quotes(std::string_view text) {
@@ -155,15 +167,11 @@ double read_finite(const Json& value, const Path& path) {
   return number;
 }
 
-double read_positive(const Json& value, const Path& path) {
+// A number in the engine's range for it (parameter_range.h, material_table.h).
+double read_in_range(const Json& value, const Path& path, const ParameterRange& range) {
   const double number = read_finite(value, path);
-  if (!(number > 0.0)) fail(path, "must be > 0, got " + value.dump());
-  return number;
-}
-
-double read_non_negative(const Json& value, const Path& path) {
-  const double number = read_finite(value, path);
-  if (!(number >= 0.0)) fail(path, "must be >= 0, got " + value.dump());
+  const std::string reason = range_reason(range, number, value.dump());
+  if (!reason.empty()) fail(path, reason);
   return number;
 }
 
@@ -193,6 +201,11 @@ int read_int_between(const Json& value, const Path& path, std::int64_t low, std:
   if (number < low) fail(path, "must be >= " + std::to_string(low) + ", got " + value.dump());
   if (number > high) fail(path, "must be <= " + std::to_string(high) + ", got " + value.dump());
   return static_cast<int>(number);
+}
+
+int read_int_in_range(const Json& value, const Path& path, const ParameterRange& range) {
+  return read_int_between(value, path, static_cast<std::int64_t>(range.minimum),
+                          static_cast<std::int64_t>(range.maximum));
 }
 
 Vec3 read_point(const Json& value, const Path& path) {
@@ -258,17 +271,20 @@ void read_coupling(const Json& root, const Path& root_path, Scene& scene) {
   const Path path(root_path, "coupling");
   expect_object(*coupling, path);
   if (const Json* value = find(*coupling, "stiffness_N_per_mm")) {
-    scene.stiffness_N_per_mm = read_positive(*value, Path(path, "stiffness_N_per_mm"));
+    scene.stiffness_N_per_mm =
+        read_in_range(*value, Path(path, "stiffness_N_per_mm"), setting_range::kStiffness);
   }
   if (const Json* value = find(*coupling, "servo_rate_Hz")) {
-    scene.servo_rate_Hz = read_positive(*value, Path(path, "servo_rate_Hz"));
+    scene.servo_rate_Hz =
+        read_in_range(*value, Path(path, "servo_rate_Hz"), setting_range::kServoRate);
   }
   reject_unknown_fields(*coupling, path, {"stiffness_N_per_mm", "servo_rate_Hz"});
 }
 
 void read_tolerance(const Json& root, const Path& root_path, Scene& scene) {
   if (const Json* value = find(root, "tolerance_mm")) {
-    scene.tolerance_mm = read_non_negative(*value, Path(root_path, "tolerance_mm"));
+    scene.tolerance_mm =
+        read_in_range(*value, Path(root_path, "tolerance_mm"), setting_range::kTolerance);
   }
 }
 
@@ -278,55 +294,26 @@ void read_safety(const Json& root, const Path& root_path, SafetyLimits& safety) 
   const Path path(root_path, "safety");
   expect_object(*object, path);
   if (const Json* value = find(*object, "max_force_N")) {
-    safety.max_force_N = read_positive(*value, Path(path, "max_force_N"));
+    safety.max_force_N = read_in_range(*value, Path(path, "max_force_N"), setting_range::kMaxForce);
   }
   if (const Json* value = find(*object, "max_torque_N_mm")) {
-    safety.max_torque_N_mm = read_positive(*value, Path(path, "max_torque_N_mm"));
+    safety.max_torque_N_mm =
+        read_in_range(*value, Path(path, "max_torque_N_mm"), setting_range::kMaxTorque);
   }
   if (const Json* value = find(*object, "ramp_time_s")) {
-    safety.ramp_time_s = read_non_negative(*value, Path(path, "ramp_time_s"));
+    safety.ramp_time_s = read_in_range(*value, Path(path, "ramp_time_s"), setting_range::kRampTime);
   }
   if (const Json* value = find(*object, "max_transitions_per_tick")) {
-    safety.max_transitions_per_tick =
-        read_int_between(*value, Path(path, "max_transitions_per_tick"), 1, kMaxInt32);
+    safety.max_transitions_per_tick = read_int_in_range(
+        *value, Path(path, "max_transitions_per_tick"), setting_range::kMaxTransitions);
   }
   if (const Json* value = find(*object, "capped_tick_force_N")) {
-    safety.capped_tick_force_N = read_positive(*value, Path(path, "capped_tick_force_N"));
+    safety.capped_tick_force_N =
+        read_in_range(*value, Path(path, "capped_tick_force_N"), setting_range::kCappedTickForce);
   }
   reject_unknown_fields(*object, path,
                         {"max_force_N", "max_torque_N_mm", "ramp_time_s",
                          "max_transitions_per_tick", "capped_tick_force_N"});
-}
-
-// Which parameters a model takes; every one of them must be finite and > 0.
-enum class Need { NotAParameter, Required, Optional };
-
-struct MaterialParameter {
-  std::string_view key;
-  double Material::*field;
-};
-
-constexpr std::array<MaterialParameter, 4> kMaterialParameters{{
-    {"drag_distance_mm", &Material::drag_distance_mm},
-    {"viscosity_N_s_per_mm", &Material::viscosity_N_s_per_mm},
-    {"max_lag_mm", &Material::max_lag_mm},
-    {"break_force_N", &Material::break_force_N},
-}};
-
-Need parameter_need(MaterialModel model, std::string_view key) {
-  switch (model) {
-    case MaterialModel::Drag:
-      return key == "drag_distance_mm" ? Need::Required : Need::NotAParameter;
-    case MaterialModel::Viscous:
-      if (key == "viscosity_N_s_per_mm") return Need::Required;
-      return key == "max_lag_mm" ? Need::Optional : Need::NotAParameter;
-    case MaterialModel::Membrane:
-      return key == "break_force_N" ? Need::Required : Need::NotAParameter;
-    case MaterialModel::Free:
-    case MaterialModel::Rigid:
-      break;
-  }
-  return Need::NotAParameter;
 }
 
 Material read_material(const Json& object, const Path& path, NameRegistry& names) {
@@ -339,27 +326,33 @@ Material read_material(const Json& object, const Path& path, NameRegistry& names
   const std::string& model = read_string(required(object, path, "model"), model_path);
   const auto parsed = material_model_from_name(model);
   if (!parsed) {
-    fail(model_path,
-         "unknown model " + in_quotes(model) + " (expected " + std::string(kModelList) + ")");
+    fail(model_path, "unknown model " + in_quotes(model) + " (expected " + model_list() + ")");
   }
   material.model = *parsed;
-  for (const MaterialParameter& parameter : kMaterialParameters) {
-    const Need need = parameter_need(material.model, parameter.key);
-    const Json* value = find(object, parameter.key);
-    const Path parameter_path(path, parameter.key);
-    if (need == Need::NotAParameter) {
+  // Every parameter of every model in file order, so the first error does not
+  // depend on the language (tree_reader.py walks the same table).
+  for (const MaterialParameterSpec& any_model : material_parameters()) {
+    const std::string_view key = any_model.range.name;
+    const MaterialParameterSpec* parameter = find_material_parameter(material.model, key);
+    const Json* value = find(object, key);
+    const Path parameter_path(path, key);
+    if (parameter == nullptr) {
       if (value != nullptr) fail(parameter_path, "not a parameter of model " + in_quotes(model));
       continue;
     }
     if (value == nullptr) {
-      if (need == Need::Required) fail(parameter_path, "required field missing");
+      if (parameter->required) fail(parameter_path, "required field missing");
       continue;
     }
-    material.*(parameter.field) = read_positive(*value, parameter_path);
+    material.*(parameter->field) = read_in_range(*value, parameter_path, parameter->range);
   }
-  reject_unknown_fields(
-      object, path,
-      {"name", "model", "drag_distance_mm", "viscosity_N_s_per_mm", "max_lag_mm", "break_force_N"});
+  for (auto it = object.begin(); it != object.end(); ++it) {
+    const bool known =
+        it.key() == "name" || it.key() == "model" ||
+        std::any_of(material_parameters().begin(), material_parameters().end(),
+                    [&](const MaterialParameterSpec& p) { return p.range.name == it.key(); });
+    if (!known) fail(Path(path, it.key()), "unknown field");
+  }
   return material;
 }
 
@@ -573,10 +566,8 @@ Json material_tree(const Material& material) {
   Json tree = Json::object();
   tree["name"] = material.name;
   tree["model"] = material_model_name(material.model);
-  for (const MaterialParameter& parameter : kMaterialParameters) {
-    if (parameter_need(material.model, parameter.key) != Need::NotAParameter) {
-      tree[std::string(parameter.key)] = material.*(parameter.field);
-    }
+  for (const MaterialParameterSpec& parameter : material_model_spec(material.model).parameters) {
+    tree[std::string(parameter.range.name)] = material.*(parameter.field);
   }
   return tree;
 }
@@ -733,9 +724,8 @@ void write_file_atomically(const std::vector<std::uint8_t>& bytes, const std::st
 }  // namespace
 
 std::optional<MaterialModel> material_model_from_name(std::string_view name) {
-  for (MaterialModel model : {MaterialModel::Free, MaterialModel::Drag, MaterialModel::Rigid,
-                              MaterialModel::Viscous, MaterialModel::Membrane}) {
-    if (name == material_model_name(model)) return model;
+  for (const MaterialModelSpec& spec : material_models()) {
+    if (name == spec.name) return spec.model;
   }
   return std::nullopt;
 }

@@ -1,13 +1,24 @@
 #include "hapticut/space.h"
 
+#include <stdexcept>
 #include <string>
 
 #include "hapticut/material.h"
+#include "hapticut/parameter_range.h"
 
 namespace hapticut {
 
 Space::Space(TetMesh mesh, std::vector<Material> materials, EngineSettings settings)
     : mesh_(std::move(mesh)), materials_(std::move(materials)), settings_(settings) {
+  // The engine checks its own inputs (std::invalid_argument naming the value):
+  // a NaN, infinite, negative or absurd setting would reach the device.
+  check_in_range(setting_range::kStiffness, settings_.stiffness_N_per_mm, "stiffness_N_per_mm");
+  check_in_range(setting_range::kServoRate, settings_.servo_rate_Hz, "servo_rate_Hz");
+  check_in_range(setting_range::kMaxTransitions, settings_.max_transitions_per_tick,
+                 "max_transitions_per_tick");
+  check_in_range(setting_range::kCappedTickForce, settings_.capped_tick_force_N,
+                 "capped_tick_force_N");
+  for (const Material& material : materials_) validate_material(material);
   const auto material_count = static_cast<std::int32_t>(materials_.size());
   rigid_.resize(mesh_.tet_count());
   for (std::int32_t t = 0; t < mesh_.tet_count(); ++t) {
@@ -21,7 +32,6 @@ Space::Space(TetMesh mesh, std::vector<Material> materials, EngineSettings setti
   }
   for (const Material& m : materials_)
     uses_speed_ = uses_speed_ || m.model == MaterialModel::Viscous;
-  if (settings_.max_transitions_per_tick < 1) settings_.max_transitions_per_tick = 1;
 }
 
 Space Space::from_scene(const Scene& scene) {

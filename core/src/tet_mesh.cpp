@@ -5,6 +5,8 @@
 #include <numbers>
 #include <string>
 
+#include "hapticut/parameter_range.h"
+
 namespace hapticut {
 
 namespace {
@@ -41,6 +43,7 @@ TetMesh::TetMesh(std::vector<Vec3> vertices_mm, std::vector<std::array<std::int3
     : vertices_(std::move(vertices_mm)),
       tets_(std::move(tets)),
       materials_(std::move(tet_materials)) {
+  check_in_range(setting_range::kTolerance, tolerance_mm, "tolerance_mm");
   validate_and_orient();
   Aabb box;
   for (const Vec3& v : vertices_) box.grow(v);

@@ -27,6 +27,16 @@ echo "setup: pip install .[build,test,charts] (builds hapticut._core)"
 python3 -m pip install -q --disable-pip-version-check -C cmake.define.HAPTICUT_NATIVE=ON \
   ".[build,test,charts]"
 
+# The add-on's tests run inside Blender's Python module (about 370 MB), and once more under
+# the oldest Blender the manifest admits (bpy 4.2.0) in a virtual environment of its own.
+echo "setup: pip install bpy==5.0.1 (the add-on's tests)"
+python3 -m pip install -q --disable-pip-version-check "bpy==5.0.1"
+if [ ! -x build/venv-bpy42/bin/python ]; then
+  python3 -m venv --system-site-packages build/venv-bpy42
+fi
+echo "setup: pip install bpy==4.2.0 into build/venv-bpy42"
+build/venv-bpy42/bin/python -m pip install -q --disable-pip-version-check "bpy==4.2.0" pytest
+
 echo "setup: building the C++ tests"
 cmake -S . -B build/tests -G Ninja -DCMAKE_BUILD_TYPE=Release -DHAPTICUT_BUILD_TESTS=ON \
   -DHAPTICUT_BUILD_PYTHON=OFF -DHAPTICUT_NATIVE=ON >/dev/null

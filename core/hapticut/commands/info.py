@@ -23,11 +23,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def material_text(material) -> str:
-    parameters = {
-        "drag": ("drag_distance_mm",),
-        "viscous": ("viscosity_N_s_per_mm", "max_lag_mm"),
-        "membrane": ("break_force_N",),
-    }.get(material.model, ())
+    from hapticut.scene.model import MODEL_PARAMETERS
+
+    parameters = MODEL_PARAMETERS.get(material.model, {})
     values = ", ".join(f"{p}={getattr(material, p):g}" for p in parameters)
     return f"{material.model}" + (f" ({values})" if values else "")
 

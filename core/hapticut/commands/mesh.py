@@ -29,9 +29,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="append",
         default=[],
         metavar="REGION=MODEL[,PARAM=VALUE...]",
-        help="the material of a region: free, drag (drag_distance_mm), rigid, viscous "
-        "(viscosity_N_s_per_mm, max_lag_mm) or membrane (break_force_N); name=NAME shares a "
-        "material between regions",
+        help=f"the material of a region: {_models_help()}; name=NAME shares a material between "
+        "regions (`hapticut materials` lists ranges and defaults)",
     )
     parser.add_argument("-o", "--output", required=True, help=".hapticut.json or .hapticut.msgpack")
     parser.add_argument("--vtu", help="also write the tet mesh with materials as .vtu (ParaView)")
@@ -59,9 +58,24 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
 
 
+def _models_help() -> str:
+    """'free, drag (drag_distance_mm), rigid, ...' from the material table."""
+    from hapticut.scene.model import MODEL_PARAMETERS
+
+    parts = []
+    for model, parameters in MODEL_PARAMETERS.items():
+        parts.append(f"{model} ({', '.join(parameters)})" if parameters else model)
+    return ", ".join(parts)
+
+
 def parse_material(text: str):
-    """REGION=MODEL[,PARAM=VALUE...][,name=NAME] -> (region, Material)."""
-    from hapticut.scene import MATERIAL_MODELS, Material
+    """REGION=MODEL[,PARAM=VALUE...][,name=NAME] -> (region, Material).
+
+    A parameter of another model, or a value outside the table's range, is an error; a required
+    parameter left out takes the table's default.
+    """
+    from hapticut.scene import Material
+    from hapticut.scene.model import MATERIAL_MODELS, MODEL_PARAMETERS, PARAMETER_RANGES
 
     region, _, spec = text.partition("=")
     if not region or not spec:
@@ -69,6 +83,7 @@ def parse_material(text: str):
     model, *pairs = spec.split(",")
     if model not in MATERIAL_MODELS:
         raise ValueError(f"--material {text!r}: model {model!r} is not one of {MATERIAL_MODELS}")
+    takes = MODEL_PARAMETERS[model]
     values: dict = {}
     name = region
     for pair in pairs:
@@ -76,19 +91,37 @@ def parse_material(text: str):
         if key == "name":
             name = value
             continue
-        if key not in ("drag_distance_mm", "viscosity_N_s_per_mm", "max_lag_mm", "break_force_N"):
+        if key not in PARAMETER_RANGES:
             raise ValueError(f"--material {text!r}: unknown parameter {key!r}")
+        if key not in takes:
+            accepted = ", ".join(takes) or "none"
+            raise ValueError(
+                f"--material {text!r}: {key} is not a parameter of model {model!r} "
+                f"(it takes: {accepted})"
+            )
         try:
             values[key] = float(value)
         except ValueError:
             raise ValueError(f"--material {text!r}: {key} must be a number") from None
-    if model == "drag":
-        values.setdefault("drag_distance_mm", 1.0)
-    if model == "viscous":
-        values.setdefault("viscosity_N_s_per_mm", 0.001)
-    if model == "membrane":
-        values.setdefault("break_force_N", 1.0)
+        problem = _range_problem(values[key], PARAMETER_RANGES[key])
+        if problem:
+            raise ValueError(f"--material {text!r}: {key} {problem}")
+    for key, required in takes.items():
+        if required:
+            values.setdefault(key, PARAMETER_RANGES[key]["default"])
     return region, Material(name=name, model=model, **values)
+
+
+def _range_problem(value: float, limits: dict) -> str:
+    """'' when the value is in the table's range, else what is wrong (as the readers say it)."""
+    from hapticut.scene.model import SceneError
+    from hapticut.scene.tree_values import read_in_range
+
+    try:
+        read_in_range(value, "", limits)
+    except SceneError as error:
+        return error.reason
+    return ""
 
 
 class ProgressBar:

@@ -48,7 +48,7 @@ def _outward_normals(x: np.ndarray) -> np.ndarray:
 # after their (a-2) test, and the search would not be measured.)
 REFUSING = [
     {"name": "air", "model": "free"},
-    {"name": "refusing", "model": "drag", "drag_distance_mm": 1.0e6},
+    {"name": "refusing", "model": "drag", "drag_distance_mm": 1.0e3},  # The table's maximum.
 ]
 
 

@@ -13,19 +13,26 @@ from typing import Any
 
 import numpy as np
 
+from hapticut import _core
+
 FORMAT_NAME = "hapticut.scene"
 FORMAT_VERSION = 1
 UNITS = {"length": "mm", "force": "N", "time": "s"}
-MATERIAL_MODELS = ("free", "drag", "rigid", "viscous", "membrane")
-# The parameters each model takes (True: required, False: optional); all must be finite and > 0.
+# The material table and the settings' ranges are defined once, in C++ (material_table.h,
+# parameter_range.h); everything here is derived from them.
+MATERIAL_TABLE: dict[str, Any] = _core.material_table()
+SETTING_RANGES: dict[str, dict[str, Any]] = _core.setting_ranges()
+MATERIAL_MODELS = tuple(model["name"] for model in MATERIAL_TABLE["models"])
+# The parameters each model takes (True: required, False: optional).
 MODEL_PARAMETERS: dict[str, dict[str, bool]] = {
-    "free": {},
-    "drag": {"drag_distance_mm": True},
-    "rigid": {},
-    "viscous": {"viscosity_N_s_per_mm": True, "max_lag_mm": False},
-    "membrane": {"break_force_N": True},
+    model["name"]: {p["name"]: p["required"] for p in model["parameters"]}
+    for model in MATERIAL_TABLE["models"]
 }
-MATERIAL_PARAMETERS = ("drag_distance_mm", "viscosity_N_s_per_mm", "max_lag_mm", "break_force_N")
+# Every parameter's range (name, unit, minimum, minimum_exclusive, maximum, default, summary).
+PARAMETER_RANGES: dict[str, dict[str, Any]] = {
+    p["name"]: p for model in MATERIAL_TABLE["models"] for p in model["parameters"]
+}
+MATERIAL_PARAMETERS = tuple(PARAMETER_RANGES)
 
 
 class SceneError(ValueError):

@@ -18,6 +18,8 @@ from .model import (
     MATERIAL_MODELS,
     MATERIAL_PARAMETERS,
     MODEL_PARAMETERS,
+    PARAMETER_RANGES,
+    SETTING_RANGES,
     UNITS,
     BladeSpec,
     Material,
@@ -33,12 +35,12 @@ from .tree_values import (
     expect_exact_string,
     expect_object,
     fail,
+    read_in_range,
     read_int_between,
+    read_int_in_range,
     read_integer,
     read_name,
-    read_non_negative,
     read_point,
-    read_positive,
     read_string,
     reject_unknown_fields,
     required,
@@ -66,7 +68,9 @@ def read_tree(root: Any, strict: bool = False) -> tuple[Scene, int]:
     _read_units(root)
     coupling = _read_coupling(root)
     tolerance_mm = (
-        read_non_negative(root["tolerance_mm"], "/tolerance_mm") if "tolerance_mm" in root else 0.0
+        read_in_range(root["tolerance_mm"], "/tolerance_mm", SETTING_RANGES["tolerance_mm"])
+        if "tolerance_mm" in root
+        else 0.0
     )
     safety = _read_safety(root)
     materials = _read_materials(root)
@@ -113,7 +117,7 @@ def _read_coupling(root: dict) -> dict[str, float]:
     coupling = expect_object(root["coupling"], "/coupling")
     known = ("stiffness_N_per_mm", "servo_rate_Hz")
     out = {
-        key: read_positive(coupling[key], child("/coupling", key))
+        key: read_in_range(coupling[key], child("/coupling", key), SETTING_RANGES[key])
         for key in known
         if key in coupling
     }
@@ -126,14 +130,14 @@ def _read_safety(root: dict) -> Safety:
         return Safety()
     safety = expect_object(root["safety"], "/safety")
     readers = {
-        "max_force_N": read_positive,
-        "max_torque_N_mm": read_positive,
-        "ramp_time_s": read_non_negative,
-        "max_transitions_per_tick": lambda v, p: read_int_between(v, p, 1, MAX_INT32),
-        "capped_tick_force_N": read_positive,
+        "max_force_N": read_in_range,
+        "max_torque_N_mm": read_in_range,
+        "ramp_time_s": read_in_range,
+        "max_transitions_per_tick": read_int_in_range,
+        "capped_tick_force_N": read_in_range,
     }
     values = {
-        key: read(safety[key], child("/safety", key))
+        key: read(safety[key], child("/safety", key), SETTING_RANGES[key])
         for key, read in readers.items()
         if key in safety
     }
@@ -158,7 +162,7 @@ def _read_material(item: Any, pointer: str, names: NameRegistry) -> Material:
             if key in item:
                 fail(parameter_pointer, f"not a parameter of model '{model}'")
         elif key in item:
-            parameters[key] = read_positive(item[key], parameter_pointer)
+            parameters[key] = read_in_range(item[key], parameter_pointer, PARAMETER_RANGES[key])
         elif takes[key]:
             fail(parameter_pointer, "required field missing")
     reject_unknown_fields(item, pointer, ("name", "model", *MATERIAL_PARAMETERS))

@@ -104,17 +104,15 @@ def read_finite(value: Any, pointer: str) -> float:
     return number
 
 
-def read_positive(value: Any, pointer: str) -> float:
+def read_in_range(value: Any, pointer: str, limits: dict[str, Any]) -> float:
+    """A number in the engine's range for it (a row of SETTING_RANGES or PARAMETER_RANGES)."""
     number = read_finite(value, pointer)
-    if not number > 0.0:
-        fail(pointer, f"must be > 0, got {dump_number(value)}")
-    return number
-
-
-def read_non_negative(value: Any, pointer: str) -> float:
-    number = read_finite(value, pointer)
-    if not number >= 0.0:
-        fail(pointer, f"must be >= 0, got {dump_number(value)}")
+    low = limits["minimum"]
+    if not (number > low if limits["minimum_exclusive"] else number >= low):
+        relation = ">" if limits["minimum_exclusive"] else ">="
+        fail(pointer, f"must be {relation} {low:g}, got {dump_number(value)}")
+    if not number <= limits["maximum"]:
+        fail(pointer, f"must be <= {limits['maximum']:g}, got {dump_number(value)}")
     return number
 
 
@@ -136,6 +134,10 @@ def read_int_between(value: Any, pointer: str, low: int, high: int) -> int:
     if number > high:
         fail(pointer, f"must be <= {high}, got {dump_number(value)}")
     return number
+
+
+def read_int_in_range(value: Any, pointer: str, limits: dict[str, Any]) -> int:
+    return read_int_between(value, pointer, int(limits["minimum"]), int(limits["maximum"]))
 
 
 def read_point(value: Any, pointer: str) -> tuple[float, float, float]:

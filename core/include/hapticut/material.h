@@ -44,4 +44,9 @@ double lag_distance_mm(const Material& material, const MoveContext& context);
 
 inline bool is_rigid(const Material& material) { return material.model == MaterialModel::Rigid; }
 
+// Throws std::invalid_argument naming the material, the parameter and the value
+// unless every parameter of its model is in the table's range
+// (material_table.h); the parameters of other models are not read.
+void validate_material(const Material& material);
+
 }  // namespace hapticut

@@ -84,8 +84,10 @@ class TetMesh {
  public:
   // Validates and precomputes. Throws MeshError naming the offending index for:
   // an index out of range, a NaN/inf coordinate, a zero-volume tet, a face
-  // shared by more than two tets, a material index < 0. tolerance_mm <= 0
-  // derives the tolerance from the mesh size (kRelativeTolerance x bbox diagonal).
+  // shared by more than two tets, a material index < 0. tolerance_mm = 0
+  // derives the tolerance from the mesh size (kRelativeTolerance x bbox diagonal);
+  // a tolerance outside setting_range::kTolerance (negative, NaN, above 1 um)
+  // throws std::invalid_argument.
   TetMesh(std::vector<Vec3> vertices_mm, std::vector<std::array<std::int32_t, 4>> tets,
           std::vector<std::int32_t> tet_materials, double tolerance_mm = 0.0);
 

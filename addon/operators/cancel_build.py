@@ -1,0 +1,19 @@
+import bpy
+
+from .. import build_job, building
+
+
+class HAPTICUT_OT_cancel_build(bpy.types.Operator):
+    """Stop the running build (nothing it made is kept)"""
+
+    bl_idname = "hapticut.cancel_build"
+    bl_label = "Cancel Build"
+
+    @classmethod
+    def poll(cls, context):
+        return context.scene is not None and build_job.running(context.scene.name) is not None
+
+    def execute(self, context):
+        building.cancel_build(context.scene.name)
+        self.report({"WARNING"}, "build cancelled")
+        return {"FINISHED"}

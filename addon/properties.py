@@ -1,0 +1,145 @@
+"""What the add-on stores in a .blend: per object (role, material, blade) and per scene
+(build settings, the last build's report and problems)."""
+
+from __future__ import annotations
+
+import bpy
+from bpy.props import (
+    BoolProperty,
+    CollectionProperty,
+    EnumProperty,
+    FloatProperty,
+    IntProperty,
+    PointerProperty,
+    StringProperty,
+)
+
+from . import toolkit
+
+ROLES = (
+    ("NONE", "None", "Not part of the scene"),
+    ("REGION", "Region", "A closed mesh filled with one material"),
+    ("BLADE", "Blade", "A blade: its cutting edge samples the material"),
+)
+EDGE_MODES = (
+    ("VERTICES", "Two vertices", "The edge between two vertices picked in edit mode"),
+    ("AXIS", "Axis", "A segment along a local axis, centred on the origin"),
+)
+AXES = (("X", "X", ""), ("Y", "Y", ""), ("Z", "Z", ""))
+CUSTOM = "custom"
+
+
+def _preset_names(self, context, edit_text):
+    table = toolkit.cached_material_table()
+    names = [p["name"] for p in table["presets"]] if table else []
+    return [*names, CUSTOM]
+
+
+def _model_names(self, context, edit_text):
+    table = toolkit.cached_material_table()
+    return [m["name"] for m in table["models"]] if table else []
+
+
+class HAPTICUT_PG_parameter(bpy.types.PropertyGroup):
+    """One parameter of a custom material (its range is the material table's)."""
+
+    value: FloatProperty(name="Value")
+
+
+class HAPTICUT_PG_object(bpy.types.PropertyGroup):
+    role: EnumProperty(name="Role", items=ROLES, default="NONE")
+    # Region.
+    material_preset: StringProperty(
+        name="Material",
+        description="A preset of the toolkit's material table, or 'custom'",
+        default="soft_tissue",
+        search=_preset_names,
+    )
+    custom_name: StringProperty(
+        name="Material name", description="Regions with one name share one material"
+    )
+    custom_model: StringProperty(name="Model", search=_model_names, default="drag")
+    custom_parameters: CollectionProperty(type=HAPTICUT_PG_parameter)
+    # Blade.
+    blade_points: IntProperty(name="Points", default=50, min=2, max=1000)
+    edge_mode: EnumProperty(name="Cutting edge", items=EDGE_MODES, default="VERTICES")
+    edge_vertex_a: IntProperty(name="Edge start vertex", default=-1, min=-1)
+    edge_vertex_b: IntProperty(name="Edge end vertex", default=-1, min=-1)
+    edge_axis: EnumProperty(name="Axis", items=AXES, default="X")
+    edge_length: FloatProperty(
+        name="Length", default=0.0, min=0.0, subtype="DISTANCE", unit="LENGTH"
+    )
+    device: StringProperty(
+        name="Device", description="The servo device that moves this blade", default="sim"
+    )
+
+
+class HAPTICUT_PG_problem(bpy.types.PropertyGroup):
+    object_name: StringProperty(name="Object")
+    problem: StringProperty(name="Problem")
+
+
+class HAPTICUT_PG_scene(bpy.types.PropertyGroup):
+    accuracy: FloatProperty(
+        name="Accuracy",
+        description="How far the meshed surfaces may lie from yours (0: 0.5% of the size)",
+        default=0.0,
+        min=0.0,
+        subtype="DISTANCE",
+        unit="LENGTH",
+    )
+    edge_near: FloatProperty(
+        name="Edge near",
+        description="Tet edge length at the surfaces (0: their mean edge)",
+        default=0.0,
+        min=0.0,
+        subtype="DISTANCE",
+        unit="LENGTH",
+    )
+    edge_far: FloatProperty(
+        name="Edge far",
+        description="Tet edge length far from the surfaces (0: 4x near)",
+        default=0.0,
+        min=0.0,
+        subtype="DISTANCE",
+        unit="LENGTH",
+    )
+    enclosure: EnumProperty(
+        name="Enclosure",
+        items=(
+            ("box", "Box", "A tight box"),
+            ("cube", "Cube", "A cube (the paper's)"),
+            ("tetrahedron", "Tetrahedron", "4 boundary faces"),
+        ),
+        default="box",
+    )
+    coarsen: BoolProperty(name="Coarsen", description="Fewer tets, slower build", default=False)
+    work_directory: StringProperty(
+        name="Work directory",
+        subtype="DIR_PATH",
+        description="Where builds go (empty: the temporary directory)",
+    )
+    # The last build (kept in the .blend).
+    build_hash: StringProperty(name="Build hash")
+    report_json: StringProperty(name="Report")
+    status: StringProperty(name="Status")
+    error: StringProperty(name="Error")
+    problems: CollectionProperty(type=HAPTICUT_PG_problem)
+    # The running build (drawn as a progress bar).
+    running: BoolProperty(name="Running", default=False)
+    progress: FloatProperty(name="Progress", min=0.0, max=1.0, subtype="FACTOR")
+    stage: StringProperty(name="Stage")
+    active_index: IntProperty(name="Active")
+
+
+classes = (HAPTICUT_PG_parameter, HAPTICUT_PG_object, HAPTICUT_PG_problem, HAPTICUT_PG_scene)
+
+
+def attach() -> None:
+    bpy.types.Object.hapticut = PointerProperty(type=HAPTICUT_PG_object)
+    bpy.types.Scene.hapticut = PointerProperty(type=HAPTICUT_PG_scene)
+
+
+def detach() -> None:
+    del bpy.types.Scene.hapticut
+    del bpy.types.Object.hapticut

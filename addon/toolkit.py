@@ -1,0 +1,114 @@
+"""Reaching the ``hapticut`` toolkit: where it is, its version, its material table.
+
+The add-on never imports the toolkit (it lives in another Python, with compiled modules):
+every call is a child process. No bpy here.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+
+# What the add-on tells a user who has no toolkit yet (run outside Blender, from a checkout).
+INSTALL_COMMAND = 'python3 -m pip install "./[build]"   (in a Hapticut checkout; docs/addon.md)'
+# A quick command (version, material table) must answer within this.
+QUICK_TIMEOUT_S = 60.0
+
+
+class ToolkitError(RuntimeError):
+    """The toolkit is missing or a command of it failed; the message is for the user."""
+
+
+def find_toolkit(configured_path: str = "") -> str:
+    """The ``hapticut`` executable: the configured path, else the one on PATH."""
+    if configured_path:
+        path = os.path.abspath(os.path.expanduser(configured_path))
+        if os.path.isfile(path) and os.access(path, os.X_OK):
+            return path
+        raise ToolkitError(
+            f"the toolkit path {path!r} is not an executable; install with: {INSTALL_COMMAND}"
+        )
+    found = shutil.which("hapticut")
+    if not found:
+        raise ToolkitError(
+            f"the hapticut toolkit is not on PATH; install it with: {INSTALL_COMMAND}"
+        )
+    return found
+
+
+def last_error_line(text: str) -> str:
+    """The last non-empty line of a child's stderr (what the user sees of a failure)."""
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    return lines[-1] if lines else "(no error message)"
+
+
+def run_quick(executable: str, *args: str) -> str:
+    """A short toolkit command's stdout; ToolkitError with its last error line on failure."""
+    try:
+        done = subprocess.run(
+            [executable, *args], capture_output=True, text=True, timeout=QUICK_TIMEOUT_S
+        )
+    except (OSError, subprocess.TimeoutExpired) as error:
+        raise ToolkitError(f"hapticut {' '.join(args)}: {error}") from None
+    if done.returncode != 0:
+        line = last_error_line(done.stderr)
+        # The toolkit's own messages start with "hapticut <command>:" already.
+        raise ToolkitError(line if line.startswith("hapticut") else f"hapticut {args[0]}: {line}")
+    return done.stdout
+
+
+def toolkit_version(executable: str) -> str:
+    """The installed toolkit's version (``hapticut --version`` prints "hapticut 0.1.0")."""
+    return run_quick(executable, "--version").strip().removeprefix("hapticut ").strip()
+
+
+_material_table: dict | None = None
+
+
+def material_table(executable: str, refresh: bool = False) -> dict:
+    """``hapticut materials --json``, run once and kept (refresh=True runs it again)."""
+    global _material_table
+    if _material_table is None or refresh:
+        text = run_quick(executable, "materials", "--json")
+        try:
+            table = json.loads(text)
+        except json.JSONDecodeError as error:
+            raise ToolkitError(f"hapticut materials --json printed no JSON ({error})") from None
+        if table.get("version") != 1 or "presets" not in table or "models" not in table:
+            raise ToolkitError("hapticut materials --json: not a version 1 material table")
+        _material_table = table
+    return _material_table
+
+
+def cached_material_table() -> dict | None:
+    """The table if it was read already (for drawing: never runs a process)."""
+    return _material_table
+
+
+def forget_material_table() -> None:
+    global _material_table
+    _material_table = None
+
+
+def preset(table: dict, name: str) -> dict | None:
+    return next((p for p in table["presets"] if p["name"] == name), None)
+
+
+def model(table: dict, name: str) -> dict | None:
+    return next((m for m in table["models"] if m["name"] == name), None)
+
+
+def in_range(parameter: dict, value: float) -> bool:
+    """Within the table's range (its minimum exclusive when it says so)."""
+    low, high = parameter["minimum"], parameter["maximum"]
+    above = value > low if parameter.get("minimum_exclusive") else value >= low
+    return above and value <= high
+
+
+def range_text(parameter: dict) -> str:
+    """'(0, 1000] mm': the parameter's range as the table gives it."""
+    opening = "(" if parameter.get("minimum_exclusive") else "["
+    unit = f" {parameter['unit']}" if parameter.get("unit") else ""
+    return f"{opening}{parameter['minimum']:g}, {parameter['maximum']:g}]{unit}"

@@ -1,0 +1,165 @@
+"""The sidebar tab *Hapticut*: the scene's regions and blades, checks, build, report."""
+
+from __future__ import annotations
+
+import json
+
+import bpy
+
+from . import toolkit
+from .report_text import report_lines
+
+
+class HAPTICUT_UL_objects(bpy.types.UIList):
+    """Regions and blades, with their materials or edges."""
+
+    def draw_item(self, context, layout, data, item, icon, active_data, active_property):
+        settings = item.hapticut
+        if settings.role == "REGION":
+            preset = settings.material_preset
+            text = settings.custom_name or item.name if preset == "custom" else preset
+            layout.label(text=item.name, icon="MESH_DATA")
+            layout.label(text=text)
+        else:
+            layout.label(text=item.name, icon="SCULPTMODE_HLT")
+            layout.label(text=f"blade, {settings.blade_points} points")
+
+    def filter_items(self, context, data, propname):
+        objects = getattr(data, propname)
+        flags = [self.bitflag_filter_item if o.hapticut.role != "NONE" else 0 for o in objects]
+        return flags, []
+
+
+class HAPTICUT_PT_scene(bpy.types.Panel):
+    bl_label = "Hapticut"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Hapticut"
+
+    def draw(self, context):
+        layout = self.layout
+        scene = context.scene
+        settings = scene.hapticut
+        layout.template_list("HAPTICUT_UL_objects", "", scene, "objects", settings, "active_index")
+        for problem in settings.problems:
+            text = (
+                f"{problem.object_name}: {problem.problem}"
+                if problem.object_name
+                else problem.problem
+            )
+            layout.label(text=text, icon="ERROR")
+        layout.operator("hapticut.check_scene", icon="CHECKMARK")
+
+
+class HAPTICUT_PT_object(bpy.types.Panel):
+    bl_label = "Object"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Hapticut"
+    bl_parent_id = "HAPTICUT_PT_scene"
+
+    @classmethod
+    def poll(cls, context):
+        return context.object is not None
+
+    def draw(self, context):
+        layout = self.layout
+        obj = context.object
+        settings = obj.hapticut
+        layout.prop(settings, "role")
+        if settings.role == "REGION":
+            self.draw_region(layout, settings)
+        elif settings.role == "BLADE":
+            layout.prop(settings, "blade_points")
+            layout.prop(settings, "edge_mode")
+            if settings.edge_mode == "VERTICES":
+                row = layout.row()
+                row.label(text=f"vertices {settings.edge_vertex_a}, {settings.edge_vertex_b}")
+                row.operator("hapticut.set_cutting_edge")
+            else:
+                layout.prop(settings, "edge_axis")
+                layout.prop(settings, "edge_length")
+            layout.prop(settings, "device")
+
+    def draw_region(self, layout, settings):
+        layout.prop(settings, "material_preset")
+        table = toolkit.cached_material_table()
+        if table is None:
+            layout.label(text="Material table not read: Check in the preferences", icon="INFO")
+            return
+        if settings.material_preset != "custom":
+            preset = toolkit.preset(table, settings.material_preset)
+            if preset is not None:
+                layout.label(
+                    text=f"{preset['model']}: "
+                    + ", ".join(f"{k} {v:g}" for k, v in preset["parameters"].items())
+                )
+            layout.operator("hapticut.set_custom_material")
+            return
+        layout.prop(settings, "custom_name")
+        layout.prop(settings, "custom_model")
+        model = toolkit.model(table, settings.custom_model)
+        ranges = {p["name"]: p for p in model["parameters"]} if model else {}
+        for item in settings.custom_parameters:
+            row = layout.row()
+            row.prop(item, "value", text=item.name)
+            limits = ranges.get(item.name)
+            if limits:
+                row.label(text=toolkit.range_text(limits))
+
+
+class HAPTICUT_PT_build(bpy.types.Panel):
+    bl_label = "Build"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Hapticut"
+    bl_parent_id = "HAPTICUT_PT_scene"
+
+    def draw(self, context):
+        layout = self.layout
+        settings = context.scene.hapticut
+        for name in ("accuracy", "edge_near", "edge_far", "enclosure", "coarsen", "work_directory"):
+            layout.prop(settings, name)
+        if settings.running:
+            layout.progress(
+                factor=settings.progress,
+                type="BAR",
+                text=f"{settings.stage} {100 * settings.progress:.0f}%",
+            )
+            layout.operator("hapticut.cancel_build", icon="CANCEL")
+        else:
+            layout.operator("hapticut.tetrahedralize", icon="MESH_ICOSPHERE")
+        if settings.status:
+            layout.label(text=settings.status)
+        if settings.error:
+            layout.label(text=settings.error, icon="ERROR")
+        row = layout.row()
+        row.operator("hapticut.export_scene", icon="EXPORT")
+        row.operator("hapticut.import_scene", icon="IMPORT")
+
+
+class HAPTICUT_PT_report(bpy.types.Panel):
+    bl_label = "Report"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Hapticut"
+    bl_parent_id = "HAPTICUT_PT_scene"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    @classmethod
+    def poll(cls, context):
+        return bool(context.scene.hapticut.report_json)
+
+    def draw(self, context):
+        report = json.loads(context.scene.hapticut.report_json)
+        for line in report_lines(report):
+            self.layout.label(text=line)
+
+
+classes = (
+    HAPTICUT_UL_objects,
+    HAPTICUT_PT_scene,
+    HAPTICUT_PT_object,
+    HAPTICUT_PT_build,
+    HAPTICUT_PT_report,
+)

@@ -1,0 +1,203 @@
+"""A build request: what the Blender add-on writes for the builder (docs/addon.md).
+
+The request is a JSON file beside the regions' meshes (``.npz`` files holding ``vertices``
+(n, 3) float64 mm, world coordinates, and ``faces`` (f, 3) integer). ``read_request`` turns it
+into the builder's own inputs (Region, BladeSpec, BuildSettings); ``input_problems`` lists what
+is wrong with the regions before anything is meshed, each problem naming its region.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from hapticut.scene import BladeSpec, Material
+from hapticut.scene.builder import BuildError, BuildSettings, Region
+from hapticut.scene.geometry import signed_volume
+from hapticut.scene.model import MATERIAL_PARAMETERS
+
+REQUEST_FORMAT = "hapticut.build-request"
+REQUEST_VERSION = 1
+# The BuildSettings fields a request may set (the rest keep the builder's defaults).
+SETTINGS_FIELDS = (
+    "enclosure",
+    "margin_mm",
+    "accuracy_mm",
+    "edge_near_mm",
+    "edge_far_mm",
+    "grading",
+    "adaptive",
+    "simplify",
+    "coarsen",
+    "threads",
+)
+# A region whose |volume| is below this fraction of its bounding box's volume encloses none.
+ZERO_VOLUME_RATIO = 1e-9
+
+
+class RequestError(ValueError):
+    """A request the builder cannot read: ``field`` names the entry, the message the reason."""
+
+    def __init__(self, field: str, reason: str) -> None:
+        super().__init__(f"{field}: {reason}")
+        self.field = field
+        self.reason = reason
+
+
+@dataclass(frozen=True)
+class BuildRequest:
+    """A request read and checked: the builder's inputs and the blades' device names."""
+
+    regions: list[Region]
+    blades: list[BladeSpec]
+    settings: BuildSettings
+    blade_devices: dict[str, str]
+    scene_file: str  # The scene's file name inside the output directory.
+
+
+def _expect(condition: bool, field: str, reason: str) -> None:
+    if not condition:
+        raise RequestError(field, reason)
+
+
+def _number(value, field: str) -> float:
+    _expect(
+        isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value),
+        field,
+        f"must be a finite number, not {value!r}",
+    )
+    return float(value)
+
+
+def _material(data, field: str) -> Material:
+    _expect(isinstance(data, dict), field, "must be an object")
+    _expect(isinstance(data.get("name"), str) and data["name"], f"{field}/name", "missing")
+    _expect(isinstance(data.get("model"), str), f"{field}/model", "missing")
+    values = {}
+    for key, value in data.items():
+        if key in ("name", "model"):
+            continue
+        _expect(key in MATERIAL_PARAMETERS, f"{field}/{key}", "not a material parameter")
+        values[key] = _number(value, f"{field}/{key}")
+    try:
+        return Material(name=data["name"], model=data["model"], **values)
+    except TypeError as error:
+        raise RequestError(field, str(error)) from None
+
+
+def _region(data, field: str, folder: str) -> Region:
+    _expect(isinstance(data, dict), field, "must be an object")
+    name = data.get("name")
+    _expect(isinstance(name, str) and name, f"{field}/name", "missing")
+    mesh = data.get("mesh")
+    _expect(isinstance(mesh, str) and mesh, f"{field}/mesh", "missing")
+    path = os.path.join(folder, mesh)
+    try:
+        with np.load(path, allow_pickle=False) as arrays:
+            vertices, faces = arrays["vertices"], arrays["faces"]
+    except (OSError, KeyError, ValueError) as error:
+        raise RequestError(f"{field}/mesh", f"cannot read {path}: {error}") from None
+    return Region(name, vertices, faces, _material(data.get("material"), f"{field}/material"))
+
+
+def _blade(data, field: str) -> tuple[BladeSpec, str]:
+    _expect(isinstance(data, dict), field, "must be an object")
+    name = data.get("name")
+    _expect(isinstance(name, str) and name, f"{field}/name", "missing")
+    ends = []
+    for key in ("start_mm", "end_mm"):
+        point = data.get(key)
+        _expect(isinstance(point, list) and len(point) == 3, f"{field}/{key}", "must be [x, y, z]")
+        ends.append(tuple(_number(v, f"{field}/{key}") for v in point))
+    points = data.get("points", 50)
+    _expect(
+        isinstance(points, int) and not isinstance(points, bool) and points >= 2,
+        f"{field}/points",
+        f"must be an integer of at least 2, not {points!r}",
+    )
+    device = data.get("device", "")
+    _expect(isinstance(device, str), f"{field}/device", "must be a string")
+    return BladeSpec(name, ends[0], ends[1], points), device
+
+
+def read_request(path: str | os.PathLike) -> BuildRequest:
+    """The request at path, its meshes read from beside it; RequestError names a bad entry."""
+    path = os.fspath(path)
+    try:
+        with open(path, encoding="utf-8") as file:
+            data = json.load(file)
+    except (OSError, json.JSONDecodeError) as error:
+        raise RequestError("(root)", f"cannot read {path}: {error}") from None
+    _expect(isinstance(data, dict), "(root)", "must be a JSON object")
+    _expect(data.get("format") == REQUEST_FORMAT, "format", f"must be {REQUEST_FORMAT!r}")
+    _expect(data.get("version") == REQUEST_VERSION, "version", f"must be {REQUEST_VERSION}")
+    folder = os.path.dirname(os.path.abspath(path))
+    regions = data.get("regions")
+    _expect(isinstance(regions, list), "regions", "must be a list")
+    regions = [_region(item, f"regions/{i}", folder) for i, item in enumerate(regions)]
+    blades_data = data.get("blades", [])
+    _expect(isinstance(blades_data, list), "blades", "must be a list")
+    blades_and_devices = [_blade(item, f"blades/{i}") for i, item in enumerate(blades_data)]
+    settings_data = data.get("settings", {})
+    _expect(isinstance(settings_data, dict), "settings", "must be an object")
+    unknown = sorted(set(settings_data) - set(SETTINGS_FIELDS))
+    _expect(not unknown, f"settings/{unknown[0] if unknown else ''}", "not a build setting")
+    known = {f.name for f in fields(BuildSettings)}
+    assert set(SETTINGS_FIELDS) <= known
+    try:
+        settings = BuildSettings(**settings_data)
+    except TypeError as error:
+        raise RequestError("settings", str(error)) from None
+    scene_file = data.get("scene_file", "scene.hapticut.msgpack")
+    _expect(
+        isinstance(scene_file, str)
+        and os.path.basename(scene_file) == scene_file
+        and scene_file.endswith((".hapticut.json", ".hapticut.msgpack")),
+        "scene_file",
+        "must be a file name ending in .hapticut.json or .hapticut.msgpack",
+    )
+    return BuildRequest(
+        regions=regions,
+        blades=[blade for blade, _ in blades_and_devices],
+        settings=settings,
+        blade_devices={blade.name: device for blade, device in blades_and_devices if device},
+        scene_file=scene_file,
+    )
+
+
+def input_problems(regions: list[Region]) -> list[tuple[str, str]]:
+    """(region, problem) for each region that is open, self-intersecting or without volume,
+    before any repair: the add-on asks its user to fix these rather than have them patched."""
+    from hapticut.scene.repair import Surface, check_arrays, self_intersecting_faces
+
+    problems = []
+    for region in regions:
+        try:
+            vertices, faces = check_arrays(region.name, region.vertices, region.faces)
+        except BuildError as error:
+            problems.append((region.name, error.problem))
+            continue
+        edges = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+        _, uses = np.unique(edges, axis=0, return_counts=True)
+        open_edges = int((uses == 1).sum())
+        if open_edges:
+            problems.append((region.name, f"the mesh is open ({open_edges} boundary edges)"))
+        if (uses > 2).any():
+            problems.append(
+                (region.name, f"the mesh is not manifold ({int((uses > 2).sum())} edges)")
+            )
+        crossing = int(self_intersecting_faces([Surface(vertices, faces)]).sum())
+        if crossing:
+            problems.append((region.name, f"the mesh intersects itself ({crossing} faces)"))
+        extent = vertices.max(axis=0) - vertices.min(axis=0)
+        volume = abs(signed_volume(vertices, faces))
+        if volume <= ZERO_VOLUME_RATIO * max(float(np.prod(extent)), float(extent.max()) ** 3):
+            problems.append((region.name, f"the region has no volume ({volume:.3g} mm^3)"))
+    names = [region.name for region in regions]
+    for name in sorted({n for n in names if names.count(n) > 1}):
+        problems.append((name, "two regions have this name"))
+    return problems

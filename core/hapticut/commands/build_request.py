@@ -1,0 +1,145 @@
+"""``hapticut build-request REQUEST.json --out DIR``: the add-on's build (docs/addon.md).
+
+Reads a build request (hapticut.build_request), checks its regions, builds the scene with
+hapticut.scene.builder and writes into DIR: the scene file, ``preview.npz``
+(hapticut.preview) and ``report.json``. DIR appears whole or not at all: everything is
+written into a temporary directory beside it, renamed to DIR at the end (an existing DIR is
+replaced). ``--progress jsonl`` prints one JSON object per line on stdout:
+``{"event": "progress", "stage": "repair", "fraction": 0.03, "message": "..."}``, then
+``{"event": "done", ...}`` or ``{"event": "error", "object": NAME, "problem": TEXT}``
+(also the last line on stderr). ``--check`` only checks the regions (open, self-intersecting,
+without volume) and prints their problems.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import os
+import shutil
+import sys
+import tempfile
+import time
+
+NAME = "build-request"
+HELP = "Build a scene from an add-on's build request (progress as JSON lines, preview, report)."
+# At most this many progress lines a second (the add-on polls a few times a second).
+PROGRESS_LINES_PER_S = 20
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.description = __doc__
+    parser.formatter_class = argparse.RawDescriptionHelpFormatter
+    parser.add_argument("request", help="the build request (.json) beside its region meshes")
+    parser.add_argument("--out", help="the output directory (replaced when it exists)")
+    parser.add_argument("--progress", choices=("jsonl", "none"), default="jsonl")
+    parser.add_argument("--check", action="store_true", help="only check the regions")
+
+
+class JsonLines:
+    """Events as JSON lines on a stream, progress thinned to PROGRESS_LINES_PER_S."""
+
+    def __init__(self, stream, enabled: bool = True) -> None:
+        from hapticut.scene.builder import _Progress
+
+        self.stream = stream
+        self.enabled = enabled
+        self.last_stage = ""
+        self.last_time = 0.0
+        # The builder's steps and their shares of the whole, in order: a fraction's stage.
+        self.stage_ends = []
+        total = 0.0
+        for stage, weight in _Progress.WEIGHTS.items():
+            total += weight
+            self.stage_ends.append((total, stage))
+
+    def emit(self, event: str, **values) -> None:
+        if self.enabled or event != "progress":
+            self.stream.write(json.dumps({"event": event, **values}) + "\n")
+            self.stream.flush()
+
+    def stage_of(self, fraction: float) -> str:
+        for end, stage in self.stage_ends:
+            if fraction < end - 1e-9:
+                return stage
+        return self.stage_ends[-1][1]
+
+    def __call__(self, fraction: float, message: str) -> bool:
+        stage = self.stage_of(fraction) if fraction < 1.0 else "done"
+        now = time.monotonic()
+        if stage != self.last_stage or now - self.last_time >= 1.0 / PROGRESS_LINES_PER_S:
+            self.emit("progress", stage=stage, fraction=round(fraction, 4), message=message)
+            self.last_stage, self.last_time = stage, now
+        return True
+
+
+def _fail(events: JsonLines, name: str, problem: str, code: int = 1) -> int:
+    events.emit("error", object=name, problem=problem)
+    print(f"hapticut build-request: {f'{name}: ' if name else ''}{problem}", file=sys.stderr)
+    return code
+
+
+def run(args: argparse.Namespace) -> int:
+    from hapticut.build_request import RequestError, input_problems, read_request
+
+    from .mesh import _terminate_as_exit
+
+    events = JsonLines(sys.stdout, args.progress == "jsonl")
+    if not args.check and not args.out:
+        return _fail(events, "", "--out DIR is required (or --check)", 2)
+    try:
+        request = read_request(args.request)
+    except RequestError as error:
+        return _fail(events, "", f"request {error}", 2)
+    events.emit("progress", stage="validate", fraction=0.0, message="checking regions")
+    problems = input_problems(request.regions)
+    if not request.regions:
+        problems.append(("", "no regions to build a scene from"))
+    if args.check:
+        for name, problem in problems:
+            events.emit("problem", object=name, problem=problem)
+        events.emit("checked", problems=len(problems))
+        return 1 if problems else 0
+    if problems:
+        return _fail(events, *problems[0])
+    with _terminate_as_exit():
+        return _build(request, os.path.abspath(args.out), events)
+
+
+def _build(request, out: str, events: JsonLines) -> int:
+    from dataclasses import replace
+
+    from hapticut.preview import scene_report, write_preview
+    from hapticut.scene import save_scene
+    from hapticut.scene.builder import BuildError, build
+
+    start = time.perf_counter()
+    settings = replace(request.settings, in_subprocess=True)
+    try:
+        scene = build(request.regions, request.blades, settings, progress=events)
+    except BuildError as error:
+        return _fail(events, error.region, error.problem)
+    if request.blade_devices:
+        scene.metadata["blade_devices"] = dict(request.blade_devices)
+    parent = os.path.dirname(out) or "."
+    os.makedirs(parent, exist_ok=True)
+    staging = tempfile.mkdtemp(prefix=f".{os.path.basename(out)}.tmp-", dir=parent)
+    try:
+        events.emit("progress", stage="write", fraction=1.0, message="writing the scene")
+        save_scene(scene, os.path.join(staging, request.scene_file))
+        write_preview(scene, os.path.join(staging, "preview.npz"))
+        with open(os.path.join(staging, "report.json"), "w", encoding="utf-8") as file:
+            json.dump(scene_report(scene), file, indent=1)
+        if os.path.isdir(out):
+            shutil.rmtree(out)
+        os.replace(staging, out)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            shutil.rmtree(staging)
+        raise
+    seconds = round(time.perf_counter() - start, 3)
+    events.emit(
+        "done", out=out, scene=request.scene_file, tets=int(len(scene.tets)), seconds=seconds
+    )
+    return 0

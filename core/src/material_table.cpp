@@ -1,0 +1,98 @@
+#include "hapticut/material_table.h"
+
+#include <array>
+#include <string>
+
+namespace hapticut {
+
+namespace {
+
+// Upper bounds: a drag or viscous lag beyond a metre, a viscosity giving more
+// than 1 kN at 0.1 m/s, a membrane needing more than 100 N to break are not
+// tissue; they only overflow the physics. The lower bound is exclusive: a zero
+// would make the model the free one under another name.
+constexpr MaterialParameterSpec kDragDistance{
+    {"drag_distance_mm", "mm", 0.0, true, 1000.0, 1.0,
+     "the proxy trails the device point by at most this (eq. 16)"},
+    &Material::drag_distance_mm,
+    true};
+constexpr MaterialParameterSpec kViscosity{{"viscosity_N_s_per_mm", "N s/mm", 0.0, true, 10.0,
+                                            0.001, "resistance c in f = c v at stroke speed v"},
+                                           &Material::viscosity_N_s_per_mm,
+                                           true};
+constexpr MaterialParameterSpec kMaxLag{
+    {"max_lag_mm", "mm", 0.0, true, 1000.0, 50.0, "cap on the speed-dependent lag c v / k"},
+    &Material::max_lag_mm,
+    false};
+constexpr MaterialParameterSpec kBreakForce{
+    {"break_force_N", "N", 0.0, true, 100.0, 1.0,
+     "rigid until the push k |p - q| exceeds this, then free"},
+    &Material::break_force_N,
+    true};
+
+constexpr std::array<MaterialParameterSpec, 4> kAllParameters{kDragDistance, kViscosity, kMaxLag,
+                                                              kBreakForce};
+constexpr std::array<MaterialParameterSpec, 1> kDragParameters{kDragDistance};
+constexpr std::array<MaterialParameterSpec, 2> kViscousParameters{kViscosity, kMaxLag};
+constexpr std::array<MaterialParameterSpec, 1> kMembraneParameters{kBreakForce};
+
+constexpr std::array<MaterialModelSpec, 5> kModels{{
+    {MaterialModel::Free, "free", "no resistance: the proxy follows the device point (air)", {}},
+    {MaterialModel::Drag, "drag", "the proxy trails the device point at a fixed distance",
+     kDragParameters},
+    {MaterialModel::Rigid, "rigid", "impenetrable: the proxy stays on the surface (bone)", {}},
+    {MaterialModel::Viscous, "viscous", "drag whose lag grows with the stroke speed",
+     kViscousParameters},
+    {MaterialModel::Membrane, "membrane", "rigid until pushed hard enough, then free (skin)",
+     kMembraneParameters},
+}};
+
+constexpr std::array<PresetValue, 1> kSoftTissueValues{{{"drag_distance_mm", 2.0}}};
+constexpr std::array<PresetValue, 2> kFatValues{
+    {{"viscosity_N_s_per_mm", 0.002}, {"max_lag_mm", 10.0}}};
+constexpr std::array<PresetValue, 1> kSkinValues{{{"break_force_N", 1.5}}};
+
+constexpr std::array<MaterialPreset, 5> kPresets{{
+    {"air", "Air", MaterialModel::Free, {}},
+    {"soft_tissue", "Soft tissue", MaterialModel::Drag, kSoftTissueValues},
+    {"fat", "Fat", MaterialModel::Viscous, kFatValues},
+    {"skin", "Skin", MaterialModel::Membrane, kSkinValues},
+    {"bone", "Bone", MaterialModel::Rigid, {}},
+}};
+
+}  // namespace
+
+std::span<const MaterialModelSpec> material_models() { return kModels; }
+
+const MaterialModelSpec& material_model_spec(MaterialModel model) {
+  for (const MaterialModelSpec& spec : kModels) {
+    if (spec.model == model) return spec;
+  }
+  return kModels[0];  // Unreachable: every enumerator has a row.
+}
+
+std::span<const MaterialParameterSpec> material_parameters() { return kAllParameters; }
+
+const MaterialParameterSpec* find_material_parameter(MaterialModel model, std::string_view name) {
+  for (const MaterialParameterSpec& parameter : material_model_spec(model).parameters) {
+    if (parameter.range.name == name) return &parameter;
+  }
+  return nullptr;
+}
+
+std::span<const MaterialPreset> material_presets() { return kPresets; }
+
+Material preset_material(const MaterialPreset& preset) {
+  Material material;
+  material.name = std::string(preset.name);
+  material.model = preset.model;
+  for (const MaterialParameterSpec& parameter : material_model_spec(preset.model).parameters) {
+    material.*(parameter.field) = parameter.range.default_value;
+  }
+  for (const PresetValue& value : preset.values) {
+    material.*(find_material_parameter(preset.model, value.parameter)->field) = value.value;
+  }
+  return material;
+}
+
+}  // namespace hapticut

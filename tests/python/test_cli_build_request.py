@@ -1,0 +1,188 @@
+"""`hapticut build-request`, `preview` and `convert`: the add-on's side of the toolkit, run as
+the add-on runs them (child processes), without Blender."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from build_test_support import EXAMPLES, icosphere
+from hapticut.build_request import RequestError, input_problems, read_request
+from hapticut.preview import preview_arrays
+from hapticut.scene import Material, load_scene
+from hapticut.scene.builder import Region
+
+
+def run_cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "hapticut.cli", *map(str, args)],
+                          capture_output=True, text=True, timeout=300, cwd=cwd)  # fmt: skip
+
+
+def write_request(folder, regions, blades=(), settings=None, **extra):
+    entries = []
+    for i, (name, (vertices, faces), material) in enumerate(regions):
+        np.savez(folder / f"region-{i}.npz", vertices=vertices, faces=faces)
+        entries.append({"name": name, "mesh": f"region-{i}.npz", "material": material})
+    request = {"format": "hapticut.build-request", "version": 1, "regions": entries,
+               "blades": list(blades), "settings": settings or {}, **extra}  # fmt: skip
+    path = folder / "request.json"
+    path.write_text(json.dumps(request))
+    return path
+
+
+def nested_spheres(folder):
+    return write_request(
+        folder,
+        [("Flesh", icosphere(20.0, 2), {"name": "flesh", "model": "drag", "drag_distance_mm": 0.5}),
+         ("Bone", icosphere(8.0, 1), {"name": "bone", "model": "rigid"})],
+        blades=[{"name": "Knife", "start_mm": [-10, 0, 0], "end_mm": [10, 0, 0], "points": 8,
+                 "device": "sim"}],
+        settings={"enclosure": "cube", "accuracy_mm": 1.0},
+    )  # fmt: skip
+
+
+def test_build_request_streams_progress_and_writes_the_build_whole(tmp_path):
+    request = nested_spheres(tmp_path)
+    out = tmp_path / "work" / "build"
+    result = run_cli("build-request", request, "--out", out, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    events = [json.loads(line) for line in result.stdout.splitlines()]
+    progress = [e for e in events if e["event"] == "progress"]
+    fractions = [e["fraction"] for e in progress]
+    assert fractions == sorted(fractions) and fractions[-1] == 1.0
+    stages = list(dict.fromkeys(e["stage"] for e in progress))
+    assert stages == ["validate", "repair", "simplify", "check", "sizing", "tetrahedralize",
+                      "label", "report", "done", "write"]  # fmt: skip
+    assert events[-1]["event"] == "done" and events[-1]["tets"] > 100
+    assert sorted(os.listdir(out)) == ["preview.npz", "report.json", "scene.hapticut.msgpack"]
+    assert os.listdir(out.parent) == ["build"]  # No staging directory left.
+    scene = load_scene(out / "scene.hapticut.msgpack")
+    assert [m.name for m in scene.materials] == ["air", "flesh", "bone"]
+    assert scene.blades[0].name == "Knife" and scene.blades[0].points == 8
+    assert scene.metadata["blade_devices"] == {"Knife": "sim"}
+    report = json.loads((out / "report.json").read_text())
+    assert report["tets"] == len(scene.tets) and set(report["deviation_mm"]) == {"Flesh", "Bone"}
+    # A second build replaces the first whole.
+    again = run_cli("build-request", request, "--out", out, "--progress", "none", cwd=tmp_path)
+    assert again.returncode == 0, again.stderr
+    assert [json.loads(x)["event"] for x in again.stdout.splitlines()] == ["done"]
+
+
+def test_build_request_names_the_region_of_a_builder_error(tmp_path):
+    # Two spheres crossing each other: the builder refuses, naming one.
+    a, b = icosphere(10.0, 2), icosphere(10.0, 2)
+    b = (b[0] + [8.0, 0, 0], b[1])
+    request = write_request(tmp_path, [("Left", a, {"name": "l", "model": "rigid"}),
+                                       ("Right", b, {"name": "r", "model": "rigid"})])  # fmt: skip
+    result = run_cli("build-request", request, "--out", tmp_path / "build")
+    assert result.returncode == 1
+    error = json.loads(result.stdout.splitlines()[-1])
+    assert error["event"] == "error" and error["object"] in ("Left", "Right")
+    assert "crosses region" in error["problem"]
+    assert result.stderr.strip().splitlines()[-1].startswith("hapticut build-request: ")
+    assert not (tmp_path / "build").exists()
+
+
+def test_check_lists_open_self_intersecting_and_flat_regions(tmp_path):
+    vertices, faces = icosphere(10.0, 1)
+    flat = (vertices * [1, 1, 0], faces)
+    crossing_vertices = np.vstack([vertices, vertices + [5.0, 0, 0]])
+    crossing = (crossing_vertices, np.vstack([faces, faces + len(vertices)]))
+    request = write_request(tmp_path, [
+        ("Open", (vertices, faces[1:]), {"name": "a", "model": "rigid"}),
+        ("Crossing", crossing, {"name": "a", "model": "rigid"}),
+        ("Flat", flat, {"name": "a", "model": "rigid"}),
+        ("Good", (vertices + [40.0, 0, 0], faces), {"name": "a", "model": "rigid"}),
+    ])  # fmt: skip
+    result = run_cli("build-request", request, "--check")
+    assert result.returncode == 1
+    problems = [json.loads(x) for x in result.stdout.splitlines()]
+    found = {
+        (p["object"], p["problem"].split(" (")[0]) for p in problems if p["event"] == "problem"
+    }
+    assert ("Open", "the mesh is open") in found
+    assert ("Crossing", "the mesh intersects itself") in found
+    assert ("Flat", "the region has no volume") in found
+    assert not [name for name, _ in found if name == "Good"]
+    assert problems[-1] == {"event": "checked", "problems": len(found)}
+
+
+@pytest.mark.parametrize(
+    ("change", "field"),
+    [
+        ({"format": "x"}, "format"),
+        ({"version": 2}, "version"),
+        ({"settings": {"voxels": 3}}, "settings/voxels"),
+        ({"scene_file": "../x.hapticut.json"}, "scene_file"),
+        ({"blades": [{"name": "k", "start_mm": [0, 0], "end_mm": [1, 0, 0]}]}, "blades/0/start_mm"),
+        ({"blades": [{"name": "k", "start_mm": [0, 0, 0], "end_mm": [1, 0, float("nan")]}]},
+         "blades/0/end_mm"),
+    ],
+)  # fmt: skip
+def test_a_bad_request_names_its_field(tmp_path, change, field):
+    path = nested_spheres(tmp_path)
+    data = json.loads(path.read_text())
+    data.update(change)
+    path.write_text(json.dumps(data))
+    with pytest.raises(RequestError) as error:
+        read_request(path)
+    assert error.value.field == field
+    result = run_cli("build-request", path, "--out", tmp_path / "out")
+    assert result.returncode == 2 and f"request {field}: " in result.stderr
+
+
+def test_a_missing_mesh_and_a_bad_material_are_named(tmp_path):
+    path = nested_spheres(tmp_path)
+    os.unlink(tmp_path / "region-1.npz")
+    with pytest.raises(RequestError, match="regions/1/mesh"):
+        read_request(path)
+    path = nested_spheres(tmp_path)
+    data = json.loads(path.read_text())
+    data["regions"][0]["material"]["stiffness"] = 3
+    path.write_text(json.dumps(data))
+    with pytest.raises(RequestError, match="regions/0/material/stiffness: not a material"):
+        read_request(path)
+
+
+def test_input_problems_pass_a_closed_sphere():
+    region = Region("Ball", *icosphere(10.0, 2), Material("a", "rigid"))
+    assert input_problems([region]) == []
+
+
+def test_preview_holds_each_material_regions_closed_surface():
+    scene = load_scene(EXAMPLES / "finger.hapticut.msgpack")
+    preview = preview_arrays(scene)
+    assert list(preview["material_names"]) == [m.name for m in scene.materials]
+    for index in range(1, len(scene.materials)):
+        faces = preview["faces"][preview["face_materials"] == index]
+        assert len(faces) > 0
+        edges = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+        _, uses = np.unique(edges, axis=0, return_counts=True)
+        assert set(uses.tolist()) == {2}, scene.materials[index].name  # Closed surfaces.
+    assert 0 not in preview["face_materials"]  # Air has no surface of its own.
+
+
+def test_preview_and_convert_commands(tmp_path):
+    source = EXAMPLES / "finger.hapticut.msgpack"
+    result = run_cli("preview", source, "--out", tmp_path / "p.npz")
+    assert result.returncode == 0, result.stderr
+    with np.load(tmp_path / "p.npz", allow_pickle=False) as data:
+        assert json.loads(str(data["report_json"]))["tets"] == len(load_scene(source).tets)
+    converted = tmp_path / "finger.hapticut.json"
+    assert run_cli("convert", source, converted).returncode == 0
+    assert load_scene(converted) == load_scene(source)
+    broken = tmp_path / "broken.hapticut.json"
+    broken.write_text("{}")
+    for args in (("preview", broken, "--out", tmp_path / "q.npz"), ("convert", broken, converted)):
+        result = run_cli(*args)
+        assert result.returncode == 1 and str(broken) in result.stderr
+    assert not (tmp_path / "q.npz").exists()
+
+
+def test_version():
+    result = run_cli("--version")
+    assert result.returncode == 0 and result.stdout.startswith("hapticut ")
