@@ -81,6 +81,13 @@ def parse_frame(data: bytes, names: Sequence[str] | None = None, received_s: flo
     return Frame(header, blades, received_s)
 
 
+def _sequence_of(data: bytes) -> int | None:
+    """A datagram's frame sequence from its header alone, or None when it is no frame."""
+    if len(data) < layout.FRAME_HEADER.itemsize or data[:4] != layout.FRAME_MAGIC:
+        return None
+    return int(struct.unpack_from("<Q", data, 16)[0])
+
+
 class ServoClient:
     """The control channel (TCP, length-prefixed JSON) and the stream (UDP)."""
 
@@ -98,6 +105,7 @@ class ServoClient:
         self.blade_names: list[str] = []
         self.frames_received = 0
         self.bad_datagrams = 0
+        self.datagrams_read = 0
         self._sock: socket.socket | None = None
         self._stream: socket.socket | None = None
         self._next_id = 0
@@ -232,6 +240,39 @@ class ServoClient:
         """The newest complete frame waiting on the stream socket, or None. Never blocks."""
         frames = self.poll_all()
         return frames[-1] if frames else None
+
+    def poll_newest(self, max_datagrams: int = 64, budget_s: float = 0.002) -> Frame | None:
+        """The newest frame among at most ``max_datagrams`` waiting datagrams, read for at most
+        ``budget_s``; None when none came. Bounded by construction (a timer of the add-on
+        calls it): only the newest datagram is parsed whole, the rest are left for the next
+        call or, once stale, overwritten by the kernel's newer ones."""
+        if self._stream is None:
+            return None
+        began = time.monotonic()
+        newest_data, newest_sequence, newest_s = None, -1, 0.0
+        for _ in range(max_datagrams):
+            try:
+                data = self._stream.recv(layout.MAX_FRAME_BYTES + 1)
+            except (BlockingIOError, InterruptedError):
+                break
+            now = time.monotonic()
+            self.datagrams_read += 1
+            sequence = _sequence_of(data)
+            if sequence is None:
+                self.bad_datagrams += 1
+            elif sequence > newest_sequence:
+                newest_data, newest_sequence, newest_s = data, sequence, now
+            if now - began >= budget_s:
+                break
+        if newest_data is None:
+            return None
+        try:
+            frame = parse_frame(newest_data, self.blade_names or None, newest_s)
+        except ValueError:
+            self.bad_datagrams += 1
+            return None
+        self.frames_received += 1
+        return frame
 
     def poll_all(self) -> list[Frame]:
         """Every frame waiting, oldest first (out-of-order ones dropped). Never blocks."""
