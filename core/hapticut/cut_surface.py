@@ -10,7 +10,9 @@ From a servo recording's proxies ``q`` (ticks, N, 3) and states, and the scene's
   kept when all four corners cut at their rows and both points stayed inside tets at every
   tick between the rows; it carries the frame of row r+1 (when the blade got there).
 
-So no face lies in rigid material (its proxies stop on its surface) or in air.
+Then every face whose centre or edge midpoint lies outside cuttable material is dropped (a
+flat quad between two points beside a curved bone would clip the bone's surface). So no
+face lies in rigid material (its proxies stop on its surface) or in air, at those samples.
 """
 
 from __future__ import annotations
@@ -205,6 +207,37 @@ def sweep(
     )
 
 
+def keep_inside_cuttable(
+    surface: CutSurface, locator: TetLocator, tet_materials: np.ndarray, material_models
+) -> CutSurface:
+    """The surface without the faces whose centre or an edge midpoint is not in a tet of
+    cuttable material."""
+    if not len(surface.faces):
+        return surface
+    corners = surface.vertices[surface.faces]  # (f, 3, 3)
+    samples = np.stack(
+        [
+            corners.mean(axis=1),
+            (corners[:, 0] + corners[:, 1]) / 2,
+            (corners[:, 1] + corners[:, 2]) / 2,
+            (corners[:, 2] + corners[:, 0]) / 2,
+        ],
+        axis=1,
+    )  # (f, 4, 3)
+    inside = cuttable_points(
+        samples, np.full(samples.shape[:2], STATE_TET), locator, tet_materials, material_models
+    ).all(axis=1)
+    faces = surface.faces[inside]
+    used, compact = np.unique(faces, return_inverse=True)
+    return CutSurface(
+        surface.vertices[used],
+        compact.reshape(-1, 3).astype(np.int32),
+        surface.face_frames[inside],
+        surface.cutting,
+        surface.row_ticks,
+    )
+
+
 def cut_surface(
     q: np.ndarray,
     states: np.ndarray,
@@ -225,4 +258,5 @@ def cut_surface(
     cutting = cuttable_points(
         q[rows], np.asarray(states)[rows], locator, tet_materials, material_models
     )
-    return sweep(q, states, rows, row_frames, cutting)
+    surface = sweep(q, states, rows, row_frames, cutting)
+    return keep_inside_cuttable(surface, locator, tet_materials, material_models)

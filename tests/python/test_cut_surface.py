@@ -87,8 +87,10 @@ def test_the_cut_surface_of_a_servo_stroke_is_in_cuttable_material_only(finger, 
         models,
     )
     assert len(surface.faces) > 50
-    centres = surface.vertices[surface.faces].mean(axis=1)
-    for points in (centres, surface.vertices):
+    corners = surface.vertices[surface.faces]
+    centres = corners.mean(axis=1)
+    midpoints = (corners + np.roll(corners, 1, axis=1)).reshape(-1, 3) / 2
+    for points in (centres, midpoints, surface.vertices):
         tets = space.locate(points)
         assert np.all(tets >= 0)
         found = {models[m] for m in scene.tet_materials[tets]}
