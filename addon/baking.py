@@ -72,7 +72,8 @@ def _collection(scene):
 def _material(name: str, colour) -> bpy.types.Material:
     material = bpy.data.materials.get(name) or bpy.data.materials.new(name)
     material.diffuse_color = colour
-    material.use_nodes = True
+    if bpy.app.version < (5, 0, 0):  # Always true from 5.0 on (and deprecated there).
+        material.use_nodes = True
     shader = material.node_tree.nodes.get("Principled BSDF")
     if shader is not None:
         shader.inputs["Base Color"].default_value = colour

@@ -15,10 +15,13 @@ import bpy
 HERE = Path(__file__).resolve().parent
 # The keyframed stroke (mm, frames at 24 fps) of the knife (its 40 mm edge along x, centred
 # on its origin): above the finger, its edge over the proximal bone (x -36 to -9) and the
-# flesh beyond; down into the bone (its surface is 3.5 mm from the axis; the skin, a
-# membrane, gives way at 1 N a point: a 10 mm lag at 0.1 N/mm), then across and out.
+# flesh beyond; down into the bone (its surface is 3.5 mm from the axis), then across and
+# out. The skin is a membrane that gives way at 0.5 N a point (a 5 mm lag at 0.1 N/mm; the
+# preset's 1.5 N would need a push deeper than the finger).
 KNIFE_X = -22.0
-STROKE = ((1, (KNIFE_X, 0, 20)), (18, (KNIFE_X, 0, -3.0)), (48, (KNIFE_X, 18, -3.0)))
+DEEPEST_Z = -3.0
+SKIN_BREAK_FORCE_N = 0.5
+STROKE = ((1, (KNIFE_X, 0, 20)), (18, (KNIFE_X, 0, DEEPEST_Z)), (48, (KNIFE_X, 18, DEEPEST_Z)))
 OVER_BONE_X = (-34.0, -11.0)
 _built: dict = {}
 
@@ -50,6 +53,11 @@ def finger_with_stroke(work: Path):
         bpy.ops.wm.open_mainfile(filepath=_built["blend"])
         return bpy.context.scene
     scene = blender_scene.finger_scene(str(work))
+    skin = bpy.data.objects["Skin"]
+    skin.hapticut.custom_model, skin.hapticut.custom_name = "membrane", "skin"
+    with bpy.context.temp_override(object=skin, active_object=skin):
+        assert bpy.ops.hapticut.set_custom_material() == {"FINISHED"}
+    skin.hapticut.custom_parameters["break_force_N"].value = SKIN_BREAK_FORCE_N
     scene.hapticut_live.realtime = False  # Shared test machines: no SCHED_FIFO.
     build(scene)
     keyframe_stroke(bpy.data.objects["Knife"])
