@@ -22,7 +22,7 @@ KNIFE_X = -22.0
 DEEPEST_Z = -3.0
 SKIN_BREAK_FORCE_N = 0.5
 STROKE = ((1, (KNIFE_X, 0, 20)), (18, (KNIFE_X, 0, DEEPEST_Z)), (48, (KNIFE_X, 18, DEEPEST_Z)))
-OVER_BONE_X = (-34.0, -11.0)
+OVER_BONE_X = (-31.0, -14.0)  # Clear of its rounded ends.
 _built: dict = {}
 
 
