@@ -10,7 +10,17 @@ from __future__ import annotations
 
 import bpy
 
-from . import build_job, live, live_properties, operators, preferences, properties, ui, ui_live
+from . import (
+    build_job,
+    live,
+    live_properties,
+    operators,
+    preferences,
+    properties,
+    toolkit,
+    ui,
+    ui_live,
+)
 
 classes = (
     *properties.classes,
@@ -28,11 +38,26 @@ def register() -> None:
     properties.attach()
     live_properties.attach()
     live.add_handlers()
+    if not bpy.app.background:  # Read the material table once, soon after startup.
+        bpy.app.timers.register(_read_material_table, first_interval=1.0)
+
+
+def _read_material_table():
+    """A one-shot timer: a missing toolkit shows in the preferences, not as an error here."""
+    prefs = preferences.preferences()
+    try:
+        preferences.material_table()
+    except toolkit.ToolkitError as error:
+        if prefs is not None:
+            prefs.toolkit_error = str(error)
+    return None
 
 
 def unregister() -> None:
     live.shutdown()
     live.remove_handlers()
+    if bpy.app.timers.is_registered(_read_material_table):
+        bpy.app.timers.unregister(_read_material_table)
     build_job.cancel_all()
     live_properties.detach()
     properties.detach()

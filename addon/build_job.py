@@ -91,7 +91,7 @@ def start(
     out_dir = os.path.join(work_dir, BUILD_FOLDER)
     scratch = os.path.join(job_dir, "tmp")
     os.makedirs(scratch, exist_ok=True)
-    env = dict(os.environ, TMPDIR=scratch, PYTHONUNBUFFERED="1")
+    env = toolkit.child_environment(TMPDIR=scratch, PYTHONUNBUFFERED="1")
     with (
         open(os.path.join(job_dir, "progress.jsonl"), "wb") as stdout,
         open(os.path.join(job_dir, "stderr.log"), "wb") as stderr,

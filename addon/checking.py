@@ -28,6 +28,7 @@ def toolkit_problems(executable: str, request: str) -> list[exchange.SceneProble
             capture_output=True,
             text=True,
             timeout=toolkit.QUICK_TIMEOUT_S,
+            env=toolkit.child_environment(),
         )
     except (OSError, subprocess.TimeoutExpired) as error:
         return [exchange.SceneProblemError("", f"hapticut build-request --check: {error}")]

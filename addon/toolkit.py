@@ -38,6 +38,14 @@ def find_toolkit(configured_path: str = "") -> str:
     return found
 
 
+def child_environment(**extra: str) -> dict[str, str]:
+    """The environment for a toolkit child: Blender's own Python settings removed (the
+    toolkit runs in its own Python), extra entries added."""
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONHOME", "PYTHONPATH")}
+    env.update(extra)
+    return env
+
+
 def last_error_line(text: str) -> str:
     """The last non-empty line of a child's stderr (what the user sees of a failure)."""
     lines = [line.strip() for line in text.splitlines() if line.strip()]
@@ -48,7 +56,11 @@ def run_quick(executable: str, *args: str) -> str:
     """A short toolkit command's stdout; ToolkitError with its last error line on failure."""
     try:
         done = subprocess.run(
-            [executable, *args], capture_output=True, text=True, timeout=QUICK_TIMEOUT_S
+            [executable, *args],
+            capture_output=True,
+            text=True,
+            timeout=QUICK_TIMEOUT_S,
+            env=child_environment(),
         )
     except (OSError, subprocess.TimeoutExpired) as error:
         raise ToolkitError(f"hapticut {' '.join(args)}: {error}") from None

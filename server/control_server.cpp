@@ -15,6 +15,7 @@
 
 #include "clock.h"
 #include "hapticut/scene_io.h"
+#include "realtime.h"
 
 namespace hapticut::servo {
 
@@ -109,16 +110,20 @@ void ControlServer::serve() {
   while (!quit_.load()) {
     fds.clear();
     fds.push_back({listen_fd_, POLLIN, 0});
-    fds.push_back({udp_fd_, POLLIN, 0});
+    // After a burst of stray datagrams, leave the stream socket alone for a
+    // while: a flood then costs the kernel's drops, not this thread's time.
+    const bool stray_paused = monotonic_now_s() < stray_pause_until_s_;
+    fds.push_back({udp_fd_, static_cast<short>(stray_paused ? 0 : POLLIN), 0});
     for (const Client& c : clients_) {
       fds.push_back({c.fd, static_cast<short>(POLLIN | (c.out.empty() ? 0 : POLLOUT)), 0});
     }
-    // Frames: wake shortly after the next one is due; else every 50 ms.
+    // Frames: wake just after the next one is due (then every 0.1 ms until it
+    // is there); else every 50 ms.
     double wait_s = 0.05;
     const double interval_s = servo_.shared().stream_interval_s.load();
     if (interval_s > 0.0 && servo_.shared().running.load()) {
-      const double due_s = last_frame_time_s_ + interval_s + 0.0002;
-      wait_s = std::clamp(due_s - monotonic_now_s(), 0.0002, interval_s);
+      const double due_s = last_frame_time_s_ + interval_s + 0.0001;
+      wait_s = std::clamp(due_s - monotonic_now_s(), 0.0001, interval_s);
     }
     const timespec timeout = to_timespec(wait_s);
     const int ready = ppoll(fds.data(), fds.size(), &timeout, nullptr);
@@ -332,7 +337,9 @@ void ControlServer::send_frames() {
   FrameBytes& frame = shared.frames.front();
   FrameHeader header;
   std::memcpy(&header, frame.bytes, sizeof(header));
-  last_frame_time_s_ = monotonic_now_s();
+  // The next frame is due one interval after this one's tick (not after this
+  // fetch: a late fetch must not delay every frame after it).
+  last_frame_time_s_ = header.servo_time_s;
   header.compute_p50_us = shared.compute_us.percentile_us(0.5);
   header.compute_p99_us = shared.compute_us.percentile_us(0.99);
   header.compute_max_us = shared.compute_us.max_us();
@@ -353,6 +360,7 @@ void ControlServer::send_frames() {
                              reinterpret_cast<const sockaddr*>(&to), sizeof(to));
     if (n == static_cast<ssize_t>(frame.size)) {
       ++counters_.frames_sent;
+      send_age_us_->add((monotonic_now_s() - header.servo_time_s) * 1e6);
     } else {
       ++counters_.frames_dropped;
     }
@@ -361,10 +369,11 @@ void ControlServer::send_frames() {
 
 void ControlServer::drain_stray_datagrams() {
   char buffer[2048];
-  for (int i = 0; i < 4096; ++i) {
+  for (int i = 0; i < 256; ++i) {
     if (recv(udp_fd_, buffer, sizeof(buffer), MSG_DONTWAIT) < 0) return;
     ++counters_.stray_datagrams;
   }
+  stray_pause_until_s_ = monotonic_now_s() + 0.005;  // A flood: pause 5 ms.
 }
 
 nlohmann::json ControlServer::counters_json() const {
@@ -384,6 +393,10 @@ nlohmann::json ControlServer::counters_json() const {
           {"frames_sent", c.frames_sent},
           {"frames_dropped", c.frames_dropped},
           {"stray_datagrams", c.stray_datagrams},
+          {"frame_age_at_send_us",
+           {{"p50", send_age_us_->percentile_us(0.5)},
+            {"p99", send_age_us_->percentile_us(0.99)},
+            {"max", send_age_us_->max_us()}}},
           {"stream_source_port", stream_port_}};
 }
 

@@ -10,12 +10,14 @@
 
 #include <atomic>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "histogram.h"
 #include "protocol.h"
 #include "servo.h"
 
@@ -87,7 +89,10 @@ class ControlServer {
   int stream_port_ = 0;
   std::vector<Client> clients_;
   ControlCounters counters_;
-  double last_frame_time_s_ = 0.0;
+  // Tick to sendto, per frame sent (the servo's share of a frame's age).
+  std::unique_ptr<LatencyHistogram> send_age_us_ = std::make_unique<LatencyHistogram>();
+  double last_frame_time_s_ = 0.0;    // servo_time_s of the last frame fetched.
+  double stray_pause_until_s_ = 0.0;  // Stream socket not read until then.
   std::thread thread_;
   std::atomic<bool> quit_{false};
 };

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The test command (README.md): setup, lint, the C++ tests, the Python tests.
+# The test command (README.md): setup, lint, the C++ tests (plain and under ASan/UBSan), the
+# scene reader fuzzer, the Python tests.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -7,6 +8,10 @@ bash tests/scripts/setup.sh
 bash tests/scripts/lint.sh
 echo "== C++ tests (ctest)"
 ctest --test-dir build/tests --output-on-failure -j 2
+echo "== C++ tests under ASan and UBSan (ctest in build/asan)"
+bash tests/scripts/sanitizers.sh run
+echo "== Scene reader fuzzing (libFuzzer, bounded time)"
+bash tests/scripts/fuzz.sh
 echo "== Python tests (pytest)"
 python3 -m pytest -q -m "not slow" tests/python --ignore=tests/python/addon
 # bpy in a pytest process of its own (it is not imported beside the other suites' modules).

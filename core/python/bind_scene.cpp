@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "hapticut/scene_io.h"
+#include "hapticut/scene_tree.h"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -64,6 +65,45 @@ nb::object numpy_array(std::vector<T>&& values, std::initializer_list<std::size_
 
 nb::tuple point_tuple(const hapticut::Vec3& point) {
   return nb::make_tuple(point.x, point.y, point.z);
+}
+
+// The decoded tree as plain Python values (depth is bounded by the decoder).
+nb::object tree_to_python(const hapticut::SceneTree& value) {
+  using Type = hapticut::SceneTree::value_t;
+  switch (value.type()) {
+    case Type::null:
+    case Type::discarded:
+      return nb::none();
+    case Type::boolean:
+      return nb::bool_(value.get<bool>());
+    case Type::number_integer:
+      return nb::int_(value.get<std::int64_t>());
+    case Type::number_unsigned:
+      return nb::steal(PyLong_FromUnsignedLongLong(value.get<std::uint64_t>()));
+    case Type::number_float:
+      return nb::float_(value.get<double>());
+    case Type::string: {
+      const auto& text = value.get_ref<const std::string&>();
+      return nb::str(text.data(), text.size());  // Valid UTF-8: the decoder checked.
+    }
+    case Type::binary: {
+      const auto& bytes = value.get_binary();
+      return nb::bytes(bytes.data(), bytes.size());
+    }
+    case Type::array: {
+      nb::list out;
+      for (const auto& item : value) out.append(tree_to_python(item));
+      return out;
+    }
+    case Type::object: {
+      nb::dict out;
+      for (auto it = value.begin(); it != value.end(); ++it) {
+        out[nb::str(it.key().data(), it.key().size())] = tree_to_python(it.value());
+      }
+      return out;
+    }
+  }
+  return nb::none();
 }
 
 nb::dict document_to_dict(const SceneDocument& document) {
@@ -290,6 +330,15 @@ void bind_scene(nb::module_& m) {
       },
       "data"_a, "encoding"_a = "json", "strict"_a = false,
       "Parse scene bytes ('json' or 'msgpack') with the C++ reader into a dict.");
+  m.def(
+      "decode_scene_tree",
+      [](const nb::bytes& data, const std::string& encoding) {
+        return tree_to_python(
+            hapticut::decode_scene_tree(bytes_of(data), encoding_named(encoding)));
+      },
+      "data"_a, "encoding"_a = "json",
+      "Decode scene bytes into plain Python values with the C++ decoder both readers share "
+      "(bounded nesting, no duplicate keys, valid UTF-8, nothing after the value).");
   m.def(
       "serialize_scene_bytes",
       [](const nb::dict& scene, const std::string& encoding) {

@@ -22,6 +22,7 @@
 
 #include "hapticut/material_table.h"
 #include "hapticut/parameter_range.h"
+#include "hapticut/scene_tree.h"
 
 #if defined(__unix__) || defined(__APPLE__)
 #include <unistd.h>
@@ -550,16 +551,6 @@ std::string without_exception_id(const char* what) {
   return std::string(text);
 }
 
-Json decode(const std::vector<std::uint8_t>& bytes, SceneEncoding encoding) {
-  const bool json = encoding == SceneEncoding::Json;
-  try {
-    return json ? Json::parse(bytes.begin(), bytes.end()) : Json::from_msgpack(bytes);
-  } catch (const Json::exception& error) {
-    fail(Path(), std::string("truncated or not valid ") + (json ? "JSON" : "MessagePack") + ": " +
-                     without_exception_id(error.what()));
-  }
-}
-
 Json point_tree(const Vec3& point) { return Json::array({point.x, point.y, point.z}); }
 
 Json material_tree(const Material& material) {
@@ -739,7 +730,7 @@ SceneEncoding encoding_for_path(const std::string& path) {
 
 SceneDocument parse_scene_document(const std::vector<std::uint8_t>& bytes, SceneEncoding encoding,
                                    const ReadOptions& options) {
-  return read_tree(decode(bytes, encoding), options);
+  return read_tree(decode_scene_tree(bytes, encoding), options);
 }
 
 Scene parse_scene(const std::vector<std::uint8_t>& bytes, SceneEncoding encoding,

@@ -35,6 +35,7 @@ Space::Space(TetMesh mesh, std::vector<Material> materials, EngineSettings setti
 }
 
 Space Space::from_scene(const Scene& scene) {
+  check_safety_limits(scene.safety);
   EngineSettings settings;
   settings.stiffness_N_per_mm = scene.stiffness_N_per_mm;
   settings.servo_rate_Hz = scene.servo_rate_Hz;

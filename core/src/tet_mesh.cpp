@@ -45,6 +45,7 @@ TetMesh::TetMesh(std::vector<Vec3> vertices_mm, std::vector<std::array<std::int3
       materials_(std::move(tet_materials)) {
   check_in_range(setting_range::kTolerance, tolerance_mm, "tolerance_mm");
   validate_and_orient();
+  reject_duplicate_tets();
   Aabb box;
   for (const Vec3& v : vertices_) box.grow(v);
   tolerance_ = tolerance_mm > 0.0 ? tolerance_mm : kRelativeTolerance * norm(box.hi - box.lo);
@@ -52,6 +53,7 @@ TetMesh::TetMesh(std::vector<Vec3> vertices_mm, std::vector<std::array<std::int3
   build_edges();
   build_vertex_fans();
   build_trees();
+  reject_overlapping_tets();
   compute_stats();
 }
 
@@ -109,6 +111,53 @@ void TetMesh::validate_and_orient() {
   }
 }
 
+// A tet listed twice leaves the body without boundary faces: the proxy would
+// pass through it with zero force (issue 8, defect 8).
+void TetMesh::reject_duplicate_tets() const {
+  std::vector<std::pair<std::array<std::int32_t, 4>, std::int32_t>> sorted(tets_.size());
+  for (std::size_t t = 0; t < tets_.size(); ++t) {
+    auto key = tets_[t];
+    std::sort(key.begin(), key.end());
+    sorted[t] = {key, static_cast<std::int32_t>(t)};
+  }
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t k = 1; k < sorted.size(); ++k) {
+    if (sorted[k].first != sorted[k - 1].first) continue;
+    const auto& v = sorted[k].first;
+    throw MeshError("tets " + std::to_string(sorted[k - 1].second) + " and " +
+                        std::to_string(sorted[k].second) + " are the same tet (vertices " +
+                        std::to_string(v[0]) + ", " + std::to_string(v[1]) + ", " +
+                        std::to_string(v[2]) + ", " + std::to_string(v[3]) + ")",
+                    sorted[k].second);
+  }
+}
+
+// Interiors must be disjoint. Tets across a face are separated by its plane
+// (build_faces rejects folds); for the rest, five points well inside each tet
+// (its centroid and the midpoints from there to its vertices) must lie in no
+// other tet by more than the tolerance. A sampled test: it finds every
+// duplicate-like or substantial overlap, not a sliver-thin one (decisions.md).
+void TetMesh::reject_overlapping_tets() const {
+  for (std::size_t t = 0; t < tets_.size(); ++t) {
+    const auto& tv = tets_[t];
+    const Vec3 centroid =
+        (vertices_[tv[0]] + vertices_[tv[1]] + vertices_[tv[2]] + vertices_[tv[3]]) * 0.25;
+    std::array<Vec3, 5> samples{centroid};
+    for (int k = 0; k < 4; ++k) samples[k + 1] = (centroid + vertices_[tv[k]]) * 0.5;
+    const auto self = static_cast<std::int32_t>(t);
+    for (const Vec3& sample : samples) {
+      tet_tree_.for_each_containing(sample, 0.0, [&](std::int32_t other) {
+        if (other == self || outside_distance(other, sample) >= -tolerance_) return;
+        throw MeshError("tets " + std::to_string(std::min(self, other)) + " and " +
+                            std::to_string(std::max(self, other)) +
+                            " overlap (a point well inside tet " + std::to_string(self) +
+                            " is inside tet " + std::to_string(other) + ")",
+                        std::max(self, other));
+      });
+    }
+  }
+}
+
 void TetMesh::build_faces() {
   const std::size_t n = tets_.size();
   planes_.resize(4 * n);
@@ -142,11 +191,23 @@ void TetMesh::build_faces() {
     Vec3 normal = cross(vertices_[key[1]] - a, vertices_[key[2]] - a);
     normal = normal / norm(normal);
     const double offset = dot(normal, a);
+    std::array<bool, 2> flipped{};
     for (std::size_t j = k; j < end; ++j) {
       const auto& item = faces[j];
       const Vec3& opposite = vertices_[tets_[item.tet][item.local]];
       const bool flip = dot(normal, opposite) - offset > 0.0;
+      flipped[j - k] = flip;
       planes_[4 * item.tet + item.local] = flip ? Plane{-normal, -offset} : Plane{normal, offset};
+    }
+    // Two tets on the same side of their shared face overlap and would get
+    // the same plane: the walk could not leave one for the other.
+    if (end - k == 2 && flipped[0] == flipped[1]) {
+      throw MeshError("tets " + std::to_string(faces[k].tet) + " and " +
+                          std::to_string(faces[k + 1].tet) +
+                          " lie on the same side of their shared face (vertices " +
+                          std::to_string(key[0]) + ", " + std::to_string(key[1]) + ", " +
+                          std::to_string(key[2]) + "): the mesh is folded",
+                      std::max(faces[k].tet, faces[k + 1].tet));
     }
     if (end - k == 2) {
       const auto& f0 = faces[k];

@@ -147,6 +147,23 @@ TEST(SpaceValidation, RejectsSettingsOutsideTheirRange) {
   EXPECT_EQ(space_with(settings), "max_transitions_per_tick: must be <= 10000, got 1e+09");
 }
 
+TEST(SpaceValidation, FromSceneChecksTheSafetyLimits) {
+  Scene scene;
+  const MeshData mesh = two_tets_mesh(10.0);
+  scene.vertices_mm = mesh.vertices_mm;
+  scene.tets = mesh.tets;
+  scene.tet_materials = {0, 0};
+  scene.materials = {testing::free_material()};
+  EXPECT_EQ(invalid_argument_of([&] { Space::from_scene(scene); }), "");
+  scene.safety.max_force_N = kInf;
+  EXPECT_EQ(invalid_argument_of([&] { Space::from_scene(scene); }),
+            "max_force_N: not a finite number");
+  scene.safety.max_force_N = 5.0;
+  scene.safety.ramp_time_s = -1.0;
+  EXPECT_EQ(invalid_argument_of([&] { Space::from_scene(scene); }),
+            "ramp_time_s: must be >= 0, got -1");
+}
+
 TEST(TetMeshValidation, RejectsAToleranceThatIsNotAToleranceAnyMore) {
   const MeshData mesh = two_tets_mesh(10.0);
   const auto mesh_with = [&](double tolerance_mm) {
@@ -154,9 +171,62 @@ TEST(TetMeshValidation, RejectsAToleranceThatIsNotAToleranceAnyMore) {
   };
   EXPECT_EQ(mesh_with(0.0), "");
   EXPECT_EQ(mesh_with(1e-6), "");
-  EXPECT_EQ(mesh_with(1e6), "tolerance_mm: must be <= 0.001, got 1e+06");
+  EXPECT_EQ(mesh_with(1e-4), "");
+  EXPECT_EQ(mesh_with(1e6), "tolerance_mm: must be <= 0.0001, got 1e+06");
   EXPECT_EQ(mesh_with(-1e-9), "tolerance_mm: must be >= 0, got -1e-09");
   EXPECT_EQ(mesh_with(kNan), "tolerance_mm: not a finite number");
+}
+
+}  // namespace
+}  // namespace hapticut
+
+namespace hapticut {
+namespace {
+
+std::string mesh_error_of(const std::vector<Vec3>& vertices,
+                          const std::vector<std::array<std::int32_t, 4>>& tets) {
+  try {
+    TetMesh(vertices, tets, std::vector<std::int32_t>(tets.size(), 0));
+  } catch (const MeshError& error) {
+    return error.what();
+  }
+  return "";
+}
+
+const std::vector<Vec3> kTwoTetVertices{
+    {0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {0, 0, 10}, {10, 10, 10}};
+
+TEST(TetMeshValidation, RejectsATetListedTwice) {
+  EXPECT_EQ(mesh_error_of(kTwoTetVertices, {{0, 1, 2, 3}, {1, 2, 3, 4}, {3, 2, 1, 0}}),
+            "tets 0 and 2 are the same tet (vertices 0, 1, 2, 3)");
+  EXPECT_EQ(mesh_error_of(kTwoTetVertices, {{0, 1, 2, 3}, {0, 1, 2, 3}}),
+            "tets 0 and 1 are the same tet (vertices 0, 1, 2, 3)");
+}
+
+TEST(TetMeshValidation, RejectsTwoTetsOnTheSameSideOfTheirSharedFace) {
+  std::vector<Vec3> vertices = kTwoTetVertices;
+  vertices.push_back({1, 1, 1});  // On vertex 0's side of the face (1, 2, 3).
+  EXPECT_EQ(mesh_error_of(vertices, {{0, 1, 2, 3}, {1, 2, 3, 5}}),
+            "tets 0 and 1 lie on the same side of their shared face (vertices 1, 2, 3): the mesh "
+            "is folded");
+}
+
+TEST(TetMeshValidation, RejectsOverlappingTetsWithTheirIndices) {
+  std::vector<Vec3> vertices = kTwoTetVertices;
+  for (int k = 0; k < 4; ++k) vertices.push_back(kTwoTetVertices[k] + Vec3{1, 1, 1});
+  EXPECT_EQ(mesh_error_of(vertices, {{0, 1, 2, 3}, {1, 2, 3, 4}, {5, 6, 7, 8}}),
+            "tets 0 and 2 overlap (a point well inside tet 0 is inside tet 2)");
+  // Apart, the same tets are a valid mesh.
+  for (int k = 5; k < 9; ++k) vertices[k] = vertices[k] + Vec3{50, 0, 0};
+  EXPECT_EQ(mesh_error_of(vertices, {{0, 1, 2, 3}, {1, 2, 3, 4}, {5, 6, 7, 8}}), "");
+}
+
+TEST(TetMeshValidation, AcceptsEveryReferenceMesh) {
+  for (const MeshData& mesh : {two_tets_mesh(10.0), edge_fan_mesh(12, 10.0, 10.0), cube_mesh(10.0),
+                               vertex_fan_mesh(2, 10.0), double_cone_mesh(10, 10.0, 10.0),
+                               grid_mesh({0, 5, 10}, {0, 5, 10}, {0, 5, 10}, 0.3, 21)}) {
+    EXPECT_EQ(mesh_error_of(mesh.vertices_mm, mesh.tets), "");
+  }
 }
 
 }  // namespace

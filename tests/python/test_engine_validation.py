@@ -43,7 +43,7 @@ def test_space_rejects_missing_and_unknown_material_fields():
         ("max_transitions_per_tick", 1_000_000_000, "max_transitions_per_tick: must be <= 10000"),
         ("max_transitions_per_tick", 0, "max_transitions_per_tick: must be >= 1, got 0"),
         ("capped_tick_force_N", -1.0, "capped_tick_force_N: must be > 0, got -1"),
-        ("tolerance_mm", 1e6, "tolerance_mm: must be <= 0.001, got 1e+06"),
+        ("tolerance_mm", 1e6, "tolerance_mm: must be <= 0.0001, got 1e+06"),
         ("tolerance_mm", math.nan, "tolerance_mm: not a finite number"),
         ("tolerance_mm", -1.0, "tolerance_mm: must be >= 0, got -1"),
     ],
@@ -55,4 +55,4 @@ def test_space_rejects_settings_outside_their_range(setting, value, message):
 
 def test_space_accepts_the_defaults_and_the_bounds():
     assert space().tet_count == 2
-    assert space(stiffness_N_per_mm=100.0, tolerance_mm=0.001).stiffness_N_per_mm == 100.0
+    assert space(stiffness_N_per_mm=100.0, tolerance_mm=0.0001).stiffness_N_per_mm == 100.0

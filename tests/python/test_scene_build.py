@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import time
 from dataclasses import replace
 
 import numpy as np
@@ -139,13 +138,18 @@ def test_progress_runs_from_0_to_1_and_a_cancel_stops_the_build():
     assert fractions == sorted(fractions) and fractions[-1] == 1.0
     assert any("tetrahedraliz" in m for _, m in seen)
 
+    polled = []
+
     def cancel_while_tetwild_runs(fraction, message):
+        polled.append(message)
         return "fTetWild," not in message  # The messages polled while the child process runs.
 
-    start = time.perf_counter()
+    # No timed assertion (speed belongs to benchmarks): the build stops at the first poll
+    # during fTetWild, and no later step runs.
     with pytest.raises(BuildCancelled):
         build([region], settings=BuildSettings(accuracy_mm=0.2), progress=cancel_while_tetwild_runs)
-    assert time.perf_counter() - start < 30
+    assert "fTetWild," in polled[-1]
+    assert sum("fTetWild," in m for m in polled) == 1
 
 
 def test_regions_sharing_a_material_share_its_entry():

@@ -125,11 +125,12 @@ def test_nan_written_by_python_is_rejected_by_both():
     tree["mesh"]["vertices"][3][1] = math.nan
     packed = msgpack.packb(tree)
     assert core_error(packed, MSGPACK) == "/mesh/vertices/3/1: not a finite number"
-    # json.dumps writes a NaN literal: C++ rejects the text where it stands, Python names the field.
+    # json.dumps writes a NaN literal, which is not JSON: both readers reject the text alike.
     text = json.dumps(tree).encode()
     assert core_error(text, JSON).startswith("(root): truncated or not valid JSON: ")
-    with pytest.raises(SceneError, match=r"^/mesh/vertices/3/1: not a finite number$"):
+    with pytest.raises(SceneError) as from_python:
         parse_scene(text, JSON)
+    assert str(from_python.value) == core_error(text, JSON)
 
 
 def test_inverted_tet_both_ways():

@@ -136,10 +136,25 @@ def test_truncated_file(encoding, fraction):
 @pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])
 @pytest.mark.parametrize("encoding", [JSON, MSGPACK])
 def test_non_finite_coordinate(value, encoding):
-    # Python's json writes NaN and Infinity literals; MessagePack carries them natively.
+    # MessagePack carries NaN and infinities natively. JSON has none: the NaN and Infinity
+    # literals Python's json writes, and a number beyond the double range such as 1e999, are not
+    # read as JSON by either reader (both decode with the C++ decoder).
     tree = example_tree()
     tree["mesh"]["vertices"][3][1] = value
-    assert error_of(encode(tree, encoding), encoding) == "/mesh/vertices/3/1: not a finite number"
+    if encoding == MSGPACK:
+        assert (
+            error_of(encode(tree, encoding), encoding) == "/mesh/vertices/3/1: not a finite number"
+        )
+        return
+    assert error_of(encode(tree, encoding), encoding).startswith(
+        "(root): truncated or not valid JSON"
+    )
+    tree["mesh"]["vertices"][3][1] = 12345.5
+    text = encode(tree, encoding).replace(b"12345.5", b"1e999" if value > 0 else b"-1e999")
+    if not math.isnan(value):
+        assert error_of(text, encoding).endswith(
+            "number overflow parsing '" + ("1e999'" if value > 0 else "-1e999'")
+        )
 
 
 def test_non_finite_parameter_in_msgpack():

@@ -5,7 +5,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 
-apt_packages=(cmake ninja-build g++ nlohmann-json3-dev libgtest-dev clang-format clang-tidy)
+# clang and its runtime libraries: the scene reader's libFuzzer harness (tests/scripts/fuzz.sh).
+apt_packages=(cmake ninja-build g++ nlohmann-json3-dev libgtest-dev clang-format clang-tidy clang
+  libclang-rt-14-dev)
 missing=()
 for package in "${apt_packages[@]}"; do
   dpkg -s "$package" >/dev/null 2>&1 || missing+=("$package")
@@ -41,3 +43,6 @@ echo "setup: building the C++ tests"
 cmake -S . -B build/tests -G Ninja -DCMAKE_BUILD_TYPE=Release -DHAPTICUT_BUILD_TESTS=ON \
   -DHAPTICUT_BUILD_PYTHON=OFF -DHAPTICUT_NATIVE=ON >/dev/null
 cmake --build build/tests
+
+echo "setup: building the C++ tests with AddressSanitizer and UndefinedBehaviorSanitizer (build/asan)"
+bash tests/scripts/sanitizers.sh build

@@ -8,12 +8,11 @@ files with the same checks and wording.
 
 from __future__ import annotations
 
-import json
 import logging
 import os
 from pathlib import Path
 
-import msgpack
+from hapticut import _core
 
 from ..atomic_file import write_atomically
 from .model import (
@@ -101,13 +100,10 @@ def _checked(encoding: str) -> str:
 
 
 def _decode(data: bytes, encoding: str):
-    if _checked(encoding) == JSON:
-        try:
-            # NaN and Infinity literals are accepted here so that the checks can name the field.
-            return json.loads(bytes(data).decode("utf-8-sig"))
-        except (ValueError, RecursionError) as error:  # JSONDecodeError, UnicodeDecodeError
-            raise SceneError("(root)", f"truncated or not valid JSON: {error}") from None
+    """The tree in ``data``, decoded by the C++ decoder the C++ reader uses too (scene_tree.h):
+    nesting bounded, duplicate keys, invalid UTF-8, NUL bytes and trailing bytes rejected, so
+    both readers see every file the same way."""
     try:
-        return msgpack.unpackb(data, raw=False)
-    except Exception as error:  # msgpack raises many types for bad input.
-        raise SceneError("(root)", f"truncated or not valid MessagePack: {error}") from None
+        return _core.decode_scene_tree(bytes(data), _checked(encoding))
+    except _core.SceneError as error:
+        raise SceneError(error.field, error.reason) from None

@@ -117,21 +117,24 @@ def signed_volumes6(vertices: np.ndarray, tets: np.ndarray) -> tuple[np.ndarray,
     Operation for operation the arithmetic of TetMesh and scene_io.cpp (dot, cross and norm of
     vec3.h, evaluated left to right), so all three classify the same tets as flat.
     """
-    a, b, c, d = (vertices[tets[:, k]] for k in range(4))
-    e1, e2, e3 = b - a, c - a, d - a
-    cross_x = e2[:, 1] * e3[:, 2] - e2[:, 2] * e3[:, 1]
-    cross_y = e2[:, 2] * e3[:, 0] - e2[:, 0] * e3[:, 2]
-    cross_z = e2[:, 0] * e3[:, 1] - e2[:, 1] * e3[:, 0]
-    det = e1[:, 0] * cross_x + e1[:, 1] * cross_y + e1[:, 2] * cross_z
-    volume6 = 6.0 * (det / 6.0)
-    corners = (a, b, c, d)
-    longest = np.zeros(len(tets))
-    for i, j in TET_EDGES:
-        edge = corners[i] - corners[j]
-        length = np.sqrt(
-            edge[:, 0] * edge[:, 0] + edge[:, 1] * edge[:, 1] + edge[:, 2] * edge[:, 2]
-        )
-        longest = np.maximum(longest, length)
+    # Huge finite coordinates overflow to inf or NaN here exactly as in C++, where the volume
+    # test then says "zero volume"; numpy's warnings about it say nothing new.
+    with np.errstate(over="ignore", invalid="ignore"):
+        a, b, c, d = (vertices[tets[:, k]] for k in range(4))
+        e1, e2, e3 = b - a, c - a, d - a
+        cross_x = e2[:, 1] * e3[:, 2] - e2[:, 2] * e3[:, 1]
+        cross_y = e2[:, 2] * e3[:, 0] - e2[:, 0] * e3[:, 2]
+        cross_z = e2[:, 0] * e3[:, 1] - e2[:, 1] * e3[:, 0]
+        det = e1[:, 0] * cross_x + e1[:, 1] * cross_y + e1[:, 2] * cross_z
+        volume6 = 6.0 * (det / 6.0)
+        corners = (a, b, c, d)
+        longest = np.zeros(len(tets))
+        for i, j in TET_EDGES:
+            edge = corners[i] - corners[j]
+            length = np.sqrt(
+                edge[:, 0] * edge[:, 0] + edge[:, 1] * edge[:, 1] + edge[:, 2] * edge[:, 2]
+            )
+            longest = np.maximum(longest, length)
     return volume6, longest
 
 

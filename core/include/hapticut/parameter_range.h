@@ -8,6 +8,8 @@
 #include <string>
 #include <string_view>
 
+#include "hapticut/scene.h"
+
 namespace hapticut {
 
 struct ParameterRange {
@@ -57,14 +59,15 @@ inline constexpr ParameterRange kServoRate{
     100000.0,
     1000.0,
     "servo ticks per second (haptic loops run at 0.5 to 10 kHz)"};
-// 0 derives the tolerance from the mesh size (1e-9 x its bounding-box diagonal);
-// above a micrometre the tolerance would let a proxy sink visibly into bone.
+// 0 derives the tolerance from the mesh size (1e-9 x its bounding-box diagonal).
+// The walk may sink 100 tolerances into rigid material (docs/decisions.md):
+// 0.1 um keeps that at 10 um, below what a haptic device resolves.
 inline constexpr ParameterRange kTolerance{
     "tolerance_mm",
     "mm",
     0.0,
     false,
-    0.001,
+    0.0001,
     0.0,
     "tolerance of the geometric tests; 0 derives it from the mesh size"};
 inline constexpr ParameterRange kMaxForce{
@@ -90,5 +93,9 @@ inline constexpr ParameterRange kCappedTickForce{
     "capped_tick_force_N", "N", 0.0, true, 100.0, 1.0, "per-point force limit on a capped tick"};
 
 }  // namespace setting_range
+
+// Throws std::invalid_argument naming the first limit outside its range; the
+// servo's safety layer takes only checked limits (Space::from_scene calls it).
+void check_safety_limits(const SafetyLimits& limits);
 
 }  // namespace hapticut

@@ -84,9 +84,11 @@ class TetMesh {
  public:
   // Validates and precomputes. Throws MeshError naming the offending index for:
   // an index out of range, a NaN/inf coordinate, a zero-volume tet, a face
-  // shared by more than two tets, a material index < 0. tolerance_mm = 0
+  // shared by more than two tets, a material index < 0, a tet listed twice,
+  // two tets on the same side of their shared face (folded), two tets whose
+  // interiors overlap (sampled: see reject_overlapping_tets). tolerance_mm = 0
   // derives the tolerance from the mesh size (kRelativeTolerance x bbox diagonal);
-  // a tolerance outside setting_range::kTolerance (negative, NaN, above 1 um)
+  // a tolerance outside setting_range::kTolerance (negative, NaN, above 0.1 um)
   // throws std::invalid_argument.
   TetMesh(std::vector<Vec3> vertices_mm, std::vector<std::array<std::int32_t, 4>> tets,
           std::vector<std::int32_t> tet_materials, double tolerance_mm = 0.0);
@@ -152,6 +154,8 @@ class TetMesh {
 
  private:
   void validate_and_orient();
+  void reject_duplicate_tets() const;
+  void reject_overlapping_tets() const;
   void build_faces();
   void build_edges();
   void build_vertex_fans();

@@ -138,8 +138,12 @@ def test_import_shows_a_scene_made_elsewhere(built):
     scene, _, _ = built
     example = str(blender_scene.REPO / "examples" / "finger.hapticut.msgpack")
     assert bpy.ops.hapticut.import_scene(filepath=example) == {"FINISHED"}
-    names = {o["hapticut_material"] for o in bpy.data.collections["Hapticut Preview"].objects}
+    objects = bpy.data.collections["Hapticut Preview"].objects
+    names = {o["hapticut_material"] for o in objects}
     assert names == {"skin", "flesh", "bone"}  # The example's own material names.
+    # The build's preview was replaced, not added to: its meshes are gone too.
+    assert len(objects) == 3
+    assert "Hapticut soft_tissue" not in bpy.data.meshes
     assert json.loads(scene.hapticut.report_json)["tets"] > 1000
 
 

@@ -1,0 +1,29 @@
+// Decoding a scene file's bytes (JSON or MessagePack) into one tree, the
+// first step of both readers: scene_io.cpp checks the tree in C++, and
+// hapticut/scene/tree_reader.py checks the same tree after the bindings hand
+// it to Python, so both languages see the same bytes the same way.
+//
+// The decoder trusts nothing (docs/decisions.md, "Reader limits"): nesting is
+// bounded (kMaxSceneNesting), objects are built in linear time, a duplicate
+// key, invalid UTF-8 in a string or key, a NUL byte in JSON text and trailing
+// bytes after the value are errors. Every failure throws SceneError; its
+// message never echoes the offending bytes.
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "hapticut/scene_io.h"
+
+namespace hapticut {
+
+using SceneTree = nlohmann::ordered_json;
+
+// Arrays and objects inside each other, the root counting as level 1. A scene
+// needs 4 (root, mesh, vertices, vertex); metadata may use the rest.
+inline constexpr int kMaxSceneNesting = 64;
+
+SceneTree decode_scene_tree(const std::vector<std::uint8_t>& bytes, SceneEncoding encoding);
+
+}  // namespace hapticut

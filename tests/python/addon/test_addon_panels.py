@@ -1,0 +1,97 @@
+"""The panels' draw code against the real properties and operators (background mode draws
+nothing, so a layout that checks each call stands in for Blender's), and Set Cutting Edge."""
+
+import json
+import types
+
+import blender_scene
+import bpy
+import pytest
+
+
+class CheckingLayout:
+    """Records what a panel draws; fails on a property or operator that does not exist."""
+
+    def __init__(self) -> None:
+        self.texts: list[str] = []
+
+    def prop(self, data, name, **options):
+        assert name in data.bl_rna.properties, f"{type(data).__name__} has no {name!r}"
+
+    def operator(self, idname, **options):
+        module, name = idname.split(".")
+        assert hasattr(getattr(bpy.ops, module), name), idname
+        getattr(getattr(bpy.ops, module), name).get_rna_type()  # Raises when unregistered.
+
+    def label(self, text="", **options):
+        self.texts.append(text)
+
+    def progress(self, factor=0.0, type="BAR", text=""):
+        assert 0.0 <= factor <= 1.0
+        self.texts.append(text)
+
+    def template_list(self, list_type, list_id, data, propname, active_data, active_propname):
+        assert hasattr(bpy.types, list_type)
+        assert (
+            propname in data.bl_rna.properties and active_propname in active_data.bl_rna.properties
+        )
+
+    def row(self, **options):
+        return self
+
+
+def draw(panel_class, layout) -> None:
+    panel = types.SimpleNamespace(layout=layout)
+    if hasattr(panel_class, "draw_region"):
+        panel.draw_region = lambda *args: panel_class.draw_region(panel, *args)
+    panel_class.draw(panel, bpy.context)
+
+
+def test_every_panel_draws_for_each_role_and_state(addon, tmp_path):
+    import addon as extension  # noqa: F401 - the add-on's package, registered by the fixture
+    from addon import ui
+
+    scene = blender_scene.finger_scene(str(tmp_path))
+    settings = scene.hapticut
+    settings.report_json = json.dumps({"tets": 10, "boundary_faces": 4, "timings_s": {"total": 1}})
+    for obj_name, preset in (("Skin", None), ("Flesh", "custom"), ("Knife", None)):
+        obj = bpy.data.objects[obj_name]
+        if preset:
+            obj.hapticut.material_preset = preset
+        bpy.context.view_layer.objects.active = obj
+        for running in (False, True):
+            settings.running, settings.progress, settings.stage = running, 0.4, "label"
+            drawn = {}
+            for panel_class in (ui.HAPTICUT_PT_scene, ui.HAPTICUT_PT_object, ui.HAPTICUT_PT_build,
+                                ui.HAPTICUT_PT_report):  # fmt: skip
+                drawn[panel_class] = CheckingLayout()
+                draw(panel_class, drawn[panel_class])
+            assert ("label 40%" in drawn[ui.HAPTICUT_PT_build].texts) == running
+    settings.running = False
+    layout = CheckingLayout()
+    draw(ui.HAPTICUT_PT_report, layout)
+    assert layout.texts[0] == "10 tets, 4 boundary faces"
+    prefs = bpy.context.preferences.addons[blender_scene.ADDON_MODULE].preferences
+    prefs.toolkit_error = "missing"
+    layout = CheckingLayout()
+    type(prefs).draw(types.SimpleNamespace(layout=layout, bl_rna=prefs.bl_rna, **{
+        name: getattr(prefs, name) for name in ("toolkit_path", "toolkit_version", "toolkit_error")
+    }), bpy.context)  # fmt: skip
+    assert any(text.startswith("Install: ") for text in layout.texts)
+    prefs.toolkit_error = ""
+
+
+def test_set_cutting_edge_takes_the_two_selected_vertices(addon, tmp_path):
+    blender_scene.finger_scene(str(tmp_path))
+    knife = bpy.data.objects["Knife"]
+    for vertex in knife.data.vertices:
+        vertex.select = vertex.index in (1, 2)
+    with bpy.context.temp_override(object=knife, active_object=knife):
+        assert bpy.ops.hapticut.set_cutting_edge() == {"FINISHED"}
+    assert (knife.hapticut.edge_vertex_a, knife.hapticut.edge_vertex_b) == (1, 2)
+    knife.data.vertices[0].select = True
+    with (
+        bpy.context.temp_override(object=knife, active_object=knife),
+        pytest.raises(RuntimeError, match="Knife: select exactly two vertices"),
+    ):
+        bpy.ops.hapticut.set_cutting_edge()
