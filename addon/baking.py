@@ -88,21 +88,17 @@ def _new_object(collection, name: str, data):
     return obj
 
 
-def _arrow_mesh():
-    """A unit arrow along +Z (shaft 0.8, head 0.2), radius 0.04 of its length at scale 1."""
+def _arrow_mesh(mm: float):
+    """An arrow along +Z, 1 unit long (shaft 0.8, head 0.2), 0.4 mm thick at the shaft and
+    1 mm at the head whatever its length (it is scaled along Z only)."""
     mesh = bpy.data.meshes.get(ARROW_MESH)
     if mesh is not None:
         return mesh
     sides = 12
     angles = np.linspace(0, 2 * np.pi, sides, endpoint=False)
-    ring = np.stack([np.cos(angles), np.sin(angles), np.zeros(sides)], 1)
+    ring = np.stack([np.cos(angles), np.sin(angles), np.zeros(sides)], 1) / mm
     vertices = np.concatenate(
-        [
-            ring * 0.02,
-            ring * 0.02 + [0, 0, 0.8],
-            ring * 0.06 + [0, 0, 0.8],
-            [[0, 0, 1.0], [0, 0, 0]],
-        ]
+        [ring * 0.2, ring * 0.2 + [0, 0, 0.8], ring * 0.5 + [0, 0, 0.8], [[0, 0, 1.0], [0, 0, 0]]]
     )
     faces = []
     for i in range(sides):
@@ -210,7 +206,7 @@ def bake(scene, link, recording_path: str, preview_path: str) -> dict:
         _keyframes(ideal, frames, {"location": locations, "rotation_quaternion": rotations})
         # The force arrow at the proxies' centre.
         forces = blade["block"]["engine_force_N"][nearest]
-        arrow = _new_object(collection, f"Force {name}", _arrow_mesh())
+        arrow = _new_object(collection, f"Force {name}", _arrow_mesh(mm))
         arrow["hapticut_blade"] = name
         arrow.rotation_mode = "QUATERNION"
         lengths = np.linalg.norm(forces, axis=1) * live.arrow_mm_per_N / mm
@@ -221,7 +217,11 @@ def bake(scene, link, recording_path: str, preview_path: str) -> dict:
             else mathutils.Quaternion()
             for f in forces
         ]
-        scales = [mathutils.Vector((max(s, 1e-6),) * 3) for s in lengths]
+        # Zero force: a flat arrow (hidden), never a zero scale.
+        scales = [
+            mathutils.Vector((1.0, 1.0, max(s, 1e-6))) if s > 0 else mathutils.Vector((1e-6,) * 3)
+            for s in lengths
+        ]
         _keyframes(
             arrow,
             frames,

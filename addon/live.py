@@ -219,13 +219,15 @@ def _finish_simulate(session) -> None:
         "servo_s": time.perf_counter() - job["began"] - job["sampled_s"],
         "sampled_s": job["sampled_s"],
     }
-    if scene is not None and job["bake"]:
+    if scene is None:
+        return
+    scene.hapticut_live.recording_path = job["record"]
+    if job["bake"]:
         try:
             baked = baking.bake(scene, session.link, job["record"], session.preview_path)
             figures["bake_s"] = baked["seconds"]
         except baking.BakeError as error:
             scene.hapticut_live.error = str(error)
-    scene.hapticut_live.recording_path = job["record"]
     figures["total_s"] = time.perf_counter() - job["began"]
     figures["ticks"] = session.status.get("ticks", 0)
     last_simulate = figures
