@@ -133,13 +133,16 @@ def go_live(context) -> None:
             live.rate_Hz,
             settings=_settings(live),
         )
-        if live.force_shading:
-            live_session.request(session, "set_parameters", shading=True)
     except live_session.SessionError as error:
         live.error = str(error)
         raise
     session.preview_path = live.preview_path = preview
     live.error = ""
+    if live.force_shading:  # The servo may refuse it (docs/protocol.md): say why, run on.
+        try:
+            live_session.request(session, "set_parameters", shading=True)
+        except live_session.SessionError as error:
+            live.error = f"force shading not applied: {error}"
 
 
 def engage(engaged: bool) -> None:

@@ -130,3 +130,40 @@ def test_unregister_and_loading_a_file_remove_timer_handler_and_servo(finger, tm
         assert not live_draw.handler_added() and not alive(pid)
     finally:
         blender_scene.enable_addon()
+
+
+def test_the_client_is_the_installed_toolkits_own(finger):
+    import json
+    import subprocess
+
+    import blender_scene
+
+    from addon import live
+
+    found = json.loads(
+        subprocess.run(
+            [blender_scene.toolkit_executable(), "paths", "--json"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
+    )
+    modules = live.link()
+    for module in (
+        modules.servo_client,
+        modules.recording,
+        modules.servo_layout,
+        modules.cut_surface,
+    ):
+        assert os.path.dirname(module.__file__) == found["package"]
+    assert modules.servo == found["servo"]
+
+
+def test_force_shading_refused_by_the_servo_is_said_and_the_session_runs(finger):
+    from addon import live
+
+    finger.hapticut_live.force_shading = True
+    assert bpy.ops.hapticut.go_live() == {"FINISHED"}
+    assert finger.hapticut_live.error.startswith("force shading not applied: ")
+    session = live.current()
+    live_support.follow(lambda: session.frame is not None)
