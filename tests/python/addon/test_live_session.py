@@ -8,6 +8,7 @@ import socket
 
 import bpy
 import live_support
+import numpy as np
 import pytest
 
 
@@ -43,6 +44,12 @@ def test_start_go_live_status_and_stop(finger):
     assert lines[0] == "connected (running), servo running"
     assert any(line.startswith("Knife (viewport, fresh)") for line in lines)
     assert any(line.startswith("Knife: TET") for line in lines)
+    # What the draw handler draws (its batches are made from these arrays, in Blender units).
+    geometry = live_draw.frame_geometry(session.frame, 0.5)
+    q = session.frame.blades["Knife"]["q"]
+    assert geometry["proxies"].shape == (len(q), 3) and geometry["lines"].shape == (2 * len(q), 3)
+    assert np.allclose(geometry["proxies"], q / 0.5, atol=1e-4)
+    assert geometry["force"].shape == (2, 3)
     assert bpy.ops.hapticut.engage_servo(engaged=True) == {"FINISHED"}
     live_support.follow(lambda: session.status.get("engaged") is True)
     pid = session.process.pid

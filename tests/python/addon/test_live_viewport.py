@@ -2,6 +2,7 @@
 object's pose; on the bone the ideal blade stops at its surface while the knife object passes
 through; in the flesh it lags behind."""
 
+import json
 import time
 
 import bpy
@@ -90,3 +91,32 @@ def test_the_servo_follows_the_dragged_knife_and_the_bone_holds_the_ideal_blade(
     moving = session.frame.blades["Knife"]
     lag = moving["p"][:, 1] - moving["q"][:, 1]
     assert np.median(lag) > 0.05
+
+
+def test_record_while_live_then_bake(live_finger):
+    from addon import baking, live
+
+    session = live.current()
+    knife = bpy.data.objects["Knife"]
+    x, z = live_support.KNIFE_X, live_support.DEEPEST_Z
+    drag(knife, (x, 0, 20), (x, 0, 14), 0.1)
+    settle(session, knife, 0.1)
+    assert bpy.ops.hapticut.record_live() == {"FINISHED"}
+    path = session.recording_path
+    live_support.follow(lambda: session.status.get("recording", {}).get("active"))
+    drag(knife, (x, 0, 14), (x, 0, z), 0.8)
+    drag(knife, (x, 0, z), (x, 10, z), 0.6)
+    assert bpy.ops.hapticut.record_live() == {"FINISHED"}  # Stops recording.
+    assert live_finger.hapticut_live.recording_path == path
+    assert bpy.ops.hapticut.bake_recording() == {"FINISHED"}
+    rec = live.link().recording.read_recording(path)
+    assert len(rec) > 1000  # 1.4 s at 1 kHz, recorded by the servo (not the 120 Hz stream).
+    report = json.loads(live_finger.hapticut_live.bake_report)
+    assert report["frames"] == pytest.approx(len(rec) / 1000 * 24, abs=2)
+    assert {o.name for o in baking.baked_objects()} == {"Ideal Knife", "Force Knife", "Cut Knife"}
+    # The last baked frame holds the force arrow where the recording has the proxies' centre.
+    frames, nearest = baking.frame_indices(baking.record_times(rec), 24.0, live_finger.frame_start)
+    live_finger.frame_set(int(frames[-1]))
+    centre = rec.blade("Knife")["q"][nearest[-1]].mean(axis=0)
+    arrow = np.array(bpy.data.objects["Force Knife"].matrix_world.translation)
+    assert np.allclose(arrow, centre, atol=1e-4)
