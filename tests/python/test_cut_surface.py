@@ -129,3 +129,14 @@ def test_a_quad_needs_all_four_corners_cutting():
     states[1, 0] = 1  # Point 0 left its tet at row 1: its quads go.
     surface = cut_surface.sweep(q, states, np.arange(3), np.array([1.0, 2.0, 3.0]), cutting)
     assert len(surface.faces) == 2 * 1
+
+
+def test_the_preview_holds_the_tets_the_bake_locates_in(finger):
+    from hapticut.preview import preview_arrays
+
+    scene, _ = finger
+    arrays = preview_arrays(scene)
+    assert np.array_equal(arrays["tets"], scene.tets)
+    assert np.array_equal(arrays["tet_materials"], scene.tet_materials)
+    assert np.array_equal(arrays["tet_vertices"], scene.vertices)
+    assert arrays["tets"].dtype == np.int32
