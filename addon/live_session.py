@@ -1,10 +1,11 @@
 """A live session: the servo as a child process, its control channel and its state stream.
 
 No bpy and no thread: everything here is called from the main thread (operators and the live
-timer). ``tick`` is the timer's work, bounded by construction: at most ``MAX_DATAGRAMS``
-datagrams and ``BUDGET_S`` of draining, one status request every ``STATUS_INTERVAL_S``.
-A servo that exits or stops answering turns the session ``lost`` with the reason; nothing
-raises out of ``tick``.
+timer). ``tick`` is the timer's work, bounded by construction and never waiting: at most
+``MAX_DATAGRAMS`` datagrams and ``BUDGET_S`` of draining; the poses and a status request
+every ``STATUS_INTERVAL_S`` are sent without waiting for their replies (read by the next
+ticks; at most ``MAX_UNANSWERED`` outstanding). A servo that exits or stops answering turns
+the session ``lost`` with the reason; nothing raises out of ``tick``.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ BUDGET_S = 0.002
 STATUS_INTERVAL_S = 0.25
 STARTUP_TIMEOUT_S = 15.0
 REPLY_TIMEOUT_S = 5.0
+MAX_UNANSWERED = 64
 # Exit codes of hapticut-servo (docs/servo.md).
 EXIT_NETWORK = 5
 
@@ -46,6 +48,7 @@ class Session:
     recording_path: str = ""  # The recording being written (or last written).
     simulate: dict | None = None  # While a stroke simulates: what the bake needs.
     last_status_s: float = 0.0
+    status_pending: bool = False
     frames_drawn: int = 0
     tick_costs_s: list = field(default_factory=list)
     frame_ages_s: list = field(default_factory=list)
@@ -213,17 +216,26 @@ def tick(session: Session, poses: dict[str, list[float]] | None = None) -> bool:
         lose(session, "the servo exited")
         return False
     new = False
+    client = session.client
     try:
-        frame = session.client.poll_newest(MAX_DATAGRAMS, BUDGET_S)
+        for reply in client.replies():
+            if reply.get("type") == "status" and reply.get("ok"):
+                session.status, session.status_pending = reply, False
+            elif not reply.get("ok"):
+                session.status_pending = session.status_pending and reply.get("type") != "status"
+                session.error = f"{reply.get('type')}: {reply.get('error', 'failed')}"
+        frame = client.poll_newest(MAX_DATAGRAMS, BUDGET_S)
         if frame is not None:
             session.frame, new = frame, True
             session.frame_ages_s.append(time.monotonic() - float(frame.header["servo_time_s"]))
-        for blade, pose in (poses or {}).items():
-            session.client.send_pose(blade, pose)
+        if client.unanswered < MAX_UNANSWERED:
+            for blade, pose in (poses or {}).items():
+                client.send_request("pose", blade=blade, pose=[float(x) for x in pose], buttons=0)
         now = time.monotonic()
-        if now - session.last_status_s >= STATUS_INTERVAL_S:
+        if not session.status_pending and now - session.last_status_s >= STATUS_INTERVAL_S:
             session.last_status_s = now
-            session.status = session.client.status()
+            session.status_pending = True
+            client.send_request("status")
     except session.link.servo_client.ServoError as error:
         if "closed the connection" in str(error):
             lose(session, str(error))
