@@ -2,6 +2,7 @@
 port and a missing toolkit said plainly; the servo killed mid-session shows as lost and Start
 recovers; unregister and loading another file leave no timer, handler or process."""
 
+import json
 import os
 import signal
 import socket
@@ -174,3 +175,46 @@ def test_force_shading_refused_by_the_servo_is_said_and_the_session_runs(finger)
     assert finger.hapticut_live.error.startswith("force shading not applied: ")
     session = live.current()
     live_support.follow(lambda: session.frame is not None)
+
+
+def test_the_live_panels_draw_in_every_state(finger):
+    import types
+
+    from test_addon_panels import CheckingLayout, draw
+
+    from addon import live, ui_live
+
+    class Layout(CheckingLayout):
+        def operator(self, idname, **options):
+            super().operator(idname, **options)
+            return types.SimpleNamespace()  # Its properties, set by the panel.
+
+    def texts() -> list[str]:
+        drawn = []
+        for panel_class in (ui_live.HAPTICUT_PT_live, ui_live.HAPTICUT_PT_bake):
+            layout = Layout()
+            draw(panel_class, layout)
+            drawn += layout.texts
+        return drawn
+
+    for mode in ("VIEWPORT", "CUSTOM"):
+        finger.hapticut_live.device_mode = mode
+        assert "not connected" in texts()
+    finger.hapticut_live.device_mode = "VIEWPORT"
+    assert bpy.ops.hapticut.go_live() == {"FINISHED"}
+    session = live.current()
+    live_support.follow(lambda: session.frame is not None and session.status.get("blades"))
+    assert any(text.startswith("connected (running)") for text in texts())
+    finger.hapticut_live.bake_report = json.dumps(
+        {
+            "frames": 3,
+            "ticks": 100,
+            "seconds": 0.1,
+            "blades": {"Knife": {"cut_faces": 4, "max_force_N": 1.0}},
+        }
+    )
+    assert "Knife: 4 cut faces, max force 1.00 N" in texts()
+    os.kill(session.process.pid, signal.SIGKILL)
+    session.process.wait(10)
+    live.timer()
+    assert "Start to recover" in texts()
