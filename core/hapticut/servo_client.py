@@ -294,8 +294,8 @@ class ServoClient:
     def poll_newest(self, max_datagrams: int = 64, budget_s: float = 0.002) -> Frame | None:
         """The newest frame among at most ``max_datagrams`` waiting datagrams, read for at most
         ``budget_s``; None when none came. Bounded by construction (a timer of the add-on
-        calls it): only the newest datagram is parsed whole, the rest are left for the next
-        call or, once stale, overwritten by the kernel's newer ones."""
+        calls it): only the newest datagram read is parsed whole; datagrams beyond the bound
+        wait for the next call."""
         if self._stream is None:
             return None
         began = time.monotonic()
