@@ -110,9 +110,12 @@ def test_record_while_live_then_bake(live_finger):
     assert live_finger.hapticut_live.recording_path == path
     assert bpy.ops.hapticut.bake_recording() == {"FINISHED"}
     rec = live.link().recording.read_recording(path)
-    assert len(rec) > 1000  # 1.4 s at 1 kHz, recorded by the servo (not the 120 Hz stream).
+    # About 1.4 s at 1 kHz, recorded by the servo (not the 120 Hz stream; a loaded machine
+    # skips late ticks).
+    assert len(rec) > 500
+    span_s = rec.ticks["time_s"][-1] - rec.ticks["time_s"][0]
     report = json.loads(live_finger.hapticut_live.bake_report)
-    assert report["frames"] == pytest.approx(len(rec) / 1000 * 24, abs=2)
+    assert report["frames"] == int(span_s * 24 + 1e-9) + 1
     assert {o.name for o in baking.baked_objects()} == {"Ideal Knife", "Force Knife", "Cut Knife"}
     # The last baked frame holds the force arrow where the recording has the proxies' centre.
     frames, nearest = baking.frame_indices(baking.record_times(rec), 24.0, live_finger.frame_start)
