@@ -1,22 +1,43 @@
-"""Hapticut for Blender: mark regions and blades, tetrahedralize, preview, export.
+"""Hapticut for Blender: mark regions and blades, tetrahedralize, preview, export; then run
+the scene live on the servo, simulate a keyframed stroke, bake it (docs/addon.md).
 
 Thin by design (DESIGN.md): every algorithm runs in the ``hapticut`` toolkit, a child
-process; this package is pure Python (standard library and Blender's numpy).
+process, or in its numpy-only modules loaded from the installed toolkit (toolkit_link); this
+package is pure Python (standard library and Blender's numpy).
 """
 
 from __future__ import annotations
 
 import bpy
 
-from . import build_job, operators, preferences, properties, toolkit, ui
+from . import (
+    build_job,
+    live,
+    live_properties,
+    operators,
+    preferences,
+    properties,
+    toolkit,
+    ui,
+    ui_live,
+)
 
-classes = (*properties.classes, *preferences.classes, *operators.classes, *ui.classes)
+classes = (
+    *properties.classes,
+    *live_properties.classes,
+    *preferences.classes,
+    *operators.classes,
+    *ui.classes,
+    *ui_live.classes,
+)
 
 
 def register() -> None:
     for cls in classes:
         bpy.utils.register_class(cls)
     properties.attach()
+    live_properties.attach()
+    live.add_handlers()
     if not bpy.app.background:  # Read the material table once, soon after startup.
         bpy.app.timers.register(_read_material_table, first_interval=1.0)
 
@@ -33,9 +54,12 @@ def _read_material_table():
 
 
 def unregister() -> None:
+    live.shutdown()
+    live.remove_handlers()
     if bpy.app.timers.is_registered(_read_material_table):
         bpy.app.timers.unregister(_read_material_table)
     build_job.cancel_all()
+    live_properties.detach()
     properties.detach()
     for cls in reversed(classes):
         bpy.utils.unregister_class(cls)

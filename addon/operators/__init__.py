@@ -1,12 +1,21 @@
 """One operator per module; ``classes`` in registration order."""
 
+from .bake_recording import HAPTICUT_OT_bake_recording
 from .cancel_build import HAPTICUT_OT_cancel_build
 from .check_scene import HAPTICUT_OT_check_scene
 from .check_toolkit import HAPTICUT_OT_check_toolkit
+from .clear_bake import HAPTICUT_OT_clear_bake
+from .engage_servo import HAPTICUT_OT_engage_servo
 from .export_scene import HAPTICUT_OT_export_scene
+from .go_live import HAPTICUT_OT_go_live
 from .import_scene import HAPTICUT_OT_import_scene
+from .open_servo_log import HAPTICUT_OT_open_servo_log
+from .record_live import HAPTICUT_OT_record_live
 from .set_custom_material import HAPTICUT_OT_set_custom_material
 from .set_cutting_edge import HAPTICUT_OT_set_cutting_edge
+from .simulate_stroke import HAPTICUT_OT_simulate_stroke
+from .start_servo import HAPTICUT_OT_start_servo
+from .stop_servo import HAPTICUT_OT_stop_servo
 from .tetrahedralize import HAPTICUT_OT_tetrahedralize
 
 classes = (
@@ -18,4 +27,13 @@ classes = (
     HAPTICUT_OT_cancel_build,
     HAPTICUT_OT_export_scene,
     HAPTICUT_OT_import_scene,
+    HAPTICUT_OT_start_servo,
+    HAPTICUT_OT_stop_servo,
+    HAPTICUT_OT_go_live,
+    HAPTICUT_OT_engage_servo,
+    HAPTICUT_OT_record_live,
+    HAPTICUT_OT_simulate_stroke,
+    HAPTICUT_OT_bake_recording,
+    HAPTICUT_OT_clear_bake,
+    HAPTICUT_OT_open_servo_log,
 )

@@ -19,6 +19,7 @@ COMMAND_MODULES = (
     "preview",
     "convert",
     "serve",
+    "paths",
 )
 
 

@@ -4,7 +4,9 @@ The add-on reads it with numpy alone (no compiled code inside Blender). Arrays:
 ``vertices`` (n, 3) float64 mm; ``faces`` (f, 3) int32 into vertices, oriented out of their
 material; ``face_materials`` (f,) int32 index into the names; ``material_names`` and
 ``material_models`` (k,) unicode. Air (material 0) has no surface of its own; a face between
-two materials appears once for each, oriented out of each.
+two materials appears once for each, oriented out of each. The tets themselves too, for the
+cut surface of a bake (hapticut.cut_surface): ``tet_vertices`` (m, 3) float64 mm, ``tets``
+(t, 4) int32, ``tet_materials`` (t,) int32.
 """
 
 from __future__ import annotations
@@ -37,6 +39,9 @@ def preview_arrays(scene) -> dict[str, np.ndarray]:
         "face_materials": np.concatenate(owners) if owners else np.zeros(0, np.int32),
         "material_names": np.array([m.name for m in scene.materials], dtype=str),
         "material_models": np.array([m.model for m in scene.materials], dtype=str),
+        "tet_vertices": np.asarray(scene.vertices, np.float64),
+        "tets": np.asarray(scene.tets, np.int32),
+        "tet_materials": np.asarray(scene.tet_materials, np.int32),
     }
 
 

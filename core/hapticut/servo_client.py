@@ -81,6 +81,13 @@ def parse_frame(data: bytes, names: Sequence[str] | None = None, received_s: flo
     return Frame(header, blades, received_s)
 
 
+def _sequence_of(data: bytes) -> int | None:
+    """A datagram's frame sequence from its header alone, or None when it is no frame."""
+    if len(data) < layout.FRAME_HEADER.itemsize or data[:4] != layout.FRAME_MAGIC:
+        return None
+    return int(struct.unpack_from("<Q", data, 16)[0])
+
+
 class ServoClient:
     """The control channel (TCP, length-prefixed JSON) and the stream (UDP)."""
 
@@ -98,9 +105,13 @@ class ServoClient:
         self.blade_names: list[str] = []
         self.frames_received = 0
         self.bad_datagrams = 0
+        self.datagrams_read = 0
         self._sock: socket.socket | None = None
         self._stream: socket.socket | None = None
         self._next_id = 0
+        self._inbox = b""  # Bytes of replies read ahead (send_request / replies).
+        self._unanswered = 0  # Requests sent by send_request whose replies were not read.
+        self._early: list[dict] = []  # Their replies, read while request() waited for its own.
 
     # Connection.
     def connect(self) -> ServoClient:
@@ -141,7 +152,9 @@ class ServoClient:
 
     def _receive_exactly(self, n: int) -> bytes:
         assert self._sock is not None
-        chunks = []
+        chunks = [self._inbox[:n]]
+        self._inbox = self._inbox[n:]
+        n -= len(chunks[0])
         while n:
             chunk = self._sock.recv(n)
             if not chunk:
@@ -155,10 +168,55 @@ class ServoClient:
         self._next_id += 1
         message = {"type": message_type, "id": self._next_id, **fields}
         self.send_message(message)
+        while self._unanswered:  # Replies come in order: the earlier ones first.
+            self._early.append(self.receive_message())
+            self._unanswered -= 1
         reply = self.receive_message()
         if check and not reply.get("ok"):
             raise ServoError(f"{message_type}: {reply.get('error', 'failed')}")
         return reply
+
+    def send_request(self, message_type: str, **fields) -> int:
+        """Send one message without waiting for its reply (``replies`` returns it); its id."""
+        self._next_id += 1
+        self.send_message({"type": message_type, "id": self._next_id, **fields})
+        self._unanswered += 1
+        return self._next_id
+
+    @property
+    def unanswered(self) -> int:
+        """Requests sent by ``send_request`` whose replies ``replies`` has not returned yet."""
+        return self._unanswered + len(self._early)
+
+    def replies(self) -> list[dict]:
+        """The replies to ``send_request`` that have arrived, in order; never blocks.
+        ServoError when the servo closed the connection."""
+        out, self._early = self._early, []
+        if not self._unanswered:
+            return out
+        assert self._sock is not None
+        self._sock.settimeout(0.0)  # A socket with a timeout would wait for data first.
+        try:
+            while True:
+                try:
+                    chunk = self._sock.recv(1 << 16)
+                except (BlockingIOError, InterruptedError):
+                    break
+                if not chunk:
+                    raise ServoError("the servo closed the connection")
+                self._inbox += chunk
+        finally:
+            self._sock.settimeout(self.timeout_s)
+        while self._unanswered and len(self._inbox) >= 4:
+            (length,) = struct.unpack(">I", self._inbox[:4])
+            if length > MAX_MESSAGE_BYTES:
+                raise ServoError(f"reply of {length} bytes is over the limit")
+            if len(self._inbox) < 4 + length:
+                break
+            text, self._inbox = self._inbox[4 : 4 + length], self._inbox[4 + length :]
+            out.append(json.loads(text.decode("utf-8")))
+            self._unanswered -= 1
+        return out
 
     def hello(self) -> dict:
         fields = {"version": PROTOCOL_VERSION}
@@ -232,6 +290,39 @@ class ServoClient:
         """The newest complete frame waiting on the stream socket, or None. Never blocks."""
         frames = self.poll_all()
         return frames[-1] if frames else None
+
+    def poll_newest(self, max_datagrams: int = 64, budget_s: float = 0.002) -> Frame | None:
+        """The newest frame among at most ``max_datagrams`` waiting datagrams, read for at most
+        ``budget_s``; None when none came. Bounded by construction (a timer of the add-on
+        calls it): only the newest datagram read is parsed whole; datagrams beyond the bound
+        wait for the next call."""
+        if self._stream is None:
+            return None
+        began = time.monotonic()
+        newest_data, newest_sequence, newest_s = None, -1, 0.0
+        for _ in range(max_datagrams):
+            try:
+                data = self._stream.recv(layout.MAX_FRAME_BYTES + 1)
+            except (BlockingIOError, InterruptedError):
+                break
+            now = time.monotonic()
+            self.datagrams_read += 1
+            sequence = _sequence_of(data)
+            if sequence is None:
+                self.bad_datagrams += 1
+            elif sequence > newest_sequence:
+                newest_data, newest_sequence, newest_s = data, sequence, now
+            if now - began >= budget_s:
+                break
+        if newest_data is None:
+            return None
+        try:
+            frame = parse_frame(newest_data, self.blade_names or None, newest_s)
+        except ValueError:
+            self.bad_datagrams += 1
+            return None
+        self.frames_received += 1
+        return frame
 
     def poll_all(self) -> list[Frame]:
         """Every frame waiting, oldest first (out-of-order ones dropped). Never blocks."""

@@ -1,0 +1,282 @@
+"""Bake a servo recording into the scene: per blade, the ideal blade keyframed at every frame,
+a force arrow, and the cut surface revealed over time (docs/addon.md). Clear removes it all.
+
+Everything comes from the recording (``hapticut.recording``) and the build's preview (its tets,
+for the cut surface: ``hapticut.cut_surface``), never from the live stream.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+
+import bpy
+import mathutils
+import numpy as np
+
+from . import cut_reveal
+from .stroke_path import frames_per_second
+from .units import mm_per_unit
+
+COLLECTION = "Hapticut Bake"
+TAG = "hapticut_bake"
+ARROW_MESH = "Hapticut Arrow"
+CUT_COLOUR = (0.75, 0.05, 0.05, 1.0)
+ARROW_COLOUR = (1.0, 0.75, 0.05, 1.0)
+
+
+class BakeError(RuntimeError):
+    """The recording cannot be baked; the message says why."""
+
+
+def record_times(recording) -> np.ndarray:
+    """Seconds from the recording's first tick (frame_start)."""
+    times = np.asarray(recording.ticks["time_s"], np.float64)
+    return times - times[0] if len(times) else times
+
+
+def frame_indices(times: np.ndarray, fps: float, frame_start: int) -> tuple[np.ndarray, np.ndarray]:
+    """(the scene frames the recording covers, the record nearest each)."""
+    count = int(np.floor(times[-1] * fps + 1e-9)) + 1 if len(times) else 0
+    wanted = np.arange(count) / fps
+    index = np.clip(np.searchsorted(times, wanted), 0, max(len(times) - 1, 0))
+    before = np.clip(index - 1, 0, None)
+    index = np.where(np.abs(times[before] - wanted) < np.abs(times[index] - wanted), before, index)
+    return frame_start + np.arange(count), index
+
+
+def ideal_pose(pose, p, q) -> tuple[mathutils.Vector, mathutils.Quaternion]:
+    """The rigid pose (mm) of the ideal blade: the device's rotation turned so the edge lies
+    along the proxies, moved so the edge's centre is the proxies' centre."""
+    rotation = mathutils.Quaternion(pose[3:7]).normalized()
+    device_edge = mathutils.Vector(p[-1] - p[0])
+    ideal_edge = mathutils.Vector(q[-1] - q[0])
+    if device_edge.length > 1e-9 and ideal_edge.length > 1e-9:
+        rotation = device_edge.rotation_difference(ideal_edge) @ rotation
+    local_centre = mathutils.Quaternion(pose[3:7]).normalized().inverted() @ mathutils.Vector(
+        p.mean(axis=0) - pose[:3]
+    )
+    location = mathutils.Vector(q.mean(axis=0)) - rotation @ local_centre
+    return location, rotation
+
+
+def _collection(scene):
+    collection = bpy.data.collections.get(COLLECTION)
+    if collection is None:
+        collection = bpy.data.collections.new(COLLECTION)
+    if collection.name not in scene.collection.children:
+        scene.collection.children.link(collection)
+    return collection
+
+
+def _material(name: str, colour) -> bpy.types.Material:
+    material = bpy.data.materials.get(name) or bpy.data.materials.new(name)
+    material.diffuse_color = colour
+    if bpy.app.version < (5, 0, 0):  # Always true from 5.0 on (and deprecated there).
+        material.use_nodes = True
+    shader = material.node_tree.nodes.get("Principled BSDF")
+    if shader is not None:
+        shader.inputs["Base Color"].default_value = colour
+        shader.inputs["Roughness"].default_value = 0.4
+    return material
+
+
+def _new_object(collection, name: str, data):
+    obj = bpy.data.objects.new(name, data)
+    obj[TAG] = 1
+    collection.objects.link(obj)
+    return obj
+
+
+def _arrow_mesh(mm: float):
+    """An arrow along +Z, 1 unit long (shaft 0.8, head 0.2), 0.4 mm thick at the shaft and
+    1 mm at the head whatever its length (it is scaled along Z only)."""
+    mesh = bpy.data.meshes.get(ARROW_MESH)
+    if mesh is not None:
+        return mesh
+    sides = 12
+    angles = np.linspace(0, 2 * np.pi, sides, endpoint=False)
+    ring = np.stack([np.cos(angles), np.sin(angles), np.zeros(sides)], 1) / mm
+    vertices = np.concatenate(
+        [ring * 0.2, ring * 0.2 + [0, 0, 0.8], ring * 0.5 + [0, 0, 0.8], [[0, 0, 1.0], [0, 0, 0]]]
+    )
+    faces = []
+    for i in range(sides):
+        j = (i + 1) % sides
+        faces.append((i, j, sides + j, sides + i))  # shaft
+        faces.append((2 * sides + i, 2 * sides + j, 3 * sides))  # head
+        faces.append((j, i, 3 * sides + 1))  # base
+        faces.append((sides + i, sides + j, 2 * sides + j, 2 * sides + i))  # shoulder
+    mesh = bpy.data.meshes.new(ARROW_MESH)
+    mesh.from_pydata(vertices.tolist(), [], faces)
+    mesh.update()
+    mesh.materials.append(_material("Hapticut Force", ARROW_COLOUR))
+    return mesh
+
+
+def _keyframes(obj, frames, values: dict) -> None:
+    """Keyframes of obj's properties at the frames (values: path -> (frames, k) array),
+    linear between them."""
+    preferences = bpy.context.preferences.edit
+    saved = preferences.keyframe_new_interpolation_type
+    preferences.keyframe_new_interpolation_type = "LINEAR"
+    try:
+        for k, frame in enumerate(frames):
+            for path, array in values.items():
+                setattr(obj, path, array[k])
+                obj.keyframe_insert(path, frame=float(frame))
+    finally:
+        preferences.keyframe_new_interpolation_type = saved
+
+
+def cut_mesh(name: str, surface, mm: float):
+    mesh = bpy.data.meshes.new(name)
+    vertices = np.asarray(surface.vertices, np.float64) / mm
+    faces = np.asarray(surface.faces, np.int64)
+    mesh.vertices.add(len(vertices))
+    mesh.vertices.foreach_set("co", vertices.astype(np.float32).ravel())
+    mesh.loops.add(3 * len(faces))
+    mesh.loops.foreach_set("vertex_index", faces.astype(np.int32).ravel())
+    mesh.polygons.add(len(faces))
+    mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * len(faces), 3, dtype=np.int32))
+    mesh.update(calc_edges=True)
+    attribute = mesh.attributes.new(cut_reveal.FRAME_ATTRIBUTE, "INT", "FACE")
+    attribute.data.foreach_set("value", np.asarray(surface.face_frames, np.int32))
+    mesh.materials.append(_material("Hapticut Cut", CUT_COLOUR))
+    return mesh
+
+
+def load_preview_tets(path: str) -> dict:
+    try:
+        with np.load(path) as data:
+            return {
+                "vertices": data["tet_vertices"],
+                "tets": data["tets"],
+                "materials": data["tet_materials"],
+                "models": [str(m) for m in data["material_models"]],
+            }
+    except (OSError, KeyError, ValueError) as error:
+        raise BakeError(
+            f"the scene's tets cannot be read from {path} ({error}): tetrahedralize again"
+        ) from None
+
+
+def bake(scene, link, recording_path: str, preview_path: str) -> dict:
+    """Bake the recording (module doc); its figures for the panel. Clears an earlier bake."""
+    began = time.perf_counter()
+    try:
+        recording = link.recording.read_recording(recording_path)
+    except (OSError, ValueError) as error:
+        raise BakeError(str(error)) from None
+    if len(recording) < 2:
+        raise BakeError(
+            f"recording {recording_path} holds {len(recording)} tick(s): nothing to bake"
+        )
+    tets = load_preview_tets(preview_path)
+    clear(scene)
+    live = scene.hapticut_live
+    mm = mm_per_unit(scene)
+    fps = frames_per_second(scene)
+    times = record_times(recording)
+    frames, nearest = frame_indices(times, fps, scene.frame_start)
+    collection = _collection(scene)
+    locator = link.cut_surface.TetLocator(tets["vertices"], tets["tets"])
+    figures = {
+        "recording": recording_path,
+        "ticks": len(recording),
+        "frames": len(frames),
+        "dropped_records": int(recording.ticks["dropped_records"][-1]),
+        "blades": {},
+    }
+    for name in recording.blade_names:
+        blade = recording.blade(name)
+        source = bpy.data.objects.get(name)
+        poses = blade["block"]["pose"]
+        locations, rotations, centres = [], [], []
+        for k in nearest:
+            location, rotation = ideal_pose(poses[k], blade["p"][k], blade["q"][k])
+            locations.append(location / mm)
+            rotations.append(rotation)
+            centres.append(mathutils.Vector(blade["q"][k].mean(axis=0)) / mm)
+        ideal = _new_object(collection, f"Ideal {name}", source.data if source else None)
+        ideal["hapticut_blade"] = name
+        ideal.rotation_mode = "QUATERNION"
+        if source is not None:
+            ideal.scale = source.matrix_world.to_scale()
+        _keyframes(ideal, frames, {"location": locations, "rotation_quaternion": rotations})
+        # The force arrow at the proxies' centre.
+        forces = blade["block"]["engine_force_N"][nearest]
+        arrow = _new_object(collection, f"Force {name}", _arrow_mesh(mm))
+        arrow["hapticut_blade"] = name
+        arrow.rotation_mode = "QUATERNION"
+        lengths = np.linalg.norm(forces, axis=1) * live.arrow_mm_per_N / mm
+        z = mathutils.Vector((0, 0, 1))
+        arrow_rotations = [
+            z.rotation_difference(mathutils.Vector(f))
+            if np.linalg.norm(f) > 0
+            else mathutils.Quaternion()
+            for f in forces
+        ]
+        # Zero force: a flat arrow (hidden), never a zero scale.
+        scales = [
+            mathutils.Vector((1.0, 1.0, max(s, 1e-6))) if s > 0 else mathutils.Vector((1e-6,) * 3)
+            for s in lengths
+        ]
+        _keyframes(
+            arrow,
+            frames,
+            {"location": centres, "rotation_quaternion": arrow_rotations, "scale": scales},
+        )
+        # The cut surface.
+        surface = link.cut_surface.cut_surface(
+            blade["q"],
+            blade["state"],
+            times,
+            fps,
+            scene.frame_start,
+            tets["vertices"],
+            tets["tets"],
+            tets["materials"],
+            tets["models"],
+            substeps=live.substeps,
+            locator=locator,
+        )
+        cut = _new_object(collection, f"Cut {name}", cut_mesh(f"Cut {name}", surface, mm))
+        cut["hapticut_blade"] = name
+        cut_reveal.add_reveal(cut)
+        figures["blades"][name] = {
+            "cut_faces": len(surface.faces),
+            "max_force_N": float(np.max(np.linalg.norm(forces, axis=1))),
+        }
+    figures["seconds"] = time.perf_counter() - began
+    live.bake_report = json.dumps(figures)
+    live.recording_path = recording_path
+    return figures
+
+
+def baked_objects(scene=None) -> list:
+    return [o for o in bpy.data.objects if o.get(TAG)]
+
+
+def clear(scene) -> int:
+    """Remove every object a bake made, their meshes (not a blade's), actions and the
+    collection; the number of objects removed."""
+    removed = 0
+    for obj in baked_objects(scene):
+        data = obj.data
+        action = obj.animation_data.action if obj.animation_data else None
+        bpy.data.objects.remove(obj)
+        removed += 1
+        if action is not None and action.users == 0:
+            bpy.data.actions.remove(action)
+        if isinstance(data, bpy.types.Mesh) and data.users == 0:
+            bpy.data.meshes.remove(data)
+    collection = bpy.data.collections.get(COLLECTION)
+    if collection is not None and not collection.objects:
+        bpy.data.collections.remove(collection)
+    group = bpy.data.node_groups.get(cut_reveal.GROUP_NAME)
+    if group is not None and group.users == 0:
+        bpy.data.node_groups.remove(group)
+    if scene is not None:
+        scene.hapticut_live.bake_report = ""
+    return removed

@@ -1,0 +1,269 @@
+"""A live session: the servo as a child process, its control channel and its state stream.
+
+No bpy and no thread: everything here is called from the main thread (operators and the live
+timer). ``tick`` is the timer's work, bounded by construction and never waiting: at most
+``MAX_DATAGRAMS`` datagrams and ``BUDGET_S`` of draining; the poses and a status request
+every ``STATUS_INTERVAL_S`` are sent without waiting for their replies (read by the next
+ticks; at most ``MAX_UNANSWERED`` outstanding). A servo that exits or stops answering turns
+the session ``lost`` with the reason; nothing raises out of ``tick``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import socket
+import subprocess
+import time
+from dataclasses import dataclass, field
+
+MAX_DATAGRAMS = 64
+BUDGET_S = 0.002
+STATUS_INTERVAL_S = 0.25
+STARTUP_TIMEOUT_S = 15.0
+REPLY_TIMEOUT_S = 5.0
+MAX_UNANSWERED = 64
+# Exit codes of hapticut-servo (docs/servo.md).
+EXIT_NETWORK = 5
+
+
+class SessionError(RuntimeError):
+    """Starting or talking to the servo failed; the message is for the panel."""
+
+
+@dataclass
+class Session:
+    link: object  # toolkit_link.link(): servo_client, recording, servo
+    process: subprocess.Popen
+    log_path: str
+    client: object  # servo_client.ServoClient
+    state: str = "connected"  # connected, running, simulating, lost, stopped
+    error: str = ""
+    frame: object = None  # The newest servo_client.Frame.
+    status: dict = field(default_factory=dict)
+    blades: list = field(default_factory=list)  # load reply's blades
+    scene_path: str = ""
+    preview_path: str = ""
+    recording_path: str = ""  # The recording being written (or last written).
+    simulate: dict | None = None  # While a stroke simulates: what the bake needs.
+    last_status_s: float = 0.0
+    status_pending: bool = False
+    frames_drawn: int = 0
+    tick_costs_s: list = field(default_factory=list)
+    frame_ages_s: list = field(default_factory=list)
+
+    @property
+    def alive(self) -> bool:
+        return self.state not in ("lost", "stopped")
+
+    @property
+    def running(self) -> bool:
+        return self.status.get("state") == "running"
+
+
+def _last_line(path: str) -> str:
+    try:
+        with open(path, encoding="utf-8", errors="replace") as file:
+            lines = [line.strip() for line in file.read()[-20000:].splitlines() if line.strip()]
+    except OSError:
+        return ""
+    errors = [line for line in lines if line.startswith("hapticut-servo:")]
+    return (errors or lines or [""])[-1]
+
+
+def start(
+    link, log_path: str, port: int = 0, realtime: bool = True, extra: tuple[str, ...] = ()
+) -> Session:
+    """Start hapticut-servo with a control channel (``port``; 0: any free one), its output in
+    log_path; connect and say hello. SessionError naming the problem (port busy, no servo)."""
+    os.makedirs(os.path.dirname(log_path) or ".", exist_ok=True)
+    command = [
+        link.servo,
+        "--control",
+        str(int(port)),
+        "--exit-when-done",
+        "--record-buffer-s",
+        "30",
+        *(() if realtime else ("--no-realtime",)),
+        *extra,
+    ]
+    with open(log_path, "w", encoding="utf-8") as log:
+        try:
+            process = subprocess.Popen(
+                command,
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                stdin=subprocess.DEVNULL,
+                start_new_session=True,
+            )
+        except OSError as error:
+            raise SessionError(f"cannot start {link.servo}: {error}") from None
+    began = time.monotonic()
+    found_port = 0
+    while not found_port:
+        with contextlib.suppress(OSError), open(log_path, encoding="utf-8") as file:
+            for line in file:
+                if line.startswith("control: "):
+                    found_port = int(line.rsplit(":", 1)[1])
+        if found_port:
+            break
+        code = process.poll()
+        if code is not None:
+            line = _last_line(log_path)
+            if code == EXIT_NETWORK:
+                raise SessionError(f"port {port} is busy or cannot be opened ({line})")
+            raise SessionError(f"the servo exited with code {code}: {line}")
+        if time.monotonic() - began > STARTUP_TIMEOUT_S:
+            _kill(process)
+            raise SessionError(f"the servo did not open its control port in {STARTUP_TIMEOUT_S} s")
+        time.sleep(0.01)
+    client = link.servo_client.ServoClient(port=found_port, timeout_s=REPLY_TIMEOUT_S)
+    try:
+        client.connect()
+        client.hello()
+    except (OSError, link.servo_client.ServoError) as error:
+        _kill(process)
+        raise SessionError(f"the servo does not answer on port {found_port}: {error}") from None
+    return Session(link, process, log_path, client)
+
+
+def _kill(process: subprocess.Popen, grace_s: float = 5.0) -> None:
+    if process.poll() is None:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(process.pid, signal.SIGTERM)
+        try:
+            process.wait(grace_s)
+        except subprocess.TimeoutExpired:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+
+
+def request(session: Session, name: str, *args, **kwargs):
+    """One control request; on a lost connection the session turns lost (SessionError)."""
+    if not session.alive:
+        raise SessionError(session.error or "no servo")
+    try:
+        return getattr(session.client, name)(*args, **kwargs)
+    except session.link.servo_client.ServoError as error:
+        if "closed the connection" in str(error):
+            lose(session, str(error))
+        raise SessionError(str(error)) from None
+    except (OSError, ValueError) as error:
+        lose(session, f"the servo stopped answering ({error})")
+        raise SessionError(session.error) from None
+
+
+def lose(session: Session, why: str) -> None:
+    """The servo is gone: say why (its exit code and last line), free the sockets."""
+    code = session.process.poll()
+    line = _last_line(session.log_path)
+    text = why
+    if code is not None:
+        text = f"the servo exited (code {code})" + (f": {line}" if line else "")
+    session.state, session.error = "lost", text
+    session.frame = None
+    session.simulate = None
+    session.client.close()
+
+
+def run(
+    session: Session,
+    scene_path: str,
+    devices: list[str],
+    rate_Hz: float,
+    as_fast_as_possible: bool = False,
+    record_path: str = "",
+    settings: dict | None = None,
+    engage: bool = False,
+) -> dict:
+    """Load the scene with these device bindings, apply the settings, subscribe, start."""
+    if session.running:
+        request(session, "stop")
+    reply = request(
+        session,
+        "load",
+        path=scene_path,
+        devices=devices,
+        rate_Hz=rate_Hz,
+        as_fast_as_possible=as_fast_as_possible,
+    )
+    session.blades = reply["blades"]
+    session.scene_path = scene_path
+    if settings:
+        request(session, "set_parameters", **settings)
+    request(session, "engage", engage)
+    request(session, "subscribe", rate_Hz=120.0)
+    if record_path:
+        os.makedirs(os.path.dirname(record_path) or ".", exist_ok=True)
+        request(session, "record", record_path)
+        session.recording_path = record_path
+    request(session, "start")
+    session.state = "simulating" if as_fast_as_possible else "running"
+    session.status = request(session, "status")
+    session.last_status_s = time.monotonic()
+    return reply
+
+
+def tick(session: Session, poses: dict[str, list[float]] | None = None) -> bool:
+    """The timer's work: drain the stream (bounded), send the viewport poses, refresh the
+    status now and then, notice a lost servo. True when a new frame arrived."""
+    began = time.perf_counter()
+    if not session.alive:
+        return False
+    if session.process.poll() is not None:
+        lose(session, "the servo exited")
+        return False
+    new = False
+    client = session.client
+    try:
+        for reply in client.replies():
+            if reply.get("type") == "status" and reply.get("ok"):
+                session.status, session.status_pending = reply, False
+            elif not reply.get("ok"):
+                session.status_pending = session.status_pending and reply.get("type") != "status"
+                session.error = f"{reply.get('type')}: {reply.get('error', 'failed')}"
+        frame = client.poll_newest(MAX_DATAGRAMS, BUDGET_S)
+        if frame is not None:
+            session.frame, new = frame, True
+            session.frame_ages_s.append(time.monotonic() - float(frame.header["servo_time_s"]))
+        if client.unanswered < MAX_UNANSWERED:
+            for blade, pose in (poses or {}).items():
+                client.send_request("pose", blade=blade, pose=[float(x) for x in pose], buttons=0)
+        now = time.monotonic()
+        if not session.status_pending and now - session.last_status_s >= STATUS_INTERVAL_S:
+            session.last_status_s = now
+            session.status_pending = True
+            client.send_request("status")
+    except session.link.servo_client.ServoError as error:
+        if "closed the connection" in str(error):
+            lose(session, str(error))
+        else:
+            session.error = str(error)
+    except (OSError, ValueError) as error:
+        lose(session, f"the servo stopped answering ({error})")
+    session.tick_costs_s.append(time.perf_counter() - began)
+    del session.tick_costs_s[:-4096], session.frame_ages_s[:-4096]
+    return new
+
+
+def stop(session: Session) -> None:
+    """Shut the servo down (its force ramps to zero) and wait for it; kill it if it hangs."""
+    if session.process.poll() is None and session.state != "lost":
+        with contextlib.suppress(Exception):
+            session.client.request("shutdown")
+    with contextlib.suppress(subprocess.TimeoutExpired):
+        session.process.wait(5.0)
+    _kill(session.process)
+    session.client.close()
+    session.state = "stopped"
+
+
+def port_is_free(port: int) -> bool:
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        try:
+            probe.bind(("127.0.0.1", port))
+        except OSError:
+            return False
+    return True

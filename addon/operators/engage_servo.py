@@ -1,0 +1,25 @@
+import bpy
+from bpy.props import BoolProperty
+
+from .. import live, live_session
+
+
+class HAPTICUT_OT_engage_servo(bpy.types.Operator):
+    """Engage (force on, ramped) or disengage the device"""
+
+    bl_idname = "hapticut.engage_servo"
+    bl_label = "Engage"
+
+    engaged: BoolProperty(name="Engaged", default=True)
+
+    @classmethod
+    def poll(cls, context):
+        return live.current() is not None
+
+    def execute(self, context):
+        try:
+            live.engage(self.engaged)
+        except live_session.SessionError as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        return {"FINISHED"}

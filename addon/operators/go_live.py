@@ -1,0 +1,18 @@
+import bpy
+
+from .. import live, live_session
+
+
+class HAPTICUT_OT_go_live(bpy.types.Operator):
+    """Run the built scene on the servo with the panel's device (starts the servo if needed)"""
+
+    bl_idname = "hapticut.go_live"
+    bl_label = "Go Live"
+
+    def execute(self, context):
+        try:
+            live.go_live(context)
+        except live_session.SessionError as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        return {"FINISHED"}

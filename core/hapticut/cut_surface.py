@@ -1,0 +1,262 @@
+"""The cut surface of a stroke: where the blade's ideal points went through cuttable material.
+
+Pure numpy (the Blender add-on loads this file from the toolkit, like ``servo_client``).
+From a servo recording's proxies ``q`` (ticks, N, 3) and states, and the scene's tets:
+
+- a point *cuts* at a tick when its proxy is inside a tet (state TET, not held on a face,
+  edge or vertex) whose material is cuttable (drag, viscous, or a membrane it pierced);
+- the surface is swept between consecutive rows of points (rows are ticks picked at the
+  scene's frames, ``substeps`` per frame): the quad between points i, i+1 of rows r, r+1 is
+  kept when all four corners cut at their rows and both points stayed inside tets at every
+  tick between the rows; it carries the frame of row r+1 (when the blade got there).
+
+Then every face whose centre or edge midpoint lies outside cuttable material is dropped (a
+flat quad between two points beside a curved bone would clip the bone's surface). So no
+face lies in rigid material (its proxies stop on its surface) or in air, at those samples.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+CUTTABLE_MODELS = ("drag", "viscous", "membrane")
+STATE_TET = 0  # ProxyState::Tet (core/include/hapticut/proxy.h)
+# Barycentric tolerance of the point-in-tet test (a point on a shared face is in either tet).
+INSIDE_TOLERANCE = 1e-9
+
+
+class TetLocator:
+    """The tet holding each point, through a uniform grid of the tets' bounding boxes."""
+
+    def __init__(self, vertices: np.ndarray, tets: np.ndarray, max_pairs: int = 4_000_000):
+        self.vertices = np.asarray(vertices, np.float64)
+        self.tets = np.asarray(tets, np.int64)
+        corners = self.vertices[self.tets]  # (m, 4, 3)
+        self.origin = corners[:, 0]
+        edges = corners[:, 1:] - corners[:, :1]  # (m, 3, 3): rows b-a, c-a, d-a
+        determinants = np.linalg.det(edges)
+        usable = np.abs(determinants) > 0
+        self.inverse = np.zeros_like(edges)
+        # lambda (b, c, d weights) = (x - a) @ inv(edges)
+        self.inverse[usable] = np.linalg.inv(edges[usable])
+        self.usable = usable
+        lo, hi = corners.min(axis=1), corners.max(axis=1)
+        self.lo = lo.min(axis=0) if len(lo) else np.zeros(3)
+        span = (hi.max(axis=0) - self.lo) if len(hi) else np.ones(3)
+        cell = float(np.median(np.max(hi - lo, axis=1))) if len(lo) else 1.0
+        while True:
+            self.cell = max(cell, 1e-9)
+            self.shape = np.maximum(1, np.ceil(span / self.cell).astype(np.int64) + 1)
+            first = np.floor((lo - self.lo) / self.cell).astype(np.int64)
+            last = np.floor((hi - self.lo) / self.cell).astype(np.int64)
+            counts = np.prod(last - first + 1, axis=1)
+            if counts.sum() <= max_pairs or cell > span.max():
+                break
+            cell *= 1.5
+        self._build(first, last, counts)
+
+    def _build(self, first: np.ndarray, last: np.ndarray, counts: np.ndarray) -> None:
+        m = len(counts)
+        tet_of_pair = np.repeat(np.arange(m), counts)
+        offset = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+        size = last - first + 1
+        nx, ny = size[tet_of_pair, 0], size[tet_of_pair, 1]
+        ix = first[tet_of_pair, 0] + offset % nx
+        iy = first[tet_of_pair, 1] + (offset // nx) % ny
+        iz = first[tet_of_pair, 2] + offset // (nx * ny)
+        cells = (iz * self.shape[1] + iy) * self.shape[0] + ix
+        order = np.argsort(cells, kind="stable")
+        self.pair_tets = tet_of_pair[order]
+        total = int(np.prod(self.shape))
+        self.cell_start = np.searchsorted(cells[order], np.arange(total + 1))
+
+    def locate(self, points: np.ndarray, chunk: int = 200_000) -> np.ndarray:
+        """The index of a tet holding each point ((k, 3) -> (k,) int64), -1 outside them all."""
+        points = np.asarray(points, np.float64).reshape(-1, 3)
+        out = np.full(len(points), -1, np.int64)
+        index = np.floor((points - self.lo) / self.cell).astype(np.int64)
+        inside_grid = np.all((index >= 0) & (index < self.shape), axis=1) & np.all(
+            np.isfinite(points), axis=1
+        )
+        which = np.flatnonzero(inside_grid)
+        if not len(which):
+            return out
+        i = index[which]
+        cells = (i[:, 2] * self.shape[1] + i[:, 1]) * self.shape[0] + i[:, 0]
+        start, stop = self.cell_start[cells], self.cell_start[cells + 1]
+        counts = stop - start
+        # Candidates in chunks of pairs (point, tet) so memory stays bounded.
+        ends = np.cumsum(counts)
+        begin = 0
+        while begin < len(which):
+            limit = (ends[begin - 1] if begin else 0) + chunk
+            end = max(begin + 1, int(np.searchsorted(ends, limit, side="right")))
+            self._locate_some(points, which[begin:end], start[begin:end], counts[begin:end], out)
+            begin = end
+        return out
+
+    def _locate_some(self, points, which, start, counts, out) -> None:
+        total = int(counts.sum())
+        if not total:
+            return
+        point_of_pair = np.repeat(np.arange(len(which)), counts)
+        offset = np.arange(total) - np.repeat(np.cumsum(counts) - counts, counts)
+        tets = self.pair_tets[np.repeat(start, counts) + offset]
+        x = points[which[point_of_pair]] - self.origin[tets]
+        weights = np.einsum("ki,kij->kj", x, self.inverse[tets])
+        inside = (
+            self.usable[tets]
+            & np.all(weights >= -INSIDE_TOLERANCE, axis=1)
+            & (weights.sum(axis=1) <= 1 + INSIDE_TOLERANCE)
+        )
+        hits = np.flatnonzero(inside)
+        # The first hit per point (pairs are grouped by point, in order).
+        points_hit, first = np.unique(point_of_pair[hits], return_index=True)
+        out[which[points_hit]] = tets[hits[first]]
+
+
+@dataclass
+class CutSurface:
+    vertices: np.ndarray  # (v, 3) mm
+    faces: np.ndarray  # (f, 3) int32
+    face_frames: np.ndarray  # (f,) int32: the scene frame each face was cut at
+    cutting: np.ndarray  # (rows, N) bool: which point cut at each row
+    row_ticks: np.ndarray  # (rows,) the recording index of each row
+
+
+def cuttable_points(
+    q: np.ndarray,
+    states: np.ndarray,
+    locator: TetLocator,
+    tet_materials: np.ndarray,
+    material_models,
+) -> np.ndarray:
+    """(…, N) bool: the proxy is in a tet (state TET) of a cuttable material."""
+    q = np.asarray(q, np.float64)
+    shape = q.shape[:-1]
+    cuttable_material = np.array([m in CUTTABLE_MODELS for m in material_models], bool)
+    in_tet = np.asarray(states).reshape(-1) == STATE_TET
+    found = np.full(in_tet.shape, -1, np.int64)
+    found[in_tet] = locator.locate(q.reshape(-1, 3)[in_tet])
+    material = np.where(found >= 0, np.asarray(tet_materials)[np.maximum(found, 0)], -1)
+    ok = (found >= 0) & cuttable_material[np.maximum(material, 0)]
+    return ok.reshape(shape)
+
+
+def row_ticks_at_frames(
+    times_s: np.ndarray, fps: float, frame_start: int, substeps: int = 1
+) -> tuple[np.ndarray, np.ndarray]:
+    """(recording indices, their frames): the tick nearest each (sub)frame of the stroke.
+
+    ``times_s`` are the records' times from the stroke's start (0 at frame_start)."""
+    times_s = np.asarray(times_s, np.float64)
+    if not len(times_s):
+        return np.zeros(0, np.int64), np.zeros(0, np.float64)
+    step = 1.0 / (fps * max(1, substeps))
+    count = int(np.floor(times_s[-1] / step + 1e-9)) + 1
+    wanted = np.arange(count) * step
+    index = np.clip(np.searchsorted(times_s, wanted), 0, len(times_s) - 1)
+    before = np.clip(index - 1, 0, len(times_s) - 1)
+    nearer = np.abs(times_s[before] - wanted) < np.abs(times_s[index] - wanted)
+    index = np.where(nearer, before, index)
+    index = np.unique(index)
+    return index, frame_start + times_s[index] * fps
+
+
+def sweep(
+    q: np.ndarray,
+    states: np.ndarray,
+    rows: np.ndarray,
+    row_frames: np.ndarray,
+    cutting_rows: np.ndarray,
+) -> CutSurface:
+    """The quads between consecutive rows whose four corners cut (module doc)."""
+    q = np.asarray(q, np.float64)
+    rows = np.asarray(rows, np.int64)
+    count, points = len(rows), q.shape[1]
+    if count < 2 or points < 2:
+        return CutSurface(
+            np.zeros((0, 3)),
+            np.zeros((0, 3), np.int32),
+            np.zeros(0, np.int32),
+            cutting_rows,
+            rows,
+        )
+    # Stayed inside a tet at every tick between two rows (rows r and r+1 included).
+    in_tet = np.asarray(states) == STATE_TET
+    left_tet = (~in_tet).astype(np.int64)
+    cumulative = np.concatenate([np.zeros((1, points), np.int64), np.cumsum(left_tet, axis=0)])
+    outside_between = cumulative[rows[1:] + 1] - cumulative[rows[:-1]]  # (rows-1, N)
+    stayed = outside_between == 0
+    corner = cutting_rows[:-1] & cutting_rows[1:] & stayed  # point i cuts from row r to r+1
+    keep = corner[:, :-1] & corner[:, 1:]  # (rows-1, N-1): the quad of points i, i+1
+    r, i = np.nonzero(keep)
+    a = r * points + i
+    b = a + 1
+    c = a + points + 1
+    d = a + points
+    faces = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    frames = np.ceil(np.asarray(row_frames)[r + 1] - 1e-9).astype(np.int32)
+    face_frames = np.concatenate([frames, frames])
+    used, compact = np.unique(faces, return_inverse=True)
+    vertices = q[rows].reshape(-1, 3)[used]
+    return CutSurface(
+        vertices, compact.reshape(-1, 3).astype(np.int32), face_frames, cutting_rows, rows
+    )
+
+
+def keep_inside_cuttable(
+    surface: CutSurface, locator: TetLocator, tet_materials: np.ndarray, material_models
+) -> CutSurface:
+    """The surface without the faces whose centre or an edge midpoint is not in a tet of
+    cuttable material."""
+    if not len(surface.faces):
+        return surface
+    corners = surface.vertices[surface.faces]  # (f, 3, 3)
+    samples = np.stack(
+        [
+            corners.mean(axis=1),
+            (corners[:, 0] + corners[:, 1]) / 2,
+            (corners[:, 1] + corners[:, 2]) / 2,
+            (corners[:, 2] + corners[:, 0]) / 2,
+        ],
+        axis=1,
+    )  # (f, 4, 3)
+    inside = cuttable_points(
+        samples, np.full(samples.shape[:2], STATE_TET), locator, tet_materials, material_models
+    ).all(axis=1)
+    faces = surface.faces[inside]
+    used, compact = np.unique(faces, return_inverse=True)
+    return CutSurface(
+        surface.vertices[used],
+        compact.reshape(-1, 3).astype(np.int32),
+        surface.face_frames[inside],
+        surface.cutting,
+        surface.row_ticks,
+    )
+
+
+def cut_surface(
+    q: np.ndarray,
+    states: np.ndarray,
+    times_s: np.ndarray,
+    fps: float,
+    frame_start: int,
+    tet_vertices: np.ndarray,
+    tets: np.ndarray,
+    tet_materials: np.ndarray,
+    material_models,
+    substeps: int = 2,
+    locator: TetLocator | None = None,
+) -> CutSurface:
+    """The whole computation (module doc) for one blade of a recording."""
+    locator = locator or TetLocator(tet_vertices, tets)
+    rows, row_frames = row_ticks_at_frames(times_s, fps, frame_start, substeps)
+    q = np.asarray(q, np.float64)
+    cutting = cuttable_points(
+        q[rows], np.asarray(states)[rows], locator, tet_materials, material_models
+    )
+    surface = sweep(q, states, rows, row_frames, cutting)
+    return keep_inside_cuttable(surface, locator, tet_materials, material_models)

@@ -1,0 +1,220 @@
+"""The session panel with the real servo over loopback: Start, Go Live, status, Stop; a busy
+port and a missing toolkit said plainly; the servo killed mid-session shows as lost and Start
+recovers; unregister and loading another file leave no timer, handler or process."""
+
+import json
+import os
+import signal
+import socket
+
+import bpy
+import live_support
+import numpy as np
+import pytest
+
+
+@pytest.fixture()
+def finger(addon, tmp_path_factory):
+    from addon import live
+
+    scene = live_support.finger_with_stroke(tmp_path_factory.mktemp("live-finger"))
+    yield scene
+    live.stop()
+
+
+def alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as file:
+            return file.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def test_start_go_live_status_and_stop(finger):
+    from addon import live, live_draw, ui_live
+
+    assert ui_live.status_lines(None)[0].startswith("not connected")
+    assert bpy.ops.hapticut.start_servo() == {"FINISHED"}
+    session = live.current()
+    assert session is not None and live.timer_registered() and live_draw.handler_added()
+    assert os.path.isfile(finger.hapticut_live.log_path)
+    assert bpy.ops.hapticut.go_live() == {"FINISHED"}
+    assert [b["kind"] for b in session.blades] == ["viewport"]
+    live_support.follow(lambda: session.frame is not None and session.status.get("ticks", 0) > 50)
+    lines = ui_live.status_lines(session)
+    assert lines[0] == "connected (running), servo running"
+    assert any(line.startswith("Knife (viewport, fresh)") for line in lines)
+    assert any(line.startswith("Knife: TET") for line in lines)
+    # What the draw handler draws (its batches are made from these arrays, in Blender units).
+    geometry = live_draw.frame_geometry(session.frame, 0.5)
+    q = session.frame.blades["Knife"]["q"]
+    assert geometry["proxies"].shape == (len(q), 3) and geometry["lines"].shape == (2 * len(q), 3)
+    assert np.allclose(geometry["proxies"], q / 0.5, atol=1e-4)
+    assert geometry["force"].shape == (2, 3)
+    assert bpy.ops.hapticut.engage_servo(engaged=True) == {"FINISHED"}
+    live_support.follow(lambda: session.status.get("engaged") is True)
+    pid = session.process.pid
+    assert bpy.ops.hapticut.stop_servo() == {"FINISHED"}
+    assert live.current() is None and not live.timer_registered()
+    assert not live_draw.handler_added()
+    assert not alive(pid)
+    # The log the panel links to holds the servo's own lines.
+    with open(finger.hapticut_live.log_path) as log:
+        assert "hapticut-servo: loaded" in log.read()
+    assert bpy.ops.hapticut.open_servo_log() == {"FINISHED"}
+    assert "control: 127.0.0.1:" in bpy.data.texts["hapticut-servo.log"].as_string()
+
+
+def test_a_busy_port_is_said_so(finger):
+    from addon import live, ui_live
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        finger.hapticut_live.port = taken.getsockname()[1]
+        try:
+            with pytest.raises(RuntimeError, match="busy"):
+                bpy.ops.hapticut.start_servo()
+        finally:
+            finger.hapticut_live.port = 0
+    assert live.current() is None
+    assert "busy" in finger.hapticut_live.error
+    assert "busy" in ui_live.status_lines(None)[0]
+
+
+def test_a_missing_toolkit_names_the_install_command(finger):
+    from addon import live, toolkit, toolkit_link
+
+    prefs = bpy.context.preferences.addons["addon"].preferences
+    saved = prefs.toolkit_path
+    prefs.toolkit_path = "/nonexistent/hapticut"
+    toolkit_link._link = None
+    try:
+        with pytest.raises(RuntimeError, match="install"):
+            bpy.ops.hapticut.start_servo()
+        assert toolkit.INSTALL_COMMAND in finger.hapticut_live.error
+        assert live.current() is None
+    finally:
+        prefs.toolkit_path = saved
+
+
+def test_the_servo_killed_mid_session_shows_as_lost_and_start_recovers(finger):
+    from addon import live, ui_live
+
+    assert bpy.ops.hapticut.go_live() == {"FINISHED"}  # Starts the servo too.
+    session = live.current()
+    live_support.follow(lambda: session.frame is not None)
+    os.kill(session.process.pid, signal.SIGKILL)
+    session.process.wait(10)
+    assert live.timer() is None  # The timer ends itself; no exception.
+    assert session.state == "lost"
+    lines = ui_live.status_lines(session)
+    assert lines[0].startswith("servo lost: the servo exited (code -9)")
+    assert lines[1] == "Start to recover"
+    assert bpy.ops.hapticut.start_servo() == {"FINISHED"}
+    assert bpy.ops.hapticut.go_live() == {"FINISHED"}
+    recovered = live.current()
+    assert recovered is not session and recovered.alive
+    live_support.follow(lambda: recovered.frame is not None)
+
+
+def test_unregister_and_loading_a_file_remove_timer_handler_and_servo(finger, tmp_path):
+    import blender_scene
+
+    from addon import live, live_draw
+
+    path = str(tmp_path / "live.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=path)
+    assert bpy.ops.hapticut.start_servo() == {"FINISHED"}
+    pid = live.current().process.pid
+    bpy.ops.wm.open_mainfile(filepath=path)  # Loading another file stops everything.
+    assert live.current() is None and not live.timer_registered()
+    assert not live_draw.handler_added() and not alive(pid)
+    assert bpy.ops.hapticut.start_servo() == {"FINISHED"}
+    pid = live.current().process.pid
+    blender_scene.disable_addon()
+    try:
+        assert live.current() is None and not live.timer_registered()
+        assert not live_draw.handler_added() and not alive(pid)
+    finally:
+        blender_scene.enable_addon()
+
+
+def test_the_client_is_the_installed_toolkits_own(finger):
+    import json
+    import subprocess
+
+    import blender_scene
+
+    from addon import live
+
+    found = json.loads(
+        subprocess.run(
+            [blender_scene.toolkit_executable(), "paths", "--json"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
+    )
+    modules = live.link()
+    for module in (
+        modules.servo_client,
+        modules.recording,
+        modules.servo_layout,
+        modules.cut_surface,
+    ):
+        assert os.path.dirname(module.__file__) == found["package"]
+    assert modules.servo == found["servo"]
+
+
+def test_force_shading_refused_by_the_servo_is_said_and_the_session_runs(finger):
+    from addon import live
+
+    finger.hapticut_live.force_shading = True
+    assert bpy.ops.hapticut.go_live() == {"FINISHED"}
+    assert finger.hapticut_live.error.startswith("force shading not applied: ")
+    session = live.current()
+    live_support.follow(lambda: session.frame is not None)
+
+
+def test_the_live_panels_draw_in_every_state(finger):
+    import types
+
+    from test_addon_panels import CheckingLayout, draw
+
+    from addon import live, ui_live
+
+    class Layout(CheckingLayout):
+        def operator(self, idname, **options):
+            super().operator(idname, **options)
+            return types.SimpleNamespace()  # Its properties, set by the panel.
+
+    def texts() -> list[str]:
+        drawn = []
+        for panel_class in (ui_live.HAPTICUT_PT_live, ui_live.HAPTICUT_PT_bake):
+            layout = Layout()
+            draw(panel_class, layout)
+            drawn += layout.texts
+        return drawn
+
+    for mode in ("VIEWPORT", "CUSTOM"):
+        finger.hapticut_live.device_mode = mode
+        assert "not connected" in texts()
+    finger.hapticut_live.device_mode = "VIEWPORT"
+    assert bpy.ops.hapticut.go_live() == {"FINISHED"}
+    session = live.current()
+    live_support.follow(lambda: session.frame is not None and session.status.get("blades"))
+    assert any(text.startswith("connected (running)") for text in texts())
+    finger.hapticut_live.bake_report = json.dumps(
+        {
+            "frames": 3,
+            "ticks": 100,
+            "seconds": 0.1,
+            "blades": {"Knife": {"cut_faces": 4, "max_force_N": 1.0}},
+        }
+    )
+    assert "Knife: 4 cut faces, max force 1.00 N" in texts()
+    os.kill(session.process.pid, signal.SIGKILL)
+    session.process.wait(10)
+    live.timer()
+    assert "Start to recover" in texts()

@@ -1,0 +1,148 @@
+"""Simulate stroke and bake, with the real servo: a keyframed knife through the finger's skin
+and flesh onto its bone; the ideal blade's keyframes follow the recording; the cut surface lies
+in cuttable material only (checked against the scene's tets by the engine); Clear; the bake
+survives a save and reopen and renders."""
+
+import time
+
+import bpy
+import live_support
+import mathutils
+import numpy as np
+import pytest
+
+CUTTABLE = {"drag", "viscous", "membrane"}
+
+
+@pytest.fixture(scope="module")
+def baked(addon, tmp_path_factory):
+    from addon import baking, live
+
+    scene = live_support.finger_with_stroke(tmp_path_factory.mktemp("live-finger"))
+    began = time.perf_counter()
+    assert bpy.ops.hapticut.simulate_stroke() == {"FINISHED"}
+    live_support.follow(lambda: live.current().simulate is None, timeout_s=120)
+    seconds = time.perf_counter() - began
+    figures = live.last_simulate
+    print(
+        f"\nSimulate stroke to a baked animation ({figures['ticks']} ticks, "
+        f"{scene.frame_end - scene.frame_start} frames): {seconds:.2f} s (servo "
+        f"{figures['servo_s']:.2f} s, bake {figures.get('bake_s', 0):.2f} s)"
+    )
+    assert scene.hapticut_live.error == ""
+    assert baking.baked_objects(scene)
+    yield scene
+    live.stop()
+
+
+def recording(scene):
+    from addon import live
+
+    return live.link().recording.read_recording(scene.hapticut_live.recording_path)
+
+
+def test_the_stroke_ran_every_tick_and_the_bake_made_its_objects(baked):
+    rec = recording(baked)
+    duration_s = (baked.frame_end - baked.frame_start) / 24
+    # Every tick of the stroke, then the stop ramp (0.1 s) after it.
+    assert duration_s * 1000 <= len(rec) <= duration_s * 1000 + 110
+    assert rec.ticks["dropped_records"][-1] == 0
+    assert rec.header["as_fast_as_possible"] is True
+    names = {o.name for o in bpy.data.collections["Hapticut Bake"].objects}
+    assert names == {"Ideal Knife", "Force Knife", "Cut Knife"}
+
+
+def test_the_ideal_blade_keyframes_follow_the_recording(baked):
+    from addon import baking
+
+    rec = recording(baked)
+    blade = rec.blade("Knife")
+    times = baking.record_times(rec)
+    frames, nearest = baking.frame_indices(times, 24.0, baked.frame_start)
+    ideal = bpy.data.objects["Ideal Knife"]
+    knife = bpy.data.objects["Knife"]
+    assert len(frames) >= baked.frame_end - baked.frame_start + 1
+    for frame, k in zip(frames[::5], nearest[::5], strict=True):
+        baked.frame_set(int(frame))
+        location, rotation = baking.ideal_pose(
+            blade["block"]["pose"][k], blade["p"][k], blade["q"][k]
+        )
+        assert np.allclose(ideal.matrix_world.translation, location, atol=1e-4)
+        assert abs(ideal.matrix_world.to_quaternion().rotation_difference(rotation).angle) < 1e-4
+        # The device followed the keyframed knife (no simulated hand), to within the nearest
+        # tick (0.5 ms at under 50 mm/s).
+        assert np.allclose(blade["block"]["pose"][k][:3], knife.matrix_world.translation, atol=0.03)
+    # Deepest (frame 18): the knife is 3 mm under the bone's axis, the ideal blade held up
+    # by the bone (most of its points on the bone's surface, 3.5 mm above the axis).
+    baked.frame_set(18)
+    assert knife.matrix_world.translation.z == pytest.approx(live_support.DEEPEST_Z)
+    assert ideal.matrix_world.translation.z > knife.matrix_world.translation.z + 2.0
+    # The force arrow pushes the knife back up, out of the bone.
+    arrow = bpy.data.objects["Force Knife"]
+    up = arrow.matrix_world.to_quaternion() @ mathutils.Vector((0, 0, 1))
+    assert up.z > 0.8 and arrow.matrix_world.to_scale().z > 1.0
+
+
+def test_the_cut_surface_is_in_cuttable_material_only_and_opens_over_time(baked):
+    from addon import building
+
+    cut = bpy.data.objects["Cut Knife"]
+    mesh = cut.data
+    assert len(mesh.polygons) > 50
+    vertices = np.array([v.co for v in mesh.vertices])
+    corners = vertices[np.array([p.vertices[:] for p in mesh.polygons])]
+    centres = corners.mean(axis=1)
+    midpoints = (corners + np.roll(corners, 1, axis=1)).reshape(-1, 3) / 2
+    samples = np.vstack([centres, midpoints, vertices])
+    models = live_support.probe_materials(building.scene_file(baked), samples)
+    assert set(models) <= CUTTABLE, sorted(set(models) - CUTTABLE)
+    # Through the flesh (a pierced skin lets the proxies through within a few ticks).
+    assert "drag" in set(models)
+    # Each face carries its frame; the modifier shows only the faces cut so far.
+    data = mesh.attributes["hapticut_cut_frame"].data
+    frames = np.zeros(len(data), np.int32)
+    data.foreach_get("value", frames)
+    assert frames.min() >= baked.frame_start and frames.max() <= baked.frame_end
+    shown = []
+    for frame in (baked.frame_start, int(np.median(frames)), baked.frame_end):
+        baked.frame_set(frame)
+        evaluated = cut.evaluated_get(bpy.context.evaluated_depsgraph_get())
+        shown.append(len(evaluated.data.polygons))
+    assert shown[0] == 0 < shown[1] < shown[2] == len(mesh.polygons)
+
+
+def test_clear_removes_the_bake_and_bake_remakes_it_from_the_recording(baked):
+    from addon import baking
+
+    assert bpy.ops.hapticut.clear_bake() == {"FINISHED"}
+    assert not baking.baked_objects(baked)
+    assert "Hapticut Bake" not in bpy.data.collections
+    assert "Hapticut Cut Reveal" not in bpy.data.node_groups
+    assert bpy.data.objects["Knife"].data.name in bpy.data.meshes  # The blade's mesh stays.
+    assert bpy.ops.hapticut.bake_recording() == {"FINISHED"}
+    assert len(baking.baked_objects(baked)) == 3
+
+
+def test_the_bake_survives_save_and_reopen_and_renders(baked, tmp_path):
+    path = str(tmp_path / "baked.blend")
+    faces = len(bpy.data.objects["Cut Knife"].data.polygons)
+    bpy.ops.wm.save_as_mainfile(filepath=path)
+    bpy.ops.wm.read_homefile(use_empty=True)
+    bpy.ops.wm.open_mainfile(filepath=path)
+    scene = bpy.context.scene
+    assert len(bpy.data.objects["Cut Knife"].data.polygons) == faces
+    assert bpy.data.objects["Cut Knife"].modifiers["Hapticut Reveal"].node_group is not None
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    scene.collection.objects.link(camera)
+    camera.location = (0, -60, 30)
+    camera.rotation_euler = (1.1, 0, 0)
+    scene.camera = camera
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = 1
+    scene.render.resolution_x, scene.render.resolution_y = 48, 32
+    scene.render.filepath = str(tmp_path / "frame.png")
+    scene.frame_set(40)
+    bpy.ops.render.render(write_still=True)
+    image = bpy.data.images.load(str(tmp_path / "frame.png"))
+    assert tuple(image.size) == (48, 32)

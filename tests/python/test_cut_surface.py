@@ -1,0 +1,142 @@
+"""hapticut.cut_surface (pure numpy, loaded by the Blender add-on) against the engine: its tet
+locator agrees with Space.locate, and the cut surface of a real servo stroke through the
+finger (skin, flesh, onto the bone, across) lies in cuttable material only."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hapticut import cut_surface
+from hapticut.engine import load_space
+from hapticut.recording import read_recording
+from hapticut.servo_client import ServoProcess
+
+FINGER = Path(__file__).resolve().parents[2] / "examples" / "finger.hapticut.msgpack"
+CUTTABLE = {"drag", "viscous", "membrane"}
+# Down from above into the bone (its surface is 3.5 mm from the axis: the skin, a membrane,
+# gives way at 1 N a point, a 10 mm lag at 0.1 N/mm), then across
+# and out of the finger (mm, s).
+STROKE = [(0.0, (0, 0, 20)), (0.8, (0, 0, -3.0)), (1.8, (0, 22, -3.0))]
+
+
+@pytest.fixture(scope="module")
+def finger():
+    return load_space(FINGER)
+
+
+def test_the_locator_agrees_with_the_engine(finger):
+    scene, space = finger
+    points = np.random.default_rng(7).uniform(
+        scene.vertices.min(0) - 5, scene.vertices.max(0) + 5, (20000, 3)
+    )
+    mine = cut_surface.TetLocator(scene.vertices, scene.tets).locate(points)
+    theirs = space.locate(points)
+    assert np.array_equal(mine >= 0, theirs >= 0)
+    inside = theirs >= 0
+    assert np.array_equal(scene.tet_materials[mine[inside]], scene.tet_materials[theirs[inside]])
+    assert (~inside).sum() > 100  # Some points were outside the mesh.
+
+
+def stroke_poses(rate_Hz: float) -> list:
+    times = np.arange(0, STROKE[-1][0] + 1e-9, 1 / rate_Hz)
+    keys_t = [t for t, _ in STROKE]
+    xyz = np.stack([np.interp(times, keys_t, [p[i] for _, p in STROKE]) for i in range(3)], 1)
+    return [[float(t), *map(float, p), 1.0, 0.0, 0.0, 0.0] for t, p in zip(times, xyz, strict=True)]
+
+
+@pytest.fixture(scope="module")
+def stroke_recording(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("cut")
+    path = folder / "stroke.path.json"
+    path.write_text(json.dumps({"poses": stroke_poses(1000.0)}))
+    record = folder / "stroke.rec"
+    servo = ServoProcess(
+        [
+            str(FINGER),
+            "--device",
+            f"scalpel=sim:{path},hand=0,hold_s=0",
+            "--as-fast-as-possible",
+            "--exit-when-done",
+            "--engage",
+            "--quiet",
+            "--record",
+            str(record),
+        ],
+        control=False,
+    ).start()
+    assert servo.wait(120) == 0, servo.stderr_lines
+    return read_recording(record)
+
+
+def test_the_cut_surface_of_a_servo_stroke_is_in_cuttable_material_only(finger, stroke_recording):
+    scene, space = finger
+    rec = stroke_recording
+    blade = rec.blade("scalpel")
+    times = rec.ticks["time_s"] - rec.ticks["time_s"][0]
+    models = [m.model for m in scene.materials]
+    surface = cut_surface.cut_surface(
+        blade["q"],
+        blade["state"],
+        times,
+        24.0,
+        1,
+        scene.vertices,
+        scene.tets,
+        scene.tet_materials,
+        models,
+    )
+    assert len(surface.faces) > 50
+    corners = surface.vertices[surface.faces]
+    centres = corners.mean(axis=1)
+    midpoints = (corners + np.roll(corners, 1, axis=1)).reshape(-1, 3) / 2
+    for points in (centres, midpoints, surface.vertices):
+        tets = space.locate(points)
+        assert np.all(tets >= 0)
+        found = {models[m] for m in scene.tet_materials[tets]}
+        assert found <= CUTTABLE, found
+    # Through the flesh; the frames run from the first to the last frame.
+    found = {models[m] for m in scene.tet_materials[space.locate(centres)]}
+    assert "drag" in found
+    assert surface.face_frames.min() >= 1
+    assert surface.face_frames.max() <= 1 + int(np.ceil(times[-1] * 24))
+    # The device points went into the bone (and no face is there: checked above).
+    assert blade["p"][:, :, 2].min() == pytest.approx(-3.0)
+    in_bone = scene.tet_materials[np.maximum(space.locate(blade["p"].reshape(-1, 3)), 0)]
+    assert np.any(np.array(models)[in_bone] == "rigid")
+
+
+def test_points_that_are_held_or_in_air_or_rigid_do_not_cut(finger):
+    scene, _ = finger
+    models = [m.model for m in scene.materials]
+    locator = cut_surface.TetLocator(scene.vertices, scene.tets)
+    q = np.array([[[-20, 0, 0], [-20, 0, 5.0], [-20, 0, 8.0], [-20, 0, 14], [-20, 0, 5.0]]])
+    states = np.array([[0, 0, 0, 0, 1]])  # The last one is held on a face.
+    cuts = cut_surface.cuttable_points(q, states, locator, scene.tet_materials, models)
+    assert cuts.tolist() == [[False, True, True, False, False]]
+
+
+def test_a_quad_needs_all_four_corners_cutting():
+    q = np.zeros((3, 3, 3))
+    q[:, :, 0] = np.arange(3)[None, :]
+    q[:, :, 1] = np.arange(3)[:, None]
+    states = np.zeros((3, 3), np.uint8)
+    cutting = np.ones((3, 3), bool)
+    cutting[2, 2] = False
+    surface = cut_surface.sweep(q, states, np.arange(3), np.array([1.0, 2.0, 3.0]), cutting)
+    assert len(surface.faces) == 2 * 3  # Three of the four quads.
+    assert sorted(set(surface.face_frames.tolist())) == [2, 3]
+    states[1, 0] = 1  # Point 0 left its tet at row 1: its quads go.
+    surface = cut_surface.sweep(q, states, np.arange(3), np.array([1.0, 2.0, 3.0]), cutting)
+    assert len(surface.faces) == 2 * 1
+
+
+def test_the_preview_holds_the_tets_the_bake_locates_in(finger):
+    from hapticut.preview import preview_arrays
+
+    scene, _ = finger
+    arrays = preview_arrays(scene)
+    assert np.array_equal(arrays["tets"], scene.tets)
+    assert np.array_equal(arrays["tet_materials"], scene.tet_materials)
+    assert np.array_equal(arrays["tet_vertices"], scene.vertices)
+    assert arrays["tets"].dtype == np.int32
