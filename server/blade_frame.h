@@ -1,7 +1,8 @@
-// BladeFrame: what the servo publishes and records of one blade after a tick
-// (device points p, proxies q, proxy states, the tick's force and torque),
-// read from Blade's public accessors by the one function below. Sized once
-// for the blade's points; filling it never allocates.
+// BladeFrame: what the servo publishes and records of one blade after a tick:
+// the engine's own snapshot (Blade::snapshot: per point the proxy place, the
+// device point p and the force; the tick with its work budget; the blade's
+// counters) and the proxies per state. Sized once for the blade's points;
+// filling it never allocates.
 #pragma once
 
 #include <array>
@@ -13,16 +14,13 @@
 namespace hapticut::servo {
 
 struct BladeFrame {
-  explicit BladeFrame(int points = 0)
-      : q_mm(static_cast<std::size_t>(points)),
-        p_mm(static_cast<std::size_t>(points)),
-        state(static_cast<std::size_t>(points)) {}
+  explicit BladeFrame(int points = 0) : points(static_cast<std::size_t>(points)) {}
 
-  std::vector<Vec3> q_mm;
-  std::vector<Vec3> p_mm;
-  std::vector<std::uint8_t> state;  // ProxyState per point.
+  std::size_t point_count() const { return points.size(); }
+
+  BladeSnapshotHeader header;  // header.tick: the last step; header.counters: since the run began.
+  std::vector<ProxySnapshot> points;
   std::array<std::uint16_t, kProxyStateCount> state_counts{};
-  BladeTick tick;
 };
 
 // Copies the blade's state after its last step into `frame` (sized for it).

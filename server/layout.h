@@ -17,8 +17,8 @@
 
 namespace hapticut::servo {
 
-inline constexpr std::uint16_t kFrameVersion = 1;
-inline constexpr std::uint16_t kRecordVersion = 1;
+inline constexpr std::uint16_t kFrameVersion = 2;
+inline constexpr std::uint16_t kRecordVersion = 2;
 inline constexpr char kFrameMagic[4] = {'H', 'C', 'F', 'R'};
 // The largest UDP payload over IPv4; a scene whose frame is larger is refused.
 inline constexpr std::size_t kMaxFrameBytes = 65507;
@@ -72,7 +72,15 @@ inline constexpr std::size_t kMaxFrameBytes = 65507;
   F(std::uint16_t, capped_points)                                                      \
   F(std::uint8_t, device_status) /* DeviceStatus: 0 fresh, 1 stale, 2 lost. */         \
   F(std::uint8_t, step_kind)     /* StepKind: 0 none, 1 step, 2 reset + step. */       \
-  F(std::uint16_t, max_transitions)
+  F(std::uint16_t, max_transitions)                                                    \
+  F(double, stiffness_N_per_mm)    /* k of this tick's settings. */                    \
+  F(std::uint64_t, rejected_ticks) /* Engine counters of the run. */                   \
+  F(std::uint64_t, out_of_workspace_ticks)                                             \
+  F(std::uint64_t, unfinished_ticks)                                                   \
+  F(std::uint32_t, transitions) /* This tick, all points. */                           \
+  F(std::uint16_t, deferred_points)                                                    \
+  F(std::uint8_t, engine_rejected) /* 1: the engine refused the sample. */             \
+  F(std::uint8_t, force_shading)   /* 1: this tick's settings shade. */
 
 #define HAPTICUT_DECLARE_FIELD(type, name) type name{};
 #define HAPTICUT_DECLARE_ARRAY(type, name, count) type name[count]{};

@@ -8,9 +8,10 @@ namespace hapticut::servo {
 namespace {
 
 constexpr const char* kFlagNames[kSafetyFlagCount] = {
-    "engaged",         "ramping",         "force_clamped",     "torque_clamped",   "device_lost",
-    "watchdog",        "non_finite_pose", "outside_workspace", "non_finite_force", "passivity",
-    "no_force_output", "stale",           "waiting",           "stopping"};
+    "engaged",          "ramping",   "force_clamped",   "torque_clamped",
+    "device_lost",      "watchdog",  "non_finite_pose", "outside_workspace",
+    "non_finite_force", "passivity", "no_force_output", "stale",
+    "waiting",          "stopping",  "engine_rejected"};
 
 bool pose_is_finite(const Pose& pose) {
   const Quaternion& r = pose.rotation;

@@ -3,7 +3,9 @@
 //   before the engine steps (admit): the device's status and sample are
 //     checked: lost, watchdog (no new sample for N ticks), a pose that is not
 //     finite or lies outside the device's workspace. Any of these is a fault:
-//     the engine does not step and the force is zero in this same tick.
+//     the engine does not step and the force is zero in this same tick. The
+//     engine's own refusal of a sample (outside the scene's workspace, zero
+//     rotation) is reported by engine_refused as the same kind of fault.
 //   after it steps (render): a force or torque that is not finite is a fault;
 //     then the passivity controller (if any), the clamp to the limits (the
 //     device's, lowered by the scene or a control message), and the ramp
@@ -36,11 +38,15 @@ enum SafetyFlag : std::uint32_t {
   kSafetyStale = 1U << 11,            // No new sample this tick (not yet a fault).
   kSafetyWaiting = 1U << 12,          // No sample yet since start.
   kSafetyStopping = 1U << 13,         // Ramping down before the loop ends.
+  // Fault: the engine refused the sample for a reason of its own (a rotation
+  // of zero norm, settings out of range). A sample outside the scene's
+  // workspace, which the engine also refuses, is kSafetyOutsideWorkspace.
+  kSafetyEngineRejected = 1U << 14,
 };
-inline constexpr int kSafetyFlagCount = 14;
+inline constexpr int kSafetyFlagCount = 15;
 inline constexpr std::uint32_t kSafetyFaults = kSafetyDeviceLost | kSafetyWatchdog |
                                                kSafetyNonFinitePose | kSafetyOutsideWorkspace |
-                                               kSafetyNonFiniteForce;
+                                               kSafetyNonFiniteForce | kSafetyEngineRejected;
 // Names in bit order, for messages and the protocol's status.
 const char* safety_flag_name(int bit);
 
@@ -79,6 +85,9 @@ class SafetyChannel {
 
   // Before the engine steps: may it step with this sample?
   bool admit(DeviceStatus status, const DeviceSample& sample);
+  // After admit: the engine refused the sample (a fault flag: kSafetyOutsideWorkspace
+  // or kSafetyEngineRejected); render then makes the force zero this tick.
+  void engine_refused(std::uint32_t fault_flag) { tick_flags_ |= fault_flag; }
   // After: the force and torque to write. engine_ok false when the engine did
   // not step (the force is then zero).
   SafetyOutput render(const Vec3& engine_force_N, const Vec3& engine_torque_N_mm, bool engine_ok,

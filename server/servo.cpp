@@ -99,13 +99,13 @@ void Servo::load(const SessionConfig& config) {
   shared_->ring.store(nullptr);
   session_ = std::move(session);
   recorder_ = std::move(recorder);
-  shared_->force_scale.store(1.0);
+  shared_->settings.publish(session_->runtime_settings());  // The scene's, until a "set".
   run_ended_.store(false);
   if (!options_.quiet) {
     std::printf("hapticut-servo: loaded %s: %zu blade(s) at %g Hz\n",
                 session_->scene_label().c_str(), session_->bindings().size(), session_->rate_Hz());
     for (const Binding& b : session_->bindings()) {
-      std::printf("  blade '%s' (%zu points) <- %s\n", b.blade_name.c_str(), b.frame.q_mm.size(),
+      std::printf("  blade '%s' (%zu points) <- %s\n", b.blade_name.c_str(), b.frame.point_count(),
                   b.device_text.c_str());
     }
     std::fflush(stdout);
@@ -244,6 +244,14 @@ nlohmann::json Servo::status() {
   out["rate_Hz"] = session_ ? session_->rate_Hz() : 0.0;
   out["engaged"] = shared_->engaged.load();
   out["realtime"] = realtime_message_;
+  RuntimeSettings settings;
+  if (session_ && shared_->settings.read(settings) != 0) {
+    out["settings"] = {{"stiffness_N_per_mm", settings.stiffness_N_per_mm},
+                       {"shading", settings.force_shading},
+                       {"max_transitions_per_tick", settings.max_transitions_per_tick},
+                       {"capped_tick_force_N", settings.capped_tick_force_N},
+                       {"blade_transition_budget", settings.blade_transition_budget}};
+  }
   return out;
 }
 
@@ -283,6 +291,77 @@ void Servo::housekeeping() {
   }
 }
 
+// "set": settings per tick (validated as the scene file's, handed to the loop
+// through a LatestValue: the next tick steps with them), safety limits, the
+// stream rate. All or nothing: a bad value applies none.
+nlohmann::json Servo::set_parameters(const nlohmann::json& message) {
+  static const char* const kKnown[] = {"type",
+                                       "id",
+                                       "stiffness_N_per_mm",
+                                       "shading",
+                                       "max_transitions_per_tick",
+                                       "capped_tick_force_N",
+                                       "blade_transition_budget",
+                                       "max_force_N",
+                                       "max_torque_N_mm",
+                                       "ramp_time_s",
+                                       "stream_rate_Hz"};
+  for (const auto& [key, value] : message.items()) {
+    if (std::find(std::begin(kKnown), std::end(kKnown), key) == std::end(kKnown)) {
+      throw CommandError("unknown parameter '" + key +
+                         "' (known: stiffness_N_per_mm, shading, max_transitions_per_tick, "
+                         "capped_tick_force_N, blade_transition_budget, max_force_N, "
+                         "max_torque_N_mm, ramp_time_s, stream_rate_Hz); nothing applied");
+    }
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  RuntimeSettings settings;
+  const bool has_settings = shared_->settings.read(settings) != 0;
+  bool settings_changed = false;
+  LimitsRequest limits;
+  shared_->limits.read(limits);
+  bool limits_changed = false;
+  nlohmann::json applied = nlohmann::json::object();
+  for (const auto& [key, value] : message.items()) {
+    if (key == "type" || key == "id") continue;
+    if (key == "stiffness_N_per_mm" || key == "capped_tick_force_N") {
+      (key == "stiffness_N_per_mm" ? settings.stiffness_N_per_mm : settings.capped_tick_force_N) =
+          number_field(message, key.c_str());
+      settings_changed = true;
+    } else if (key == "max_transitions_per_tick" || key == "blade_transition_budget") {
+      if (!value.is_number_integer()) throw CommandError(key + ": expected an integer");
+      const auto v = value.get<std::int64_t>();
+      if (v < 0 || v > 1000000000) throw CommandError(key + ": out of range");
+      (key == "max_transitions_per_tick" ? settings.max_transitions_per_tick
+                                         : settings.blade_transition_budget) = static_cast<int>(v);
+      settings_changed = true;
+    } else if (key == "shading") {
+      if (!value.is_boolean()) throw CommandError("shading: expected true or false");
+      settings.force_shading = value.get<bool>();
+      settings_changed = true;
+    } else if (key == "max_force_N" || key == "max_torque_N_mm" || key == "ramp_time_s") {
+      const double v = number_field(message, key.c_str());
+      if (!(v > 0.0)) throw CommandError(key + ": must be positive");
+      (key == "max_force_N"       ? limits.max_force_N
+       : key == "max_torque_N_mm" ? limits.max_torque_N_mm
+                                  : limits.ramp_time_s) = v;
+      limits_changed = true;
+    }
+    applied[key] = value;
+  }
+  if (settings_changed) {
+    if (!session_ || !has_settings) throw CommandError("settings per tick: no scene loaded");
+    try {
+      settings.validate();
+    } catch (const std::invalid_argument& e) {
+      throw CommandError(std::string(e.what()) + "; nothing applied");
+    }
+    shared_->settings.publish(settings);
+  }
+  if (limits_changed) shared_->limits.publish(limits);
+  return {{"applied", applied}, {"note", "safety limits only lower the device's"}};
+}
+
 nlohmann::json Servo::command(const nlohmann::json& message) {
   const std::string type = message.at("type").get<std::string>();
   if (type == "load") {
@@ -309,7 +388,7 @@ nlohmann::json Servo::command(const nlohmann::json& message) {
     nlohmann::json blades = nlohmann::json::array();
     for (const Binding& b : session_->bindings()) {
       blades.push_back({{"name", b.blade_name},
-                        {"points", b.frame.q_mm.size()},
+                        {"points", b.frame.point_count()},
                         {"device", b.device_text},
                         {"kind", b.device->kind()}});
     }
@@ -332,55 +411,7 @@ nlohmann::json Servo::command(const nlohmann::json& message) {
     shared_->engaged.store(v.get<bool>());
     return {{"engaged", v.get<bool>()}};
   }
-  if (type == "set") {
-    LimitsRequest limits;
-    shared_->limits.read(limits);
-    bool limits_changed = false;
-    nlohmann::json applied = nlohmann::json::object();
-    static const char* const kKnown[] = {"type",
-                                         "id",
-                                         "stiffness_N_per_mm",
-                                         "max_force_N",
-                                         "max_torque_N_mm",
-                                         "ramp_time_s",
-                                         "stream_rate_Hz",
-                                         "shading"};
-    for (const auto& [key, value] : message.items()) {
-      if (std::find(std::begin(kKnown), std::end(kKnown), key) == std::end(kKnown)) {
-        throw CommandError("unknown parameter '" + key +
-                           "' (known: stiffness_N_per_mm, max_force_N, max_torque_N_mm, "
-                           "ramp_time_s, stream_rate_Hz); nothing applied");
-      }
-    }
-    for (const auto& [key, value] : message.items()) {
-      if (key == "type" || key == "id") continue;
-      if (key == "stiffness_N_per_mm") {
-        std::lock_guard<std::mutex> lock(mutex_);
-        if (!session_) throw CommandError("stiffness_N_per_mm: no scene loaded");
-        const double k = number_field(message, "stiffness_N_per_mm");
-        if (!(k > 0.0)) throw CommandError("stiffness_N_per_mm: must be positive");
-        shared_->force_scale.store(k / session_->scene().stiffness_N_per_mm);
-      } else if (key == "max_force_N" || key == "max_torque_N_mm" || key == "ramp_time_s") {
-        const double v = number_field(message, key.c_str());
-        if (!(v > 0.0)) throw CommandError(key + ": must be positive");
-        (key == "max_force_N"       ? limits.max_force_N
-         : key == "max_torque_N_mm" ? limits.max_torque_N_mm
-                                    : limits.ramp_time_s) = v;
-        limits_changed = true;
-      } else if (key == "shading") {
-        throw CommandError(
-            "shading: not available in this engine build (force shading per tick comes with "
-            "the engine's runtime settings)");
-      } else if (key != "stream_rate_Hz") {
-        throw CommandError("unknown parameter '" + key +
-                           "' (known: stiffness_N_per_mm, max_force_N, max_torque_N_mm, "
-                           "ramp_time_s, stream_rate_Hz)");
-      }
-      applied[key] = value;
-    }
-    if (limits_changed) shared_->limits.publish(limits);
-    return {{"applied", applied}, {"note", "safety limits only lower the device's"}};
-  }
+  if (type == "set") return set_parameters(message);
   if (type == "status") return status();
   if (type == "record") {
     const std::string action = message.value("action", "start");

@@ -54,6 +54,7 @@ class Servo {
   bool run_ended() const { return run_ended_.load(); }
 
  private:
+  nlohmann::json set_parameters(const nlohmann::json& message);
   nlohmann::json finish_run_locked();
   nlohmann::json stats_locked() const;
   void housekeeping();

@@ -10,27 +10,55 @@ namespace hapticut::servo {
 
 namespace {
 
-// One blade: read, admit, step, render, write. Returns the tick's result in
-// binding.result.
+// Whether the engine would take `pose` for `blade` (what Blade::reset and
+// Blade::step check): a valid rotation and every point inside the Space's
+// workspace. Asked only before a reset, which throws for a refused pose.
+std::uint32_t engine_refusal(const Blade& blade, const Pose& pose) {
+  if (!is_finite(pose.position_mm) || !pose.rotation.valid()) return kSafetyEngineRejected;
+  const Quaternion r = pose.rotation.normalized();
+  for (const Vec3& t : blade.tool_points()) {
+    if (!blade.space().in_workspace(pose.position_mm + r.rotate(t))) return kSafetyOutsideWorkspace;
+  }
+  return 0;
+}
+
+// One blade: read, admit, step with this tick's settings, render, write.
+// Returns the tick's result in binding.result.
 void tick_blade(Binding& b, double now_s, double dt_s, bool engaged, bool stopping,
-                double force_scale) {
+                const RuntimeSettings& settings) {
   BladeTickResult& r = b.result;
   r.status = b.device->read(now_s, r.sample);
   r.step = StepKind::None;
   r.engine_force_N = Vec3{};
   r.engine_torque_N_mm = Vec3{};
+  r.stiffness_N_per_mm = settings.stiffness_N_per_mm;
+  r.force_shading = settings.force_shading;
+  r.engine_rejected = false;
   bool engine_ok = false;
   if (b.safety->admit(r.status, r.sample)) {
-    r.step = b.has_reset ? StepKind::Step : StepKind::ResetAndStep;
-    if (!b.has_reset) {
-      b.blade->reset(r.sample.pose);
-      b.has_reset = true;
+    const std::uint32_t refusal = b.has_reset ? 0U : engine_refusal(*b.blade, r.sample.pose);
+    if (refusal != 0) {
+      r.engine_rejected = true;
+      b.safety->engine_refused(refusal);
+    } else {
+      r.step = b.has_reset ? StepKind::Step : StepKind::ResetAndStep;
+      if (!b.has_reset) {
+        b.blade->reset(r.sample.pose);
+        b.has_reset = true;
+      }
+      r.step_dt_s = r.sample.dt_s > 0.0 ? r.sample.dt_s : dt_s;
+      const std::uint64_t far_before = b.blade->counters().out_of_workspace_ticks;
+      const BladeTick tick = b.blade->step(r.sample.pose, r.step_dt_s, settings);
+      engine_ok = !tick.rejected;
+      if (tick.rejected) {
+        r.engine_rejected = true;
+        b.safety->engine_refused(b.blade->counters().out_of_workspace_ticks > far_before
+                                     ? kSafetyOutsideWorkspace
+                                     : kSafetyEngineRejected);
+      }
+      r.engine_force_N = tick.force_N;
+      r.engine_torque_N_mm = tick.torque_N_mm;
     }
-    r.step_dt_s = r.sample.dt_s > 0.0 ? r.sample.dt_s : dt_s;
-    const BladeTick tick = b.blade->step(r.sample.pose, r.step_dt_s);
-    engine_ok = !tick.rejected;
-    r.engine_force_N = tick.force_N * force_scale;
-    r.engine_torque_N_mm = tick.torque_N_mm * force_scale;
     read_blade_frame(*b.blade, b.frame);
   }
   r.safety =
@@ -84,7 +112,11 @@ void run_loop(Session& session, LoopShared& shared) {
     b.safety->restart();
     b.has_reset = false;
     b.result = BladeTickResult{};
+    b.blade->clear_counters();  // The frames' engine counters count this run.
   }
+  // Settings per tick: the scene's until the control channel publishes others.
+  RuntimeSettings settings = session.runtime_settings();
+  shared.settings.read(settings);
   std::uint64_t limits_seen = 0;
   const double start_s = monotonic_now_s();
   double deadline_s = start_s + period_s;
@@ -128,12 +160,12 @@ void run_loop(Session& session, LoopShared& shared) {
       stop_started_s = now_s;
     }
     const bool engaged = shared.engaged.load(std::memory_order_relaxed);
-    const double force_scale = shared.force_scale.load(std::memory_order_relaxed);
+    shared.settings.read(settings);  // Newest settings (a sequence lock, no waiting).
     const bool recording = shared.record_wanted.load(std::memory_order_acquire);
     shared.recording.store(recording, std::memory_order_release);
 
     // The tick: devices -> engine -> safety -> devices.
-    for (Binding& b : bindings) tick_blade(b, now_s, dt_s, engaged, stopping, force_scale);
+    for (Binding& b : bindings) tick_blade(b, now_s, dt_s, engaged, stopping, settings);
     const double compute_us = (monotonic_now_s() - woke_s) * 1e6;
 
     // Counters.

@@ -43,7 +43,9 @@ struct LoopShared {
   // In (control -> loop).
   std::atomic<bool> stop_requested{false};
   std::atomic<bool> engaged{false};
-  std::atomic<double> force_scale{1.0};        // Stiffness asked for / the scene's.
+  // Settings per tick (set by the control channel, validated; none published:
+  // the scene's). Read by the loop every tick.
+  LatestValue<RuntimeSettings> settings;
   std::atomic<double> stream_interval_s{0.0};  // 0: nobody subscribed, no frames.
   std::atomic<bool> record_wanted{false};
   LatestValue<LimitsRequest> limits;

@@ -42,6 +42,7 @@ Session::Session(const SessionConfig& config) {
   }
   as_fast_as_possible_ = config.as_fast_as_possible;
   space_ = Space::from_scene(scene_);
+  shading_ = std::make_shared<const ForceShading>(*space_);
 
   std::vector<DeviceSpec> specs;
   for (const std::string& text : config.devices) specs.push_back(parse_device_spec(text));
@@ -104,7 +105,7 @@ Session::Session(const SessionConfig& config) {
     binding.device_text = spec->text;
     binding.device = make_device(*spec, context);
     binding.viewport = dynamic_cast<ViewportDevice*>(binding.device.get());
-    binding.blade = std::make_unique<Blade>(space_, blade_spec);
+    binding.blade = std::make_unique<Blade>(space_, blade_spec, shading_);
     binding.requested = request;
     binding.safety = std::make_unique<SafetyChannel>(request, binding.device->limits());
     // A per-device passivity controller plugs in here:
@@ -122,7 +123,7 @@ Session::Session(const SessionConfig& config) {
   recording_info_.scene = scene_label_;
   for (const Binding& b : bindings_) {
     recording_info_.blades.push_back(
-        {b.blade_name, b.device_text, static_cast<std::uint32_t>(b.frame.q_mm.size()), 0});
+        {b.blade_name, b.device_text, static_cast<std::uint32_t>(b.frame.point_count()), 0});
   }
   lay_out_record(recording_info_);
 }
@@ -137,7 +138,7 @@ Binding* Session::find(const std::string& blade_name) {
 std::size_t Session::frame_bytes() const {
   std::size_t bytes = sizeof(FrameHeader);
   for (const Binding& b : bindings_)
-    bytes += sizeof(BladeBlock) + points_block_bytes(b.frame.q_mm.size());
+    bytes += sizeof(BladeBlock) + points_block_bytes(b.frame.point_count());
   return bytes;
 }
 

@@ -53,6 +53,8 @@ class Session {
   const Scene& scene() const { return scene_; }
   const std::string& scene_label() const { return scene_label_; }
   double rate_Hz() const { return rate_Hz_; }
+  // The scene's settings per tick (what a run starts with).
+  const RuntimeSettings& runtime_settings() const { return space_->runtime_settings(); }
   bool as_fast_as_possible() const { return as_fast_as_possible_; }
   std::vector<Binding>& bindings() { return bindings_; }
   const std::vector<Binding>& bindings() const { return bindings_; }
@@ -65,6 +67,8 @@ class Session {
   Scene scene_;
   std::string scene_label_;
   std::shared_ptr<const Space> space_;
+  // Built at load, shared by every blade: the settings per tick switch it on.
+  std::shared_ptr<const ForceShading> shading_;
   double rate_Hz_ = 1000.0;
   bool as_fast_as_possible_ = false;
   std::vector<Binding> bindings_;

@@ -31,26 +31,37 @@ std::size_t write_blade_block(const BladeTickResult& result, const BladeFrame& f
   put(block.torque_N_mm, result.safety.torque_N_mm);
   block.ramp = result.safety.ramp;
   block.step_dt_s = result.step == StepKind::None ? 0.0 : result.step_dt_s;
-  const std::size_t points = frame.q_mm.size();
+  const std::size_t points = frame.point_count();
+  const BladeTick& tick = frame.header.tick;
+  const BladeCounters& counters = frame.header.counters;
   block.point_count = static_cast<std::uint32_t>(points);
   block.buttons = result.sample.buttons;
   block.safety_flags = result.safety.flags;
   block.events = result.safety.events;
   for (int s = 0; s < kProxyStateCount; ++s) block.state_counts[s] = frame.state_counts[s];
-  block.capped_points = static_cast<std::uint16_t>(frame.tick.capped_points);
+  block.capped_points = static_cast<std::uint16_t>(tick.capped_points);
   block.device_status = static_cast<std::uint8_t>(result.status);
   block.step_kind = static_cast<std::uint8_t>(result.step);
-  block.max_transitions = static_cast<std::uint16_t>(frame.tick.max_transitions);
+  block.max_transitions = static_cast<std::uint16_t>(tick.max_transitions);
+  block.stiffness_N_per_mm = result.stiffness_N_per_mm;
+  block.rejected_ticks = counters.rejected_ticks;
+  block.out_of_workspace_ticks = counters.out_of_workspace_ticks;
+  block.unfinished_ticks = counters.unfinished_ticks;
+  block.transitions = static_cast<std::uint32_t>(tick.transitions);
+  block.deferred_points = static_cast<std::uint16_t>(tick.deferred_points);
+  block.engine_rejected = result.engine_rejected ? 1 : 0;
+  block.force_shading = result.force_shading ? 1 : 0;
   std::memcpy(out, &block, sizeof(block));
   unsigned char* points_out = out + sizeof(block);
   const std::size_t bytes = points_block_bytes(points);
   std::memset(points_out + points * 6 * sizeof(double), 0, bytes - points * 6 * sizeof(double));
   const PointsView view = points_view(points_out, points);
   for (std::size_t i = 0; i < points; ++i) {
-    std::memcpy(view.q + 3 * i, &frame.q_mm[i], 3 * sizeof(double));
-    std::memcpy(view.p + 3 * i, &frame.p_mm[i], 3 * sizeof(double));
+    const ProxySnapshot& point = frame.points[i];
+    std::memcpy(view.q + 3 * i, &point.place.q, 3 * sizeof(double));
+    std::memcpy(view.p + 3 * i, &point.p, 3 * sizeof(double));
+    view.state[i] = static_cast<std::uint8_t>(point.place.state);
   }
-  std::memcpy(view.state, frame.state.data(), points);
   return sizeof(block) + bytes;
 }
 

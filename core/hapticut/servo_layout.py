@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-FRAME_VERSION = 1
-RECORD_VERSION = 1
+FRAME_VERSION = 2
+RECORD_VERSION = 2
 FRAME_MAGIC = b"HCFR"
 RECORDING_MAGIC = b"HCREC001"
 MAX_FRAME_BYTES = 65507
@@ -77,6 +77,14 @@ BLADE_BLOCK = np.dtype(
         ("device_status", "u1"),
         ("step_kind", "u1"),
         ("max_transitions", "<u2"),
+        ("stiffness_N_per_mm", "<f8"),
+        ("rejected_ticks", "<u8"),
+        ("out_of_workspace_ticks", "<u8"),
+        ("unfinished_ticks", "<u8"),
+        ("transitions", "<u4"),
+        ("deferred_points", "<u2"),
+        ("engine_rejected", "u1"),
+        ("force_shading", "u1"),
     ]
 )
 
@@ -99,6 +107,7 @@ SAFETY_FLAGS = (
     "stale",
     "waiting",
     "stopping",
+    "engine_rejected",
 )
 FAULT_FLAGS = (
     "device_lost",
@@ -106,6 +115,7 @@ FAULT_FLAGS = (
     "non_finite_pose",
     "outside_workspace",
     "non_finite_force",
+    "engine_rejected",
 )
 DEVICE_STATUS = ("fresh", "stale", "lost")
 STEP_KINDS = ("none", "step", "reset_and_step")

@@ -18,6 +18,7 @@ DeviceLimits SimDevice::limits() const {
 void SimDevice::start() {
   started_ = false;
   nan_left_ = options_.nan_ticks;
+  far_left_ = options_.far_ticks;
   rendered_force_N_ = Vec3{};
   sample_ = DeviceSample{};
   finished_.store(false, std::memory_order_relaxed);
@@ -51,6 +52,10 @@ DeviceStatus SimDevice::read(double now_s, DeviceSample& sample) {
     --nan_left_;
     sample.pose.position_mm.x = std::numeric_limits<double>::quiet_NaN();
   }
+  if (options_.far_at_s >= 0.0 && t >= options_.far_at_s && far_left_ > 0) {
+    --far_left_;
+    sample.pose.position_mm.x += 1e6;
+  }
   return DeviceStatus::Fresh;
 }
 
@@ -61,7 +66,7 @@ void SimDevice::write(const Vec3& force_N, const Vec3& /*torque_N_mm*/) {
 std::unique_ptr<Device> make_sim_device(const DeviceSpec& spec, const DeviceContext& context) {
   spec.check_options({"stroke", "speed", "hand", "mass_kg", "damping_N_s_per_mm", "spring_N_per_mm",
                       "max_force_N", "max_torque_N_mm", "hold_s", "fail_at_s", "recover_at_s",
-                      "nan_at_s", "nan_ticks"});
+                      "nan_at_s", "nan_ticks", "far_at_s", "far_ticks"});
   SimOptions options;
   options.hand = spec.number("hand", 1.0) != 0.0;
   options.hand_parameters.mass_kg = spec.number("mass_kg", options.hand_parameters.mass_kg);
@@ -79,6 +84,8 @@ std::unique_ptr<Device> make_sim_device(const DeviceSpec& spec, const DeviceCont
   options.recover_at_s = spec.number("recover_at_s", -1.0);
   options.nan_at_s = spec.number("nan_at_s", -1.0);
   options.nan_ticks = static_cast<int>(spec.number("nan_ticks", 1.0));
+  options.far_at_s = spec.number("far_at_s", -1.0);
+  options.far_ticks = static_cast<int>(spec.number("far_ticks", 1.0));
   const double speed = spec.number("speed", 100.0);
   const bool builtin = spec.value.empty() || spec.has("stroke") || spec.value == "press-slide" ||
                        spec.value == "press";

@@ -3,7 +3,8 @@
 // force the servo renders, so the loop is closed as with a real hand. Its
 // time is the loop's: real time, or the virtual time of --as-fast-as-possible.
 // Fault injection for the tests: fail_at_s (lost from then on, until
-// recover_at_s), nan_at_s (nan_ticks samples with a NaN pose).
+// recover_at_s), nan_at_s (nan_ticks samples with a NaN pose), far_at_s
+// (far_ticks finite but absurd samples, 1e6 mm off: the engine refuses them).
 #pragma once
 
 #include <atomic>
@@ -23,7 +24,8 @@ inline constexpr const char* kSimDeviceUsage =
     "      hand=0|1 (1: virtual hand feels the force; 0: pose = path)\n"
     "      mass_kg=0.2 damping_N_s_per_mm=0.002 spring_N_per_mm=0.3\n"
     "      max_force_N=10 max_torque_N_mm=1000 hold_s=0.2 (time at the end)\n"
-    "      fail_at_s=T recover_at_s=T nan_at_s=T nan_ticks=1 (fault injection)\n";
+    "      fail_at_s=T recover_at_s=T nan_at_s=T nan_ticks=1 far_at_s=T far_ticks=1\n"
+    "      (fault injection; far: a sample 1e6 mm off, outside the scene's workspace)\n";
 
 struct SimOptions {
   bool hand = true;
@@ -35,6 +37,8 @@ struct SimOptions {
   double recover_at_s = -1.0;
   double nan_at_s = -1.0;
   int nan_ticks = 1;
+  double far_at_s = -1.0;
+  int far_ticks = 1;
 };
 
 class SimDevice : public Device {
@@ -56,6 +60,7 @@ class SimDevice : public Device {
   double start_s_ = 0.0;
   double last_s_ = 0.0;
   int nan_left_ = 0;
+  int far_left_ = 0;
   Vec3 rendered_force_N_;
   DeviceSample sample_;
   std::atomic<bool> finished_{false};

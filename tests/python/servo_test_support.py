@@ -7,12 +7,13 @@ the device did through the engine (``hapticut._core.Blade``) and compares.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import subprocess
 from pathlib import Path
 
 import numpy as np
-from hapticut import engine, servo_path
+from hapticut import _core, engine, servo_path
 from hapticut.recording import Recording, read_recording
 from hapticut.scene import BladeSpec, load_scene, save_scene
 from hapticut.servo_client import ServoClient, ServoProcess
@@ -64,12 +65,19 @@ def two_blade_scene(path: Path) -> Path:
     return path
 
 
-def offline_check(scene_path: Path, recording: Recording, blade_name: str) -> int:
-    """Steps the engine offline through the recorded device poses and dts; asserts every
-    recorded q, p and engine force equals it bit for bit. Returns the ticks stepped."""
+def offline_check(
+    scene_path: Path, recording: Recording, blade_name: str, settings: dict | None = None
+) -> int:
+    """Steps the engine offline through the recorded device poses and dts, with each tick's
+    recorded stiffness and shading over the scene's settings per tick (fields in `settings`
+    replaced); asserts every recorded q, p, engine force, transitions and rejection equals it
+    bit for bit. Returns the ticks stepped."""
     scene, space = engine.load_space(scene_path)
     spec = next(b for b in scene.blades if b.name == blade_name)
-    blade = engine.make_blade(space, spec)
+    base = _core.runtime_settings(space)
+    for name, value in (settings or {}).items():
+        setattr(base, name, value)
+    blade = engine.make_blade(space, spec, base)
     records = recording.blade(blade_name)
     block = records["block"]
     stepped = 0
@@ -77,6 +85,13 @@ def offline_check(scene_path: Path, recording: Recording, blade_name: str) -> in
         kind = int(block["step_kind"][k])
         if kind == 0:
             continue
+        k_tick = float(block["stiffness_N_per_mm"][k])
+        shaded = bool(block["force_shading"][k])
+        if k_tick != base.stiffness_N_per_mm or shaded != base.force_shading:
+            base = copy.copy(base)
+            base.stiffness_N_per_mm = k_tick
+            base.force_shading = shaded
+            blade.settings = base
         pose = np.ascontiguousarray(block["pose"][k])
         if kind == 2:
             blade.reset(pose)
@@ -86,6 +101,12 @@ def offline_check(scene_path: Path, recording: Recording, blade_name: str) -> in
         assert np.array_equal(blade.p, records["p"][k]), f"{blade_name}: p differs at tick {k}"
         assert np.array_equal(tick["force_N"], block["engine_force_N"][k]), (
             f"{blade_name}: force differs at tick {k}"
+        )
+        assert tick["transitions"] == int(block["transitions"][k]), (
+            f"{blade_name}: transitions differ at tick {k}"
+        )
+        assert bool(tick["rejected"]) == bool(block["engine_rejected"][k]), (
+            f"{blade_name}: engine rejection differs at tick {k}"
         )
     return stepped
 
