@@ -6,3 +6,27 @@ benchmarks and the ``hapticut`` command.
 """
 
 __version__ = "0.1.0"
+
+
+def servo_path() -> str:
+    """The ``hapticut-servo`` executable installed with this package.
+
+    ``$HAPTICUT_SERVO`` overrides it (a build tree's binary). Raises
+    FileNotFoundError saying how to get one when it is missing.
+    """
+    import os
+
+    override = os.environ.get("HAPTICUT_SERVO")
+    if override:
+        if not os.access(override, os.X_OK):
+            raise FileNotFoundError(f"HAPTICUT_SERVO={override!r} is not an executable file")
+        return override
+    here = os.path.dirname(os.path.abspath(__file__))
+    path = os.path.join(here, "bin", "hapticut-servo")
+    if not os.access(path, os.X_OK):
+        raise FileNotFoundError(
+            f"hapticut-servo not found at {path}: this hapticut was installed without the "
+            "servo (reinstall with `pip install .`, which builds it with "
+            "HAPTICUT_BUILD_SERVO=ON), or set HAPTICUT_SERVO to a built binary"
+        )
+    return path

@@ -7,7 +7,7 @@ import importlib
 import sys
 
 # Each module defines NAME, HELP, add_arguments(parser) and run(args) -> int.
-COMMAND_MODULES = ("bench", "mesh", "info", "evaluate")
+COMMAND_MODULES = ("bench", "mesh", "info", "evaluate", "serve")
 
 
 def build_parser() -> argparse.ArgumentParser:

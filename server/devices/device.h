@@ -22,6 +22,9 @@ struct DeviceSample {
   double time_s = 0.0;
   // Increments with every new sample; the same number again means no new sample.
   std::uint64_t sequence = 0;
+  // > 0: the engine steps with this dt instead of the measured tick's (replay
+  // gives the recorded dt, so a replay is bit-identical). 0 for live devices.
+  double dt_s = 0.0;
 };
 
 // How read() went this tick.
@@ -69,6 +72,10 @@ class Device {
 
   // Non-real-time housekeeping thread, about 2 Hz: reconnection attempts.
   virtual void maintain() {}
+
+  // A scripted device (sim, replay) that has played its whole path. The
+  // servo may then end the run (--exit-when-done). Any thread.
+  virtual bool finished() const { return false; }
 };
 
 }  // namespace hapticut::servo

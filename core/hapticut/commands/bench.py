@@ -6,11 +6,11 @@ import argparse
 import platform
 
 NAME = "bench"
-HELP = "Print the engine's benchmark tables (Table 2 transitions, blade ticks)."
+HELP = "Print the benchmark tables (Table 2 transitions, blade ticks, the servo process)."
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("which", choices=["transitions", "blade"], help="which benchmark")
+    parser.add_argument("which", choices=["transitions", "blade", "servo"], help="which benchmark")
     parser.add_argument("--repeats", type=int, default=20000, help="calls per timed batch")
     parser.add_argument("--batches", type=int, default=15, help="batches (the median is shown)")
     parser.add_argument(
@@ -18,6 +18,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=int,
         default=5,
         help="time every row this many times in turn; each keeps its best round",
+    )
+    parser.add_argument(
+        "--duration", type=float, default=1.5, help="servo: seconds per row (16 rows)"
     )
     parser.add_argument(
         "--no-max-points", action="store_true", help="blade: skip the points-in-100-µs search"
@@ -32,6 +35,10 @@ def run(args: argparse.Namespace) -> int:
         from hapticut.bench import transitions
 
         print(transitions.run(args.repeats, args.batches, args.rounds))
+    elif args.which == "servo":
+        from hapticut.bench import servo
+
+        print(servo.run(duration_s=args.duration))
     else:
         from hapticut.bench import blade
 

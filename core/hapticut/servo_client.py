@@ -1,0 +1,351 @@
+"""A client for hapticut-servo's protocol (docs/protocol.md), standard library and numpy only.
+
+    with ServoProcess(["scene.hapticut.msgpack", "--wait", "--device", "scalpel=sim"]) as servo:
+        client = ServoClient(port=servo.port)
+        client.hello()
+        client.subscribe(rate_Hz=120)
+        client.start()
+        frame = client.poll()          # the newest frame, or None; never blocks
+        frame.blades["scalpel"]["q"]   # (N, 3) proxies, mm
+        client.stop()
+
+The Blender add-on uses this same file from a timer on the main thread
+(``poll`` drains the socket and keeps only the newest frame), so it must not
+import the compiled ``hapticut._core``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import struct
+import subprocess
+import threading
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from hapticut import servo_layout as layout
+
+PROTOCOL_VERSION = 1
+MAX_MESSAGE_BYTES = 16 << 20
+
+
+class ServoError(RuntimeError):
+    """The servo answered with an error, or the connection failed; the message says which."""
+
+
+@dataclass
+class Frame:
+    header: np.void  # layout.FRAME_HEADER
+    blades: dict[str, np.void]  # name -> layout.blade_dtype(points) ("block", "q", "p", "state")
+    received_s: float  # time.monotonic() on arrival (the servo's clock: CLOCK_MONOTONIC)
+
+    @property
+    def sequence(self) -> int:
+        return int(self.header["sequence"])
+
+    @property
+    def age_s(self) -> float:
+        """Arrival time minus the tick's time (both CLOCK_MONOTONIC, same machine)."""
+        return self.received_s - float(self.header["servo_time_s"])
+
+
+def parse_frame(data: bytes, names: Sequence[str] | None = None, received_s: float = 0.0) -> Frame:
+    """One datagram -> Frame. ValueError naming what is wrong for anything else."""
+    size = layout.FRAME_HEADER.itemsize
+    if len(data) < size:
+        raise ValueError(f"frame of {len(data)} bytes is shorter than its header ({size})")
+    header = np.frombuffer(data, dtype=layout.FRAME_HEADER, count=1)[0]
+    if bytes(header["magic"].tobytes()) != layout.FRAME_MAGIC:
+        raise ValueError("not a hapticut frame (magic)")
+    if int(header["version"]) != layout.FRAME_VERSION:
+        raise ValueError(f"frame version {int(header['version'])}, expected {layout.FRAME_VERSION}")
+    if int(header["frame_bytes"]) != len(data):
+        raise ValueError(f"frame says {int(header['frame_bytes'])} bytes, got {len(data)}")
+    blades: dict[str, np.void] = {}
+    offset = size
+    for i in range(int(header["blade_count"])):
+        if offset + layout.BLADE_BLOCK.itemsize > len(data):
+            raise ValueError(f"frame ends inside blade {i}")
+        points = int(np.frombuffer(data, layout.BLADE_BLOCK, 1, offset)[0]["point_count"])
+        dtype = layout.blade_dtype(points)
+        if offset + dtype.itemsize > len(data):
+            raise ValueError(f"frame ends inside blade {i}'s points")
+        name = names[i] if names is not None and i < len(names) else f"blade{i}"
+        blades[name] = np.frombuffer(data, dtype, 1, offset)[0]
+        offset += dtype.itemsize
+    return Frame(header, blades, received_s)
+
+
+class ServoClient:
+    """The control channel (TCP, length-prefixed JSON) and the stream (UDP)."""
+
+    def __init__(
+        self,
+        host: str = "127.0.0.1",
+        port: int = 0,
+        timeout_s: float = 10.0,
+        token: str | None = None,
+    ) -> None:
+        self.host = host
+        self.port = port
+        self.timeout_s = timeout_s
+        self.token = token
+        self.blade_names: list[str] = []
+        self.frames_received = 0
+        self.bad_datagrams = 0
+        self._sock: socket.socket | None = None
+        self._stream: socket.socket | None = None
+        self._next_id = 0
+
+    # Connection.
+    def connect(self) -> ServoClient:
+        if self._sock is None:
+            self._sock = socket.create_connection((self.host, self.port), timeout=self.timeout_s)
+            self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        return self
+
+    def close(self) -> None:
+        for s in (self._sock, self._stream):
+            if s is not None:
+                s.close()
+        self._sock = self._stream = None
+
+    def __enter__(self) -> ServoClient:
+        return self.connect()
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    # Messages.
+    def send_raw(self, payload: bytes) -> None:
+        """Bytes as they are (tests of malformed input)."""
+        self.connect()
+        assert self._sock is not None
+        self._sock.sendall(payload)
+
+    def send_message(self, message: dict) -> None:
+        text = json.dumps(message).encode("utf-8")
+        self.send_raw(struct.pack(">I", len(text)) + text)
+
+    def receive_message(self) -> dict:
+        header = self._receive_exactly(4)
+        (length,) = struct.unpack(">I", header)
+        if length > MAX_MESSAGE_BYTES:
+            raise ServoError(f"reply of {length} bytes is over the limit")
+        return json.loads(self._receive_exactly(length).decode("utf-8"))
+
+    def _receive_exactly(self, n: int) -> bytes:
+        assert self._sock is not None
+        chunks = []
+        while n:
+            chunk = self._sock.recv(n)
+            if not chunk:
+                raise ServoError("the servo closed the connection")
+            chunks.append(chunk)
+            n -= len(chunk)
+        return b"".join(chunks)
+
+    def request(self, message_type: str, check: bool = True, **fields) -> dict:
+        """Send one message and wait for its reply; ServoError when it is an error (if check)."""
+        self._next_id += 1
+        message = {"type": message_type, "id": self._next_id, **fields}
+        self.send_message(message)
+        reply = self.receive_message()
+        if check and not reply.get("ok"):
+            raise ServoError(f"{message_type}: {reply.get('error', 'failed')}")
+        return reply
+
+    def hello(self) -> dict:
+        fields = {"version": PROTOCOL_VERSION}
+        if self.token is not None:
+            fields["token"] = self.token
+        return self.request("hello", **fields)
+
+    def load(
+        self,
+        path: str | os.PathLike | None = None,
+        scene: dict | None = None,
+        devices: Sequence[str] | None = None,
+        rate_Hz: float | None = None,
+        as_fast_as_possible: bool | None = None,
+    ) -> dict:
+        fields: dict = {}
+        if path is not None:
+            fields["path"] = os.fspath(path)
+        if scene is not None:
+            fields["scene"] = scene
+        if devices is not None:
+            fields["devices"] = list(devices)
+        if rate_Hz is not None:
+            fields["rate_Hz"] = rate_Hz
+        if as_fast_as_possible is not None:
+            fields["as_fast_as_possible"] = as_fast_as_possible
+        reply = self.request("load", **fields)
+        self.blade_names = [b["name"] for b in reply["blades"]]
+        return reply
+
+    def start(self) -> dict:
+        return self.request("start")
+
+    def stop(self) -> dict:
+        return self.request("stop")
+
+    def status(self) -> dict:
+        return self.request("status")
+
+    def engage(self, engaged: bool = True) -> dict:
+        return self.request("engage", engaged=engaged)
+
+    def set_parameters(self, **parameters) -> dict:
+        return self.request("set", **parameters)
+
+    def record(self, path: str | os.PathLike) -> dict:
+        return self.request("record", action="start", path=os.fspath(path))
+
+    def stop_recording(self) -> dict:
+        return self.request("record", action="stop")
+
+    def send_pose(self, blade: str, pose: Sequence[float], buttons: int = 0) -> dict:
+        return self.request("pose", blade=blade, pose=[float(x) for x in pose], buttons=buttons)
+
+    def shutdown(self) -> dict:
+        return self.request("shutdown")
+
+    # Stream.
+    def subscribe(self, rate_Hz: float = 120.0) -> dict:
+        if self._stream is None:
+            self._stream = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+            self._stream.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 20)
+            self._stream.bind(("127.0.0.1", 0))
+            self._stream.setblocking(False)
+        return self.request("subscribe", port=self._stream.getsockname()[1], rate_Hz=rate_Hz)
+
+    def unsubscribe(self) -> dict:
+        return self.request("unsubscribe")
+
+    def poll(self) -> Frame | None:
+        """The newest complete frame waiting on the stream socket, or None. Never blocks."""
+        frames = self.poll_all()
+        return frames[-1] if frames else None
+
+    def poll_all(self) -> list[Frame]:
+        """Every frame waiting, oldest first (out-of-order ones dropped). Never blocks."""
+        if self._stream is None:
+            return []
+        out: list[Frame] = []
+        newest = -1
+        while True:
+            try:
+                data = self._stream.recv(layout.MAX_FRAME_BYTES + 1)
+            except (BlockingIOError, InterruptedError):
+                break
+            now = time.monotonic()
+            try:
+                frame = parse_frame(data, self.blade_names or None, now)
+            except ValueError:
+                self.bad_datagrams += 1
+                continue
+            if frame.sequence <= newest:
+                continue
+            newest = frame.sequence
+            self.frames_received += 1
+            out.append(frame)
+        return out
+
+
+@dataclass
+class ServoProcess:
+    """hapticut-servo as a child process with a control channel on a free loopback port.
+
+    ``args`` are the servo's own (scene, --device, ...); ``--control 0`` is
+    added. Its stdout is collected on a thread (``lines``; the final
+    ``stats`` line is ``stats()``).
+    """
+
+    args: Sequence[str]
+    executable: str | None = None
+    control: bool = True
+    startup_timeout_s: float = 30.0
+    process: subprocess.Popen | None = None
+    port: int = 0
+    lines: list[str] = field(default_factory=list)
+    stderr_lines: list[str] = field(default_factory=list)
+    _threads: list[threading.Thread] = field(default_factory=list)
+
+    def start(self) -> ServoProcess:
+        if self.executable is None:
+            from hapticut import servo_path
+
+            self.executable = servo_path()
+        command = [self.executable, *self.args] + (["--control", "0"] if self.control else [])
+        self.process = subprocess.Popen(
+            command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, bufsize=1
+        )
+        port_ready = threading.Event()
+
+        def read_stdout() -> None:
+            assert self.process is not None and self.process.stdout is not None
+            for line in self.process.stdout:
+                self.lines.append(line.rstrip("\n"))
+                if line.startswith("control: "):
+                    self.port = int(line.rsplit(":", 1)[1])
+                    port_ready.set()
+            port_ready.set()
+
+        def read_stderr() -> None:
+            assert self.process is not None and self.process.stderr is not None
+            for line in self.process.stderr:
+                self.stderr_lines.append(line.rstrip("\n"))
+
+        self._threads = [
+            threading.Thread(target=read_stdout, daemon=True),
+            threading.Thread(target=read_stderr, daemon=True),
+        ]
+        for t in self._threads:
+            t.start()
+        if self.control:
+            port_ready.wait(self.startup_timeout_s)
+            if not self.port:
+                self.wait(5)
+                raise ServoError(
+                    f"hapticut-servo did not open its control port (exit {self.process.poll()}): "
+                    + " | ".join(self.stderr_lines[-5:])
+                )
+        return self
+
+    def wait(self, timeout_s: float | None = None) -> int:
+        assert self.process is not None
+        code = self.process.wait(timeout_s)
+        for t in self._threads:
+            t.join(5)
+        return code
+
+    def stats(self) -> dict | None:
+        """The last ``stats`` line the servo printed (after a run ended), parsed."""
+        for line in reversed(self.lines):
+            if line.startswith("stats "):
+                return json.loads(line[len("stats ") :])
+        return None
+
+    def stop(self, timeout_s: float = 10.0) -> int:
+        """SIGTERM (the force ramps down, the recording closes), then wait."""
+        assert self.process is not None
+        if self.process.poll() is None:
+            self.process.terminate()
+        try:
+            return self.wait(timeout_s)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            return self.wait(timeout_s)
+
+    def __enter__(self) -> ServoProcess:
+        return self.start()
+
+    def __exit__(self, *exc) -> None:
+        if self.process is not None:
+            self.stop()

@@ -1,0 +1,169 @@
+"""The servo's binary layouts on the Python side: stream frames and recording records.
+
+The C++ side declares them once in ``server/layout.h``; this module declares
+them once here, as numpy dtypes, and ``tests/python/test_servo_layout.py``
+checks the two against ``hapticut-servo --print-layout``. Pure numpy: the
+Blender add-on imports it without the compiled module.
+
+A frame:  FRAME_HEADER, then per blade: BLADE_BLOCK, its points block.
+A record: RECORD_HEADER, then per blade: BLADE_BLOCK, its points block.
+Points block of N points: q (N, 3) f8, p (N, 3) f8, state (N,) u1, zero
+padding to a multiple of 8 bytes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+FRAME_VERSION = 1
+RECORD_VERSION = 1
+FRAME_MAGIC = b"HCFR"
+RECORDING_MAGIC = b"HCREC001"
+MAX_FRAME_BYTES = 65507
+
+FRAME_HEADER = np.dtype(
+    [
+        ("magic", "S1", (4,)),
+        ("version", "<u2"),
+        ("blade_count", "<u2"),
+        ("frame_bytes", "<u4"),
+        ("session", "<u4"),
+        ("sequence", "<u8"),
+        ("tick", "<u8"),
+        ("servo_time_s", "<f8"),
+        ("dt_s", "<f8"),
+        ("compute_p50_us", "<f8"),
+        ("compute_p99_us", "<f8"),
+        ("compute_max_us", "<f8"),
+        ("wake_p50_us", "<f8"),
+        ("wake_p99_us", "<f8"),
+        ("wake_max_us", "<f8"),
+        ("late_ticks", "<u8"),
+        ("dropped_records", "<u8"),
+        ("servo_flags", "<u4"),
+        ("reserved", "<u4"),
+    ]
+)
+
+RECORD_HEADER = np.dtype(
+    [
+        ("tick", "<u8"),
+        ("time_s", "<f8"),
+        ("dt_s", "<f8"),
+        ("compute_us", "<f8"),
+        ("wake_latency_us", "<f8"),
+        ("late_ticks", "<u8"),
+        ("dropped_records", "<u8"),
+        ("servo_flags", "<u4"),
+        ("blade_count", "<u4"),
+    ]
+)
+
+BLADE_BLOCK = np.dtype(
+    [
+        ("pose", "<f8", (7,)),
+        ("engine_force_N", "<f8", (3,)),
+        ("engine_torque_N_mm", "<f8", (3,)),
+        ("force_N", "<f8", (3,)),
+        ("torque_N_mm", "<f8", (3,)),
+        ("ramp", "<f8"),
+        ("step_dt_s", "<f8"),
+        ("point_count", "<u4"),
+        ("buttons", "<u4"),
+        ("safety_flags", "<u4"),
+        ("events", "<u4"),
+        ("state_counts", "<u2", (5,)),
+        ("capped_points", "<u2"),
+        ("device_status", "u1"),
+        ("step_kind", "u1"),
+        ("max_transitions", "<u2"),
+    ]
+)
+
+# Per point, in this order, each as one array over the blade's points.
+POINT_ARRAYS = (("q", "<f8", 3), ("p", "<f8", 3), ("state", "u1", 1))
+
+# BladeBlock.safety_flags / events bits, in bit order (server/safety.h).
+SAFETY_FLAGS = (
+    "engaged",
+    "ramping",
+    "force_clamped",
+    "torque_clamped",
+    "device_lost",
+    "watchdog",
+    "non_finite_pose",
+    "outside_workspace",
+    "non_finite_force",
+    "passivity",
+    "no_force_output",
+    "stale",
+    "waiting",
+    "stopping",
+)
+FAULT_FLAGS = (
+    "device_lost",
+    "watchdog",
+    "non_finite_pose",
+    "outside_workspace",
+    "non_finite_force",
+)
+DEVICE_STATUS = ("fresh", "stale", "lost")
+STEP_KINDS = ("none", "step", "reset_and_step")
+
+
+def flag_bit(name: str) -> int:
+    """The bit of a safety flag by name (``flag_bit("device_lost") == 16``)."""
+    return 1 << SAFETY_FLAGS.index(name)
+
+
+FAULT_MASK = sum(flag_bit(name) for name in FAULT_FLAGS)
+
+
+def points_block_bytes(points: int) -> int:
+    return (points * 6 * 8 + points + 7) // 8 * 8
+
+
+def blade_dtype(points: int) -> np.dtype:
+    """One blade's BladeBlock and points block as one structured dtype."""
+    fields: list = [("block", BLADE_BLOCK)]
+    for name, code, per_point in POINT_ARRAYS:
+        fields.append((name, code, (points, per_point) if per_point > 1 else (points,)))
+    pad = points_block_bytes(points) - points * 49
+    if pad:
+        fields.append(("padding", "u1", (pad,)))
+    return np.dtype(fields)
+
+
+def _with_blades(header: np.dtype, names: list[str], points: list[int]) -> np.dtype:
+    fields: list = [("header", header)]
+    fields += [(name, blade_dtype(n)) for name, n in zip(names, points, strict=True)]
+    return np.dtype(fields)
+
+
+def frame_dtype(points: list[int], names: list[str] | None = None) -> np.dtype:
+    """A whole frame for blades with these point counts (fields ``blade0``, ... by default)."""
+    names = names or [f"blade{i}" for i in range(len(points))]
+    return _with_blades(FRAME_HEADER, names, points)
+
+
+def record_dtype(points: list[int], names: list[str]) -> np.dtype:
+    """A whole record: ``header``, then one field per blade, named after the blade."""
+    return _with_blades(RECORD_HEADER, names, points)
+
+
+def describe(dtype: np.dtype) -> list[dict]:
+    """Fields as ``--print-layout`` lists them: name, type code, offset, shape."""
+    out = []
+    for name in dtype.names:
+        sub, offset = dtype.fields[name][:2]
+        base = sub.base if sub.subdtype else sub
+        code = "S1" if base.kind == "S" else base.kind + str(base.itemsize)
+        out.append(
+            {
+                "name": name,
+                "type": code,
+                "offset": offset,
+                "shape": list(sub.shape) if sub.shape else [],
+            }
+        )
+    return out

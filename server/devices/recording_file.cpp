@@ -1,0 +1,88 @@
+#include "devices/recording_file.h"
+
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+
+#include "devices/device_args.h"
+
+namespace hapticut::servo {
+
+void lay_out_record(RecordingInfo& info) {
+  std::size_t offset = sizeof(RecordHeader);
+  for (RecordingBlade& blade : info.blades) {
+    blade.offset = offset;
+    offset += sizeof(BladeBlock) + points_block_bytes(blade.points);
+  }
+  info.record_bytes = offset;
+}
+
+std::vector<unsigned char> recording_preamble(const RecordingInfo& info) {
+  nlohmann::json header;
+  header["format"] = "hapticut.recording";
+  header["version"] = kRecordVersion;
+  header["rate_Hz"] = info.rate_Hz;
+  header["as_fast_as_possible"] = info.as_fast_as_possible;
+  header["scene"] = info.scene;
+  header["record_bytes"] = info.record_bytes;
+  header["blades"] = nlohmann::json::array();
+  for (const RecordingBlade& b : info.blades) {
+    header["blades"].push_back(
+        {{"name", b.name}, {"device", b.device}, {"points", b.points}, {"offset", b.offset}});
+  }
+  header["layout"] = nlohmann::json::parse(layout_json());
+  std::string text = header.dump();
+  while ((16 + text.size()) % 8 != 0) text.push_back(' ');
+  std::vector<unsigned char> out(16 + text.size());
+  std::memcpy(out.data(), kRecordingMagic, 8);
+  const std::uint64_t length = text.size();
+  std::memcpy(out.data() + 8, &length, 8);
+  std::memcpy(out.data() + 16, text.data(), text.size());
+  return out;
+}
+
+RecordingContents read_recording(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw DeviceError("recording '" + path + "': cannot open");
+  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)),
+                                   std::istreambuf_iterator<char>());
+  const std::string where = "recording '" + path + "': ";
+  if (bytes.size() < 16 || std::memcmp(bytes.data(), kRecordingMagic, 8) != 0) {
+    throw DeviceError(where + "not a hapticut recording (no HCREC001 magic)");
+  }
+  std::uint64_t length = 0;
+  std::memcpy(&length, bytes.data() + 8, 8);
+  if (length > bytes.size() - 16) throw DeviceError(where + "header longer than the file");
+  RecordingContents out;
+  try {
+    const auto header = nlohmann::json::parse(bytes.begin() + 16, bytes.begin() + 16 + length);
+    if (header.value("version", 0) != kRecordVersion) {
+      throw DeviceError(where + "record version " + std::to_string(header.value("version", 0)) +
+                        ", this servo reads " + std::to_string(kRecordVersion));
+    }
+    out.info.rate_Hz = header.at("rate_Hz").get<double>();
+    out.info.as_fast_as_possible = header.value("as_fast_as_possible", false);
+    out.info.scene = header.value("scene", "");
+    for (const auto& b : header.at("blades")) {
+      out.info.blades.push_back({b.at("name").get<std::string>(), b.value("device", ""),
+                                 b.at("points").get<std::uint32_t>(), 0});
+    }
+    lay_out_record(out.info);
+    if (out.info.record_bytes != header.at("record_bytes").get<std::size_t>()) {
+      throw DeviceError(
+          where + "record_bytes " + std::to_string(header.at("record_bytes").get<std::size_t>()) +
+          " disagrees with this servo's layout (" + std::to_string(out.info.record_bytes) + ")");
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw DeviceError(where + "bad header (" + e.what() + ")");
+  }
+  const std::size_t data = 16 + length;
+  const std::size_t count = (bytes.size() - data) / out.info.record_bytes;
+  out.records.assign(
+      bytes.begin() + static_cast<std::ptrdiff_t>(data),
+      bytes.begin() + static_cast<std::ptrdiff_t>(data + count * out.info.record_bytes));
+  return out;
+}
+
+}  // namespace hapticut::servo

@@ -1,0 +1,55 @@
+// The recording file: every tick of a run, readable with numpy alone.
+//   bytes 0-7   magic "HCREC001"
+//   bytes 8-15  header length H, u64 little-endian
+//   16..16+H    the header, JSON (UTF-8), padded with spaces so that the
+//               records start at a multiple of 8
+//   then        fixed-size records (layout.h: RecordHeader, then per blade a
+//               BladeBlock and its points block), record_bytes each
+// A run cut short leaves at most one partial record at the end; readers drop it.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "layout.h"
+
+namespace hapticut::servo {
+
+inline constexpr char kRecordingMagic[8] = {'H', 'C', 'R', 'E', 'C', '0', '0', '1'};
+
+struct RecordingBlade {
+  std::string name;
+  std::string device;  // The --device text it was bound to.
+  std::uint32_t points = 0;
+  std::size_t offset = 0;  // Of its BladeBlock within a record.
+};
+
+struct RecordingInfo {
+  double rate_Hz = 1000.0;
+  bool as_fast_as_possible = false;
+  std::string scene;
+  std::vector<RecordingBlade> blades;
+  std::size_t record_bytes = 0;
+};
+
+// Offsets of every blade's block and the record size, from the point counts.
+void lay_out_record(RecordingInfo& info);
+// The bytes before the first record.
+std::vector<unsigned char> recording_preamble(const RecordingInfo& info);
+
+struct RecordingContents {
+  RecordingInfo info;
+  std::vector<unsigned char> records;  // record_count() * info.record_bytes bytes.
+  std::size_t record_count() const {
+    return info.record_bytes ? records.size() / info.record_bytes : 0;
+  }
+  const unsigned char* record(std::size_t i) const {
+    return records.data() + i * info.record_bytes;
+  }
+};
+
+// Reads a whole recording; throws DeviceError naming the file and what is wrong.
+RecordingContents read_recording(const std::string& path);
+
+}  // namespace hapticut::servo

@@ -1,0 +1,66 @@
+// The sim device: a scripted path (a file or a built-in stroke) pulling a
+// virtual hand (mass, damping, a spring to the path) that also feels the
+// force the servo renders, so the loop is closed as with a real hand. Its
+// time is the loop's: real time, or the virtual time of --as-fast-as-possible.
+// Fault injection for the tests: fail_at_s (lost from then on, until
+// recover_at_s), nan_at_s (nan_ticks samples with a NaN pose).
+#pragma once
+
+#include <atomic>
+#include <memory>
+
+#include "devices/device_args.h"
+#include "devices/device_factory.h"
+#include "devices/sim_path.h"
+#include "devices/virtual_hand.h"
+
+namespace hapticut::servo {
+
+inline constexpr const char* kSimDeviceUsage =
+    "  sim[:PATH|BUILTIN][,key=value...]   scripted path pulling a virtual hand\n"
+    "      PATH: JSON {\"poses\": [[t_s, x, y, z, qw, qx, qy, qz], ...]};\n"
+    "      BUILTIN: press-slide (default), press; speed=MM_PER_S (100)\n"
+    "      hand=0|1 (1: virtual hand feels the force; 0: pose = path)\n"
+    "      mass_kg=0.2 damping_N_s_per_mm=0.002 spring_N_per_mm=0.3\n"
+    "      max_force_N=10 max_torque_N_mm=1000 hold_s=0.2 (time at the end)\n"
+    "      fail_at_s=T recover_at_s=T nan_at_s=T nan_ticks=1 (fault injection)\n";
+
+struct SimOptions {
+  bool hand = true;
+  VirtualHandParameters hand_parameters;
+  double max_force_N = 10.0;
+  double max_torque_N_mm = 1000.0;
+  double hold_s = 0.2;
+  double fail_at_s = -1.0;  // < 0: never.
+  double recover_at_s = -1.0;
+  double nan_at_s = -1.0;
+  int nan_ticks = 1;
+};
+
+class SimDevice : public Device {
+ public:
+  SimDevice(SimPath path, const SimOptions& options);
+
+  const char* kind() const override { return "sim"; }
+  DeviceLimits limits() const override;
+  void start() override;
+  DeviceStatus read(double now_s, DeviceSample& sample) override;
+  void write(const Vec3& force_N, const Vec3& torque_N_mm) override;
+  bool finished() const override { return finished_.load(std::memory_order_relaxed); }
+
+ private:
+  SimPath path_;
+  SimOptions options_;
+  VirtualHand hand_;
+  bool started_ = false;
+  double start_s_ = 0.0;
+  double last_s_ = 0.0;
+  int nan_left_ = 0;
+  Vec3 rendered_force_N_;
+  DeviceSample sample_;
+  std::atomic<bool> finished_{false};
+};
+
+std::unique_ptr<Device> make_sim_device(const DeviceSpec& spec, const DeviceContext& context);
+
+}  // namespace hapticut::servo

@@ -1,0 +1,176 @@
+// hapticut-servo: the real-time process (docs/servo.md). Parses the command
+// line, loads the scene, opens the control channel, runs, and on SIGINT or
+// SIGTERM ramps the forces to zero, closes the recording and prints the
+// statistics.
+#include <pthread.h>
+#include <signal.h>
+
+#include <cstdio>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "clock.h"
+#include "control_server.h"
+#include "hapticut/scene_io.h"
+#include "histogram.h"
+#include "layout.h"
+#include "options.h"
+#include "realtime.h"
+#include "servo.h"
+
+namespace hapticut::servo {
+namespace {
+
+// A bare absolute-time clock_nanosleep loop with the servo's real-time
+// settings: the anchor the servo's wake latency is compared with.
+int run_bare_loop(const Options& options) {
+  const double rate = options.rate_Hz > 0.0 ? options.rate_Hz : 1000.0;
+  const double duration = options.duration_s > 0.0 ? options.duration_s : 2.0;
+  auto histogram = std::make_unique<LatencyHistogram>();
+  std::uint64_t late = 0;
+  std::uint64_t ticks = 0;
+  std::string realtime;
+  std::thread thread([&] {
+    realtime = options.realtime ? enter_realtime_priority(options.priority)
+                                : std::string("real-time: not asked for (--no-realtime)");
+    const double period = 1.0 / rate;
+    const double start = monotonic_now_s();
+    double deadline = start + period;
+    while (deadline - start < duration) {
+      sleep_until(deadline);
+      const double now = monotonic_now_s();
+      histogram->add((now - deadline) * 1e6);
+      ++ticks;
+      deadline += period;
+      if (now > deadline) {
+        ++late;
+        deadline += std::ceil((now - deadline) / period) * period;
+      }
+    }
+  });
+  thread.join();
+  const nlohmann::json out = {{"rate_Hz", rate},
+                              {"ticks", ticks},
+                              {"late_ticks", late},
+                              {"realtime", realtime},
+                              {"wake_latency_us",
+                               {{"p50", histogram->percentile_us(0.5)},
+                                {"p99", histogram->percentile_us(0.99)},
+                                {"max", histogram->max_us()},
+                                {"count", histogram->count()}}}};
+  std::printf("%s\n", out.dump().c_str());
+  return kExitOk;
+}
+
+int run(const Options& options) {
+  // SIGINT and SIGTERM are taken by sigtimedwait below, in no other thread.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  signal(SIGPIPE, SIG_IGN);
+
+  Servo servo_state(options);
+  if (!options.scene_path.empty()) {
+    try {
+      servo_state.load(servo_state.config_from_options());
+    } catch (const SceneError& e) {
+      std::fprintf(stderr, "hapticut-servo: scene '%s': %s\n", options.scene_path.c_str(),
+                   e.what());
+      return kExitScene;
+    } catch (const MeshError& e) {
+      std::fprintf(stderr, "hapticut-servo: scene '%s': %s\n", options.scene_path.c_str(),
+                   e.what());
+      return kExitScene;
+    } catch (const DeviceError& e) {
+      std::fprintf(stderr, "hapticut-servo: %s\n", e.what());
+      return kExitDevice;
+    }
+  } else if (options.control_port < 0) {
+    std::fprintf(stderr,
+                 "hapticut-servo: nothing to do: give a SCENE, or --control PORT to wait for "
+                 "a \"load\" message (see --help)\n");
+    return kExitUsage;
+  }
+
+  std::unique_ptr<ControlServer> control;
+  if (options.control_port >= 0) {
+    try {
+      control = std::make_unique<ControlServer>(servo_state, options);
+    } catch (const NetworkError& e) {
+      std::fprintf(stderr, "hapticut-servo: %s\n", e.what());
+      return kExitNetwork;
+    }
+    std::printf("control: %s:%d\n", options.listen_address.c_str(), control->port());
+    std::fflush(stdout);
+    control->start();
+  }
+
+  if (!options.scene_path.empty() && !options.wait_for_start) {
+    try {
+      servo_state.start();
+    } catch (const DeviceError& e) {
+      std::fprintf(stderr, "hapticut-servo: %s\n", e.what());
+      return kExitDevice;
+    } catch (const std::runtime_error& e) {
+      std::fprintf(stderr, "hapticut-servo: %s\n", e.what());
+      return kExitRecording;
+    }
+  }
+
+  // Wait: a signal, a shutdown message, or (without a control channel) the
+  // run ending by itself.
+  const timespec poll_interval = to_timespec(0.05);
+  for (;;) {
+    const int signal_number = sigtimedwait(&signals, nullptr, &poll_interval);
+    if (signal_number == SIGINT || signal_number == SIGTERM) {
+      if (!options.quiet) {
+        std::fprintf(stderr, "hapticut-servo: %s: ramping the force to zero and stopping\n",
+                     signal_number == SIGINT ? "SIGINT" : "SIGTERM");
+      }
+      break;
+    }
+    if (servo_state.shutdown_requested()) break;
+    if (!control && servo_state.run_ended()) break;
+  }
+  servo_state.stop();
+  if (control) control->stop();
+  return kExitOk;
+}
+
+int run_main(int argc, char** argv) {
+  Options options;
+  try {
+    options = parse_options(argc, argv);
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "hapticut-servo: %s\n", e.what());
+    return kExitUsage;
+  }
+  if (options.help) {
+    std::printf("%s", usage_text().c_str());
+    return kExitOk;
+  }
+  if (options.version) {
+    std::printf("hapticut-servo 0.1.0 (protocol %d, frame %d, record %d)\n", kProtocolVersion,
+                kFrameVersion, kRecordVersion);
+    return kExitOk;
+  }
+  if (options.print_layout) {
+    std::printf("%s\n", layout_json().c_str());
+    return kExitOk;
+  }
+  try {
+    if (options.bare_loop) return run_bare_loop(options);
+    return run(options);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "hapticut-servo: internal error: %s\n", e.what());
+    return kExitInternal;
+  }
+}
+
+}  // namespace
+}  // namespace hapticut::servo
+
+int main(int argc, char** argv) { return hapticut::servo::run_main(argc, argv); }

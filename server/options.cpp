@@ -1,0 +1,160 @@
+#include "options.h"
+
+#include <cmath>
+#include <cstdlib>
+
+#include "devices/device_factory.h"
+
+namespace hapticut::servo {
+
+namespace {
+
+constexpr const char* kUsage =
+    "usage: hapticut-servo [SCENE] [options]\n"
+    "\n"
+    "The Hapticut servo: runs the blades of a scene file against their devices at a\n"
+    "fixed rate (1 kHz by default), with safety (clamp, ramp, watchdog, NaN guard,\n"
+    "engage), streams the proxies over UDP and records every tick.\n"
+    "\n"
+    "  SCENE                   scene file (.hapticut.json or .hapticut.msgpack); without\n"
+    "                          it, wait for a \"load\" message on the control channel\n"
+    "  --device [NAME=]KIND[:ARGS]  bind blade NAME to a device (repeat per blade;\n"
+    "                          NAME may be left out when the scene has one blade)\n"
+    "  --rate HZ               loop rate, 1 to 10000 (default: the scene's, 1000)\n"
+    "  --as-fast-as-possible   no sleeping: time advances by the period each tick\n"
+    "                          (bake a sim stroke; never real-time priority)\n"
+    "  --duration S            end the run after S seconds (servo time)\n"
+    "  --exit-when-done        end the run when every device has finished its path\n"
+    "  --wait                  load SCENE but start only on a \"start\" message\n"
+    "  --record FILE           record every tick of every run to FILE\n"
+    "  --record-buffer-s S     records held in memory for the writer (2 s)\n"
+    "  --control PORT          open the control channel (TCP) on PORT (0: any free\n"
+    "                          port); prints \"control: ADDRESS:PORT\"\n"
+    "  --listen ADDRESS        address of the control channel (127.0.0.1); any other\n"
+    "                          needs --token\n"
+    "  --token TOKEN           clients must present it in \"hello\"\n"
+    "  --stream-rate HZ        default frame rate of a subscription (120)\n"
+    "  --engage                engaged from the start (else: an \"engage\" message or\n"
+    "                          a button of --engage-buttons)\n"
+    "  --engage-buttons MASK   device buttons that engage while held (0: none)\n"
+    "  --max-force N           force clamp, N (lowers the scene's and the device's)\n"
+    "  --max-torque NMM        torque clamp, N mm\n"
+    "  --ramp S                force ramp at start, engage and after a fault (scene's)\n"
+    "  --stop-ramp S           ramp down on stop, SIGINT and SIGTERM (0.1)\n"
+    "  --watchdog-ms MS        no new device sample for MS: zero force (100)\n"
+    "  --no-realtime           do not ask for SCHED_FIFO\n"
+    "  --priority P            SCHED_FIFO priority, 1 to 99 (80)\n"
+    "  --bare-loop             measure a bare clock_nanosleep loop at --rate for\n"
+    "                          --duration (2 s) and print its wake latency as JSON\n"
+    "  --print-layout          print the frame and record layouts as JSON and exit\n"
+    "  --quiet                 only errors and the final statistics\n"
+    "  --version, --help\n"
+    "\n"
+    "Device kinds:\n";
+
+constexpr const char* kExitCodes =
+    "\n"
+    "Exit codes: 0 the run ended (stroke done, duration, stop, shutdown, SIGINT,\n"
+    "SIGTERM: the force is ramped to zero and the recording closed first), 1 internal\n"
+    "error, 2 bad command line, 3 scene file missing or invalid, 4 device binding or\n"
+    "device failure, 5 control port unavailable or non-loopback without --token,\n"
+    "6 recording file not writable.\n";
+
+double number(const std::string& option, const char* text) {
+  char* end = nullptr;
+  const double value = std::strtod(text, &end);
+  if (end == text || *end != '\0' || !std::isfinite(value)) {
+    throw UsageError(option + ": '" + text + "' is not a number");
+  }
+  return value;
+}
+
+}  // namespace
+
+std::string usage_text() { return std::string(kUsage) + device_usage() + kExitCodes; }
+
+Options parse_options(int argc, const char* const* argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    auto value = [&]() -> const char* {
+      if (i + 1 >= argc) throw UsageError(arg + ": needs a value");
+      return argv[++i];
+    };
+    auto positive = [&](double v) {
+      if (!(v > 0.0)) throw UsageError(arg + ": must be positive");
+      return v;
+    };
+    if (arg == "--help" || arg == "-h") {
+      o.help = true;
+    } else if (arg == "--version") {
+      o.version = true;
+    } else if (arg == "--device") {
+      o.devices.emplace_back(value());
+    } else if (arg == "--rate") {
+      o.rate_Hz = number(arg, value());
+      if (!(o.rate_Hz >= 1.0 && o.rate_Hz <= 10000.0)) throw UsageError("--rate: 1 to 10000 Hz");
+    } else if (arg == "--as-fast-as-possible") {
+      o.as_fast_as_possible = true;
+    } else if (arg == "--duration") {
+      o.duration_s = positive(number(arg, value()));
+    } else if (arg == "--exit-when-done") {
+      o.exit_when_done = true;
+    } else if (arg == "--wait") {
+      o.wait_for_start = true;
+    } else if (arg == "--record") {
+      o.record_path = value();
+    } else if (arg == "--record-buffer-s") {
+      o.record_buffer_s = positive(number(arg, value()));
+    } else if (arg == "--control") {
+      const double port = number(arg, value());
+      if (port < 0 || port > 65535 || port != std::floor(port)) {
+        throw UsageError("--control: a port 0 to 65535");
+      }
+      o.control_port = static_cast<int>(port);
+    } else if (arg == "--listen") {
+      o.listen_address = value();
+    } else if (arg == "--token") {
+      o.token = value();
+    } else if (arg == "--stream-rate") {
+      o.stream_rate_Hz = positive(number(arg, value()));
+    } else if (arg == "--engage") {
+      o.engage = true;
+    } else if (arg == "--engage-buttons") {
+      o.engage_buttons = static_cast<unsigned>(number(arg, value()));
+    } else if (arg == "--max-force") {
+      o.max_force_N = positive(number(arg, value()));
+    } else if (arg == "--max-torque") {
+      o.max_torque_N_mm = positive(number(arg, value()));
+    } else if (arg == "--ramp") {
+      o.ramp_s = number(arg, value());
+      if (o.ramp_s < 0) throw UsageError("--ramp: must not be negative");
+    } else if (arg == "--stop-ramp") {
+      o.stop_ramp_s = number(arg, value());
+      if (o.stop_ramp_s < 0) throw UsageError("--stop-ramp: must not be negative");
+    } else if (arg == "--watchdog-ms") {
+      o.watchdog_ms = positive(number(arg, value()));
+    } else if (arg == "--no-realtime") {
+      o.realtime = false;
+    } else if (arg == "--priority") {
+      const double p = number(arg, value());
+      if (p < 1 || p > 99) throw UsageError("--priority: 1 to 99");
+      o.priority = static_cast<int>(p);
+    } else if (arg == "--bare-loop") {
+      o.bare_loop = true;
+    } else if (arg == "--print-layout") {
+      o.print_layout = true;
+    } else if (arg == "--quiet") {
+      o.quiet = true;
+    } else if (!arg.empty() && arg[0] == '-') {
+      throw UsageError("unknown option " + arg + " (see --help)");
+    } else if (o.scene_path.empty()) {
+      o.scene_path = arg;
+    } else {
+      throw UsageError("more than one scene given ('" + o.scene_path + "', '" + arg + "')");
+    }
+  }
+  return o;
+}
+
+}  // namespace hapticut::servo

@@ -1,0 +1,33 @@
+// The control channel's framing (docs/protocol.md): every message is a
+// 4-byte big-endian length, then that many bytes of UTF-8 JSON (an object).
+// MessageReader cuts a byte stream into messages; a length over
+// kMaxMessageBytes is refused before any of it is buffered.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+namespace hapticut::servo {
+
+inline constexpr int kProtocolVersion = 1;
+inline constexpr std::uint32_t kMaxMessageBytes = 16U << 20;  // 16 MiB (an inline scene).
+
+class MessageReader {
+ public:
+  enum class Result { NeedMore, Message, TooLarge };
+
+  void feed(const char* data, std::size_t size) { buffer_.append(data, size); }
+  // Message: `message` holds the next one. TooLarge: `length` is the refused
+  // prefix; the stream cannot be resynchronised (close it).
+  Result next(std::string& message, std::uint32_t& length);
+  std::size_t buffered() const { return buffer_.size(); }
+
+ private:
+  std::string buffer_;
+};
+
+// The length prefix and the text.
+std::string frame_message(const std::string& json_text);
+
+}  // namespace hapticut::servo

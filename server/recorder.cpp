@@ -1,0 +1,90 @@
+#include "recorder.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <stdexcept>
+
+namespace hapticut::servo {
+
+namespace {
+
+std::size_t slots_for(std::size_t record_bytes, double rate_Hz, double buffer_s) {
+  const auto wanted = static_cast<std::size_t>(std::max(1.0, rate_Hz * buffer_s));
+  const std::size_t by_memory =
+      std::max<std::size_t>(64, (64U << 20) / std::max<std::size_t>(record_bytes, 1));
+  return std::clamp<std::size_t>(std::min(wanted, by_memory), 64, 65536);
+}
+
+}  // namespace
+
+Recorder::Recorder(const RecordingInfo& info, double rate_Hz, double buffer_s)
+    : info_(info), slot_count_(slots_for(info.record_bytes, rate_Hz, buffer_s)) {}
+
+Recorder::~Recorder() {
+  if (thread_.joinable()) {
+    stop_.store(true);
+    thread_.join();
+  }
+  if (file_ != nullptr) std::fclose(file_);
+}
+
+void Recorder::start(const std::string& path, LoopShared& shared) {
+  if (active()) throw std::runtime_error("already recording to '" + path_ + "'");
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  if (file == nullptr) {
+    throw std::runtime_error("cannot open recording '" + path + "': " + std::strerror(errno));
+  }
+  const std::vector<unsigned char> preamble = recording_preamble(info_);
+  if (std::fwrite(preamble.data(), 1, preamble.size(), file) != preamble.size()) {
+    std::fclose(file);
+    throw std::runtime_error("cannot write recording '" + path + "': " + std::strerror(errno));
+  }
+  if (!ring_) ring_ = std::make_unique<SpscRing>(info_.record_bytes, slot_count_);
+  // Anything left in the ring from an earlier recording is not this one's.
+  while (ring_->front() != nullptr) ring_->pop();
+  shared.ring.store(ring_.get(), std::memory_order_release);
+  file_ = file;
+  path_ = path;
+  error_.clear();
+  written_.store(0);
+  stop_.store(false);
+  thread_ = std::thread([this] { run(); });
+  shared.record_wanted.store(true, std::memory_order_release);
+}
+
+void Recorder::stop(LoopShared& shared) {
+  if (!active()) return;
+  shared.record_wanted.store(false, std::memory_order_release);
+  // The loop acknowledges at its next tick; a stopped loop pushes nothing.
+  for (int i = 0;
+       i < 2000 && shared.recording.load(std::memory_order_acquire) && shared.running.load(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  stop_.store(true);
+  if (thread_.joinable()) thread_.join();
+  drain();
+  if (std::fclose(file_) != 0 && error_.empty()) error_ = std::strerror(errno);
+  file_ = nullptr;
+}
+
+void Recorder::drain() {
+  while (const unsigned char* record = ring_->front()) {
+    if (std::fwrite(record, 1, ring_->slot_bytes(), file_) != ring_->slot_bytes() &&
+        error_.empty()) {
+      error_ = std::string("write failed: ") + std::strerror(errno);
+    }
+    ring_->pop();
+    written_.fetch_add(1, std::memory_order_relaxed);
+  }
+}
+
+void Recorder::run() {
+  while (!stop_.load()) {
+    drain();
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+}
+
+}  // namespace hapticut::servo

@@ -1,0 +1,54 @@
+// Recorder: writes the records the loop pushes into its ring to a recording
+// file (devices/recording_file.h) on its own thread, so the tick never waits
+// for the disk. A full ring drops records (the loop counts them).
+#pragma once
+
+#include <atomic>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include "devices/recording_file.h"
+#include "servo_loop.h"
+#include "spsc_ring.h"
+
+namespace hapticut::servo {
+
+class Recorder {
+ public:
+  // The ring, allocated when a recording starts, holds about `buffer_s`
+  // seconds of records (64 to 65536 slots, at most 64 MiB).
+  Recorder(const RecordingInfo& info, double rate_Hz, double buffer_s);
+  ~Recorder();
+  Recorder(const Recorder&) = delete;
+  Recorder& operator=(const Recorder&) = delete;
+
+  // Opens `path` (std::runtime_error naming it when it cannot), writes the
+  // header and asks the loop for records.
+  void start(const std::string& path, LoopShared& shared);
+  // Asks the loop to stop pushing, waits until it has, writes what is left
+  // and closes the file. Does nothing when not recording.
+  void stop(LoopShared& shared);
+
+  bool active() const { return file_ != nullptr; }
+  const std::string& path() const { return path_; }
+  std::uint64_t written() const { return written_.load(); }
+  const std::string& error() const { return error_; }
+
+ private:
+  void drain();
+  void run();
+
+  RecordingInfo info_;
+  std::size_t slot_count_;
+  std::unique_ptr<SpscRing> ring_;  // Kept until the recorder goes (the loop may hold it).
+  std::FILE* file_ = nullptr;
+  std::string path_;
+  std::string error_;
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  std::atomic<std::uint64_t> written_{0};
+};
+
+}  // namespace hapticut::servo

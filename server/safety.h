@@ -1,0 +1,108 @@
+// SafetyChannel: the layer between the engine and one device, on by default.
+// Per tick, in this order:
+//   before the engine steps (admit): the device's status and sample are
+//     checked: lost, watchdog (no new sample for N ticks), a pose that is not
+//     finite or lies outside the device's workspace. Any of these is a fault:
+//     the engine does not step and the force is zero in this same tick.
+//   after it steps (render): a force or torque that is not finite is a fault;
+//     then the passivity controller (if any), the clamp to the limits (the
+//     device's, lowered by the scene or a control message), and the ramp
+//     (0 -> 1 over ramp_time_s at start, at engage and after every fault;
+//     1 -> 0 while stopping). No force unless engaged.
+// Every flag that turns on is an event, counted and reported.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+
+#include "devices/device.h"
+#include "passivity_hook.h"
+
+namespace hapticut::servo {
+
+enum SafetyFlag : std::uint32_t {
+  kSafetyEngaged = 1U << 0,
+  kSafetyRamping = 1U << 1,  // Ramp factor below 1 while engaged.
+  kSafetyForceClamped = 1U << 2,
+  kSafetyTorqueClamped = 1U << 3,
+  kSafetyDeviceLost = 1U << 4,        // Fault.
+  kSafetyWatchdog = 1U << 5,          // Fault: no new sample for watchdog_ticks.
+  kSafetyNonFinitePose = 1U << 6,     // Fault.
+  kSafetyOutsideWorkspace = 1U << 7,  // Fault.
+  kSafetyNonFiniteForce = 1U << 8,    // Fault (engine or passivity output).
+  kSafetyPassivity = 1U << 9,         // The passivity controller changed the force.
+  kSafetyNoForceOutput = 1U << 10,    // Input-only device: nothing is rendered.
+  kSafetyStale = 1U << 11,            // No new sample this tick (not yet a fault).
+  kSafetyWaiting = 1U << 12,          // No sample yet since start.
+  kSafetyStopping = 1U << 13,         // Ramping down before the loop ends.
+};
+inline constexpr int kSafetyFlagCount = 14;
+inline constexpr std::uint32_t kSafetyFaults = kSafetyDeviceLost | kSafetyWatchdog |
+                                               kSafetyNonFinitePose | kSafetyOutsideWorkspace |
+                                               kSafetyNonFiniteForce;
+// Names in bit order, for messages and the protocol's status.
+const char* safety_flag_name(int bit);
+
+struct SafetySettings {
+  double max_force_N = 5.0;
+  double max_torque_N_mm = 500.0;
+  double ramp_time_s = 0.5;
+  double stop_ramp_time_s = 0.1;  // Ramp down on stop, SIGINT, SIGTERM.
+  int watchdog_ticks = 50;
+  std::uint32_t engage_buttons = 0;  // Device buttons that engage while held (0: none).
+};
+
+// Limits in force: the device's, lowered (never raised) by `requested`.
+SafetySettings limit_to_device(const SafetySettings& requested, const DeviceLimits& device);
+
+struct SafetyOutput {
+  Vec3 force_N;
+  Vec3 torque_N_mm;
+  double ramp = 0.0;
+  std::uint32_t flags = 0;
+  std::uint32_t events = 0;  // Flags that turned on this tick.
+};
+
+class SafetyChannel {
+ public:
+  SafetyChannel(const SafetySettings& settings, const DeviceLimits& limits);
+
+  // New run: waiting for a first sample, ramp at 0, passivity reset.
+  void restart();
+  // Limits changed by a control message (already limited to the device's).
+  void set_settings(const SafetySettings& settings) { settings_ = settings; }
+  const SafetySettings& settings() const { return settings_; }
+  void set_passivity(std::unique_ptr<PassivityController> controller) {
+    passivity_ = std::move(controller);
+  }
+
+  // Before the engine steps: may it step with this sample?
+  bool admit(DeviceStatus status, const DeviceSample& sample);
+  // After: the force and torque to write. engine_ok false when the engine did
+  // not step (the force is then zero).
+  SafetyOutput render(const Vec3& engine_force_N, const Vec3& engine_torque_N_mm, bool engine_ok,
+                      double dt_s, bool engage_requested, bool stopping);
+
+  // Rising edges of every flag since restart (index: bit number).
+  const std::array<std::uint64_t, kSafetyFlagCount>& event_counts() const { return events_; }
+  std::uint64_t fault_count() const { return faults_; }
+
+ private:
+  SafetySettings settings_;
+  DeviceLimits limits_;
+  std::unique_ptr<PassivityController> passivity_;
+  std::uint32_t tick_flags_ = 0;  // Flags found by admit() this tick.
+  std::uint32_t last_flags_ = 0;
+  bool has_sample_ = false;
+  int stale_ticks_ = 0;
+  std::uint32_t buttons_ = 0;
+  Vec3 last_position_mm_;
+  Vec3 velocity_mm_per_s_;
+  double last_sample_time_s_ = 0.0;
+  double ramp_ = 0.0;
+  std::array<std::uint64_t, kSafetyFlagCount> events_{};
+  std::uint64_t faults_ = 0;
+};
+
+}  // namespace hapticut::servo

@@ -1,0 +1,433 @@
+#include "servo.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <future>
+
+#include "clock.h"
+#include "devices/viewport_device.h"
+#include "hapticut/scene_io.h"
+#include "protocol.h"
+#include "realtime.h"
+
+namespace hapticut::servo {
+
+namespace {
+
+nlohmann::json flag_names(std::uint32_t flags) {
+  nlohmann::json names = nlohmann::json::array();
+  for (int bit = 0; bit < kSafetyFlagCount; ++bit) {
+    if (flags & (1U << bit)) names.push_back(safety_flag_name(bit));
+  }
+  return names;
+}
+
+const char* status_name(std::uint8_t status) {
+  switch (status) {
+    case 0:
+      return "fresh";
+    case 1:
+      return "stale";
+    default:
+      return "lost";
+  }
+}
+
+nlohmann::json percentiles(const LatencyHistogram& h) {
+  return {{"p50", h.percentile_us(0.5)},
+          {"p99", h.percentile_us(0.99)},
+          {"max", h.max_us()},
+          {"count", h.count()}};
+}
+
+double number_field(const nlohmann::json& message, const char* key) {
+  const auto& v = message.at(key);
+  if (!v.is_number() || !std::isfinite(v.get<double>())) {
+    throw CommandError(std::string(key) + ": expected a finite number");
+  }
+  return v.get<double>();
+}
+
+}  // namespace
+
+Servo::Servo(const Options& options) : options_(options), shared_(std::make_unique<LoopShared>()) {
+  shared_->engaged.store(options.engage);
+  housekeeping_thread_ = std::thread([this] { housekeeping(); });
+}
+
+Servo::~Servo() {
+  try {
+    stop();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "hapticut-servo: stopping: %s\n", e.what());
+  } catch (...) {
+    std::fprintf(stderr, "hapticut-servo: stopping failed\n");
+  }
+  quit_housekeeping_.store(true);
+  try {
+    if (housekeeping_thread_.joinable()) housekeeping_thread_.join();
+  } catch (...) {
+    std::fprintf(stderr, "hapticut-servo: housekeeping thread did not join\n");
+  }
+}
+
+SessionConfig Servo::config_from_options() const {
+  SessionConfig c;
+  c.scene_path = options_.scene_path;
+  c.devices = options_.devices;
+  c.rate_Hz = options_.rate_Hz;
+  c.as_fast_as_possible = options_.as_fast_as_possible;
+  c.watchdog_ms = options_.watchdog_ms;
+  c.safety_request.max_force_N = options_.max_force_N;
+  c.safety_request.max_torque_N_mm = options_.max_torque_N_mm;
+  c.safety_request.ramp_time_s = options_.ramp_s;
+  c.safety_request.stop_ramp_time_s = options_.stop_ramp_s;
+  c.safety_request.engage_buttons = options_.engage_buttons;
+  return c;
+}
+
+void Servo::load(const SessionConfig& config) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (shared_->running.load() || loop_thread_.joinable()) {
+    throw CommandError("cannot load while running (stop first)");
+  }
+  auto session = std::make_unique<Session>(config);  // Throws; the old session stays.
+  auto recorder = std::make_unique<Recorder>(session->recording_info(), session->rate_Hz(),
+                                             options_.record_buffer_s);
+  shared_->ring.store(nullptr);
+  session_ = std::move(session);
+  recorder_ = std::move(recorder);
+  shared_->force_scale.store(1.0);
+  run_ended_.store(false);
+  if (!options_.quiet) {
+    std::printf("hapticut-servo: loaded %s: %zu blade(s) at %g Hz\n",
+                session_->scene_label().c_str(), session_->bindings().size(), session_->rate_Hz());
+    for (const Binding& b : session_->bindings()) {
+      std::printf("  blade '%s' (%zu points) <- %s\n", b.blade_name.c_str(), b.frame.q_mm.size(),
+                  b.device_text.c_str());
+    }
+    std::fflush(stdout);
+  }
+}
+
+void Servo::start() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!session_) throw CommandError("no scene loaded (send \"load\" first)");
+  if (loop_thread_.joinable()) throw CommandError("already running");
+  LoopShared& s = *shared_;
+  s.stop_requested.store(false);
+  s.ended_by_itself.store(false);
+  s.ticks.store(0);
+  s.late_ticks.store(0);
+  s.dropped_records.store(0);
+  s.frames_published.store(0);
+  s.compute_us.clear();
+  s.wake_us.clear();
+  s.session.fetch_add(1);
+  s.exit_when_done = options_.exit_when_done;
+  s.duration_s = options_.duration_s;
+  run_ended_.store(false);
+  std::size_t started = 0;
+  try {
+    for (Binding& b : session_->bindings()) {
+      b.device->start();
+      ++started;
+    }
+  } catch (...) {
+    for (std::size_t i = 0; i < started; ++i) session_->bindings()[i].device->stop();
+    throw;
+  }
+  if (!options_.record_path.empty()) {
+    try {
+      recorder_->start(options_.record_path, s);
+    } catch (...) {
+      for (Binding& b : session_->bindings()) b.device->stop();
+      throw;
+    }
+  }
+  const bool fast = session_->as_fast_as_possible();
+  const bool realtime = options_.realtime && !fast;
+  const int priority = options_.priority;
+  std::string memory_message = lock_memory();
+  std::promise<std::string> started_message;
+  auto message_future = started_message.get_future();
+  s.running.store(true);
+  loop_thread_ = std::thread([this, realtime, priority, &started_message] {
+    started_message.set_value(
+        realtime ? enter_realtime_priority(priority)
+                 : std::string("real-time: not asked for (") +
+                       (options_.realtime ? "as fast as possible" : "--no-realtime") + ")");
+    run_loop(*session_, *shared_);
+  });
+  realtime_message_ = message_future.get();
+  ++runs_;
+  if (!options_.quiet) {
+    std::printf("hapticut-servo: run %d started; %s; %s\n", runs_, realtime_message_.c_str(),
+                memory_message.c_str());
+    std::fflush(stdout);
+  }
+}
+
+nlohmann::json Servo::stop() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!loop_thread_.joinable()) return nullptr;
+  shared_->stop_requested.store(true);
+  return finish_run_locked();
+}
+
+nlohmann::json Servo::finish_run_locked() {
+  loop_thread_.join();
+  if (recorder_) recorder_->stop(*shared_);
+  for (Binding& b : session_->bindings()) b.device->stop();
+  report_events_locked();
+  nlohmann::json stats = stats_locked();
+  std::printf("stats %s\n", stats.dump().c_str());
+  std::fflush(stdout);
+  return stats;
+}
+
+nlohmann::json Servo::stats_locked() const {
+  const LoopShared& s = *shared_;
+  nlohmann::json out;
+  out["run"] = runs_;
+  out["ticks"] = s.ticks.load();
+  out["late_ticks"] = s.late_ticks.load();
+  out["time_s"] = s.time_s.load();
+  out["compute_us"] = percentiles(s.compute_us);
+  out["wake_latency_us"] = percentiles(s.wake_us);
+  out["frames_published"] = s.frames_published.load();
+  out["dropped_records"] = s.dropped_records.load();
+  out["ended_by_itself"] = s.ended_by_itself.load();
+  out["recording"] = {{"active", recorder_ && recorder_->active()},
+                      {"path", recorder_ ? recorder_->path() : std::string()},
+                      {"written", recorder_ ? recorder_->written() : 0},
+                      {"error", recorder_ ? recorder_->error() : std::string()}};
+  out["blades"] = nlohmann::json::array();
+  if (session_) {
+    for (std::size_t i = 0; i < session_->bindings().size() && i < kMaxBlades; ++i) {
+      const Binding& b = session_->bindings()[i];
+      SafetyReport report;
+      const bool has = s.reports[i].read(report) != 0;
+      nlohmann::json events = nlohmann::json::object();
+      for (int bit = 0; bit < kSafetyFlagCount; ++bit) {
+        if (report.events[bit]) events[safety_flag_name(bit)] = report.events[bit];
+      }
+      out["blades"].push_back(
+          {{"name", b.blade_name},
+           {"device", b.device_text},
+           {"kind", b.device->kind()},
+           {"device_status", has ? status_name(report.device_status) : "none"},
+           {"flags", flag_names(report.flags)},
+           {"faults", report.faults},
+           {"events", events},
+           {"ramp", report.ramp},
+           {"force_N", {report.force_N[0], report.force_N[1], report.force_N[2]}},
+           {"engine_force_N",
+            {report.engine_force_N[0], report.engine_force_N[1], report.engine_force_N[2]}}});
+    }
+  }
+  return out;
+}
+
+nlohmann::json Servo::status() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  nlohmann::json out = stats_locked();
+  const char* state = !session_                 ? "idle"
+                      : shared_->running.load() ? "running"
+                      : loop_thread_.joinable() ? "ending"
+                      : runs_ > 0               ? "stopped"
+                                                : "loaded";
+  out["state"] = state;
+  out["scene"] = session_ ? session_->scene_label() : std::string();
+  out["rate_Hz"] = session_ ? session_->rate_Hz() : 0.0;
+  out["engaged"] = shared_->engaged.load();
+  out["realtime"] = realtime_message_;
+  return out;
+}
+
+void Servo::report_events_locked() {
+  if (!session_ || options_.quiet) return;
+  for (std::size_t i = 0; i < session_->bindings().size() && i < kMaxBlades; ++i) {
+    SafetyReport report;
+    if (shared_->reports[i].read(report) == 0) continue;
+    for (int bit = 0; bit < kSafetyFlagCount; ++bit) {
+      const std::uint32_t flag = 1U << bit;
+      if ((flag & kSafetyFaults) == 0) continue;
+      if (report.events[bit] > reported_[i][bit]) {
+        std::fprintf(stderr, "hapticut-servo: blade '%s': fault %s (%llu so far); force zero\n",
+                     session_->bindings()[i].blade_name.c_str(), safety_flag_name(bit),
+                     static_cast<unsigned long long>(report.events[bit]));
+        reported_[i][bit] = report.events[bit];
+      }
+    }
+  }
+}
+
+void Servo::housekeeping() {
+  int round = 0;
+  while (!quit_housekeeping_.load()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+    if (!lock.owns_lock() || !session_) continue;
+    report_events_locked();
+    if (loop_thread_.joinable() && !shared_->running.load()) {
+      finish_run_locked();  // Ended by itself (stroke done, duration).
+      run_ended_.store(true);
+      continue;
+    }
+    if (++round % 5 == 0 && loop_thread_.joinable()) {
+      for (Binding& b : session_->bindings()) b.device->maintain();
+    }
+  }
+}
+
+nlohmann::json Servo::command(const nlohmann::json& message) {
+  const std::string type = message.at("type").get<std::string>();
+  if (type == "load") {
+    SessionConfig config = config_from_options();
+    config.scene_path.clear();
+    if (message.contains("path")) {
+      config.scene_path = message.at("path").get<std::string>();
+    } else if (message.contains("scene")) {
+      if (!message.at("scene").is_object()) throw CommandError("scene: expected an object");
+      config.scene_json = message.at("scene").dump();
+    } else {
+      throw CommandError("load needs \"path\" or \"scene\"");
+    }
+    if (message.contains("devices")) {
+      config.devices.clear();
+      for (const auto& d : message.at("devices")) config.devices.push_back(d.get<std::string>());
+    }
+    if (message.contains("rate_Hz")) config.rate_Hz = number_field(message, "rate_Hz");
+    if (message.contains("as_fast_as_possible")) {
+      config.as_fast_as_possible = message.at("as_fast_as_possible").get<bool>();
+    }
+    load(config);
+    std::lock_guard<std::mutex> lock(mutex_);
+    nlohmann::json blades = nlohmann::json::array();
+    for (const Binding& b : session_->bindings()) {
+      blades.push_back({{"name", b.blade_name},
+                        {"points", b.frame.q_mm.size()},
+                        {"device", b.device_text},
+                        {"kind", b.device->kind()}});
+    }
+    return {{"blades", blades},
+            {"rate_Hz", session_->rate_Hz()},
+            {"frame_bytes", session_->frame_bytes()},
+            {"record_bytes", session_->recording_info().record_bytes}};
+  }
+  if (type == "start") {
+    start();
+    return {{"session", shared_->session.load()}};
+  }
+  if (type == "stop") {
+    nlohmann::json stats = stop();
+    return {{"stats", stats}};
+  }
+  if (type == "engage") {
+    const auto& v = message.at("engaged");
+    if (!v.is_boolean()) throw CommandError("engaged: expected true or false");
+    shared_->engaged.store(v.get<bool>());
+    return {{"engaged", v.get<bool>()}};
+  }
+  if (type == "set") {
+    LimitsRequest limits;
+    shared_->limits.read(limits);
+    bool limits_changed = false;
+    nlohmann::json applied = nlohmann::json::object();
+    static const char* const kKnown[] = {"type",
+                                         "id",
+                                         "stiffness_N_per_mm",
+                                         "max_force_N",
+                                         "max_torque_N_mm",
+                                         "ramp_time_s",
+                                         "stream_rate_Hz",
+                                         "shading"};
+    for (const auto& [key, value] : message.items()) {
+      if (std::find(std::begin(kKnown), std::end(kKnown), key) == std::end(kKnown)) {
+        throw CommandError("unknown parameter '" + key +
+                           "' (known: stiffness_N_per_mm, max_force_N, max_torque_N_mm, "
+                           "ramp_time_s, stream_rate_Hz); nothing applied");
+      }
+    }
+    for (const auto& [key, value] : message.items()) {
+      if (key == "type" || key == "id") continue;
+      if (key == "stiffness_N_per_mm") {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!session_) throw CommandError("stiffness_N_per_mm: no scene loaded");
+        const double k = number_field(message, "stiffness_N_per_mm");
+        if (!(k > 0.0)) throw CommandError("stiffness_N_per_mm: must be positive");
+        shared_->force_scale.store(k / session_->scene().stiffness_N_per_mm);
+      } else if (key == "max_force_N" || key == "max_torque_N_mm" || key == "ramp_time_s") {
+        const double v = number_field(message, key.c_str());
+        if (!(v > 0.0)) throw CommandError(key + ": must be positive");
+        (key == "max_force_N"       ? limits.max_force_N
+         : key == "max_torque_N_mm" ? limits.max_torque_N_mm
+                                    : limits.ramp_time_s) = v;
+        limits_changed = true;
+      } else if (key == "shading") {
+        throw CommandError(
+            "shading: not available in this engine build (force shading per tick comes with "
+            "the engine's runtime settings)");
+      } else if (key != "stream_rate_Hz") {
+        throw CommandError("unknown parameter '" + key +
+                           "' (known: stiffness_N_per_mm, max_force_N, max_torque_N_mm, "
+                           "ramp_time_s, stream_rate_Hz)");
+      }
+      applied[key] = value;
+    }
+    if (limits_changed) shared_->limits.publish(limits);
+    return {{"applied", applied}, {"note", "safety limits only lower the device's"}};
+  }
+  if (type == "status") return status();
+  if (type == "record") {
+    const std::string action = message.value("action", "start");
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!recorder_) throw CommandError("no scene loaded");
+    if (action == "start") {
+      if (!message.contains("path")) throw CommandError("record start needs \"path\"");
+      try {
+        recorder_->start(message.at("path").get<std::string>(), *shared_);
+      } catch (const std::runtime_error& e) {
+        throw CommandError(e.what());
+      }
+      return {{"recording", recorder_->path()}};
+    }
+    if (action == "stop") {
+      recorder_->stop(*shared_);
+      return {{"written", recorder_->written()}, {"dropped", shared_->dropped_records.load()}};
+    }
+    throw CommandError("record: action must be \"start\" or \"stop\"");
+  }
+  if (type == "pose") {
+    const std::string blade = message.at("blade").get<std::string>();
+    const auto& p = message.at("pose");
+    if (!p.is_array() || p.size() != 7) {
+      throw CommandError("pose: expected [x, y, z, qw, qx, qy, qz]");
+    }
+    double v[7];
+    for (int i = 0; i < 7; ++i) {
+      if (!p[i].is_number()) throw CommandError("pose/" + std::to_string(i) + ": not a number");
+      v[i] = p[i].get<double>();  // NaN cannot be written in JSON; the guard still checks.
+    }
+    const auto buttons = message.value("buttons", 0U);
+    std::lock_guard<std::mutex> lock(mutex_);
+    Binding* b = session_ ? session_->find(blade) : nullptr;
+    if (b == nullptr) throw CommandError("pose: no blade '" + blade + "'");
+    if (b->viewport == nullptr) {
+      throw CommandError("pose: blade '" + blade + "' is driven by " + b->device->kind() +
+                         ", not a viewport device");
+    }
+    b->viewport->push({{v[0], v[1], v[2]}, {v[3], v[4], v[5], v[6]}}, buttons, monotonic_now_s());
+    return nlohmann::json::object();
+  }
+  if (type == "shutdown") {
+    request_shutdown();
+    return nlohmann::json::object();
+  }
+  throw CommandError("unknown message type '" + type + "'");
+}
+
+}  // namespace hapticut::servo

@@ -1,0 +1,76 @@
+// Session: a loaded scene ready to run: the engine's Space, one Blade per
+// scene blade, each bound to its device (by blade name) with its own safety
+// channel. Everything the tick touches is allocated here, before the run.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "blade_frame.h"
+#include "devices/device.h"
+#include "devices/device_factory.h"
+#include "devices/recording_file.h"
+#include "hapticut/blade.h"
+#include "hapticut/scene.h"
+#include "hapticut/space.h"
+#include "safety.h"
+#include "stream_frame.h"
+
+namespace hapticut::servo {
+
+class ViewportDevice;
+
+struct SessionConfig {
+  std::string scene_path;            // Either a path ...
+  std::string scene_json;            // ... or the scene itself (JSON text).
+  std::vector<std::string> devices;  // --device texts.
+  double rate_Hz = 0.0;              // 0: the scene's servo_rate_Hz.
+  bool as_fast_as_possible = false;
+  double watchdog_ms = 100.0;
+  SafetySettings safety_request;      // Lowered to each device's limits.
+  bool lower_to_scene_limits = true;  // The scene may lower the limits too.
+};
+
+struct Binding {
+  std::string blade_name;
+  std::string device_text;
+  std::unique_ptr<Device> device;
+  ViewportDevice* viewport = nullptr;  // The device, when it is a viewport.
+  std::unique_ptr<Blade> blade;
+  std::unique_ptr<SafetyChannel> safety;
+  SafetySettings requested;  // Before the device's limits.
+  BladeFrame frame;
+  BladeTickResult result;
+  bool has_reset = false;
+};
+
+class Session {
+ public:
+  // Throws SceneError for the scene, DeviceError for the bindings.
+  explicit Session(const SessionConfig& config);
+
+  const Scene& scene() const { return scene_; }
+  const std::string& scene_label() const { return scene_label_; }
+  double rate_Hz() const { return rate_Hz_; }
+  bool as_fast_as_possible() const { return as_fast_as_possible_; }
+  std::vector<Binding>& bindings() { return bindings_; }
+  const std::vector<Binding>& bindings() const { return bindings_; }
+  Binding* find(const std::string& blade_name);
+  // Bytes of a stream frame and of a recording record.
+  std::size_t frame_bytes() const;
+  const RecordingInfo& recording_info() const { return recording_info_; }
+
+ private:
+  Scene scene_;
+  std::string scene_label_;
+  std::unique_ptr<Space> space_;
+  double rate_Hz_ = 1000.0;
+  bool as_fast_as_possible_ = false;
+  std::vector<Binding> bindings_;
+  RecordingInfo recording_info_;
+};
+
+inline constexpr double kMaxRate_Hz = 10000.0;
+
+}  // namespace hapticut::servo

@@ -1,0 +1,36 @@
+// Writing one blade's BladeBlock and points block (layout.h) from the tick's
+// results: the same bytes go into stream frames and recording records.
+#pragma once
+
+#include <cstdint>
+
+#include "blade_frame.h"
+#include "devices/device.h"
+#include "layout.h"
+#include "safety.h"
+
+namespace hapticut::servo {
+
+// A stream frame as the network thread sends it.
+struct FrameBytes {
+  std::uint32_t size = 0;
+  unsigned char bytes[kMaxFrameBytes];
+};
+
+// What the loop knows of one blade after a tick.
+struct BladeTickResult {
+  DeviceStatus status = DeviceStatus::Lost;
+  DeviceSample sample;
+  StepKind step = StepKind::None;
+  double step_dt_s = 0.0;
+  Vec3 engine_force_N;
+  Vec3 engine_torque_N_mm;
+  SafetyOutput safety;
+};
+
+// Writes the blade's block at `out` (sizeof(BladeBlock) + points_block_bytes
+// bytes); returns the bytes written.
+std::size_t write_blade_block(const BladeTickResult& result, const BladeFrame& frame,
+                              unsigned char* out);
+
+}  // namespace hapticut::servo

@@ -1,0 +1,60 @@
+"""hapticut-servo's command line and ``hapticut serve``: options documented, exit codes."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+
+from servo_test_support import SPHERE, run_servo, stats_of
+
+SERVO_SOURCE_OPTIONS = SPHERE.parents[1] / "server" / "options.cpp"
+
+
+def test_help_documents_every_option():
+    result = run_servo("--help")
+    assert result.returncode == 0
+    parsed = set(re.findall(r'arg == "(--[a-z-]+)"', SERVO_SOURCE_OPTIONS.read_text()))
+    assert len(parsed) > 20
+    for option in parsed:
+        assert option in result.stdout, option
+    for kind in ("sim", "replay", "viewport"):
+        assert f"  {kind}" in result.stdout
+    assert "Exit codes" in result.stdout
+
+
+def test_usage_errors_exit_2():
+    for args, message in [
+        (["--rate", "20000"], "--rate"),
+        (["--frobnicate"], "unknown option --frobnicate"),
+        (["--duration"], "needs a value"),
+        ([], "nothing to do"),
+    ]:
+        result = run_servo(*args)
+        assert result.returncode == 2, (args, result.stderr)
+        assert message in result.stderr
+
+
+def test_record_file_that_cannot_be_written_exits_6(tmp_path):
+    result = run_servo(
+        str(SPHERE), "--device", "sim", "--record", str(tmp_path / "no" / "such" / "dir.rec")
+    )
+    assert result.returncode == 6 and "dir.rec" in result.stderr
+
+
+def test_hapticut_serve_runs_the_servo(tmp_path):
+    record = tmp_path / "serve.rec"
+    command = [sys.executable, "-m", "hapticut.cli", "serve", str(SPHERE), "--device", "sim:press"]
+    command += ["--as-fast-as-possible", "--exit-when-done", "--record", str(record)]
+    result = subprocess.run(command, capture_output=True, text=True, timeout=60, check=False)
+    assert result.returncode == 0, result.stderr
+    stats = stats_of(result.stdout)
+    assert stats["ended_by_itself"] and stats["recording"]["written"] == stats["ticks"] > 100
+    help_result = subprocess.run(
+        [sys.executable, "-m", "hapticut.cli", "serve", "--help-servo"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert help_result.returncode == 0 and "--device" in help_result.stdout

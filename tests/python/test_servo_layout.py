@@ -1,0 +1,56 @@
+"""The frame and record layouts: C++ (hapticut-servo --print-layout) and Python agree."""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+import pytest
+from hapticut import servo_layout as layout
+from hapticut import servo_path
+from servo_test_support import run_servo
+
+
+@pytest.fixture(scope="module")
+def printed() -> dict:
+    result = run_servo("--print-layout")
+    assert result.returncode == 0, result.stderr
+    return json.loads(result.stdout)
+
+
+@pytest.mark.parametrize(
+    ("key", "dtype"),
+    [
+        ("frame_header", layout.FRAME_HEADER),
+        ("record_header", layout.RECORD_HEADER),
+        ("blade_block", layout.BLADE_BLOCK),
+    ],
+)
+def test_fixed_structs_agree(printed, key, dtype):
+    assert printed[key]["size"] == dtype.itemsize
+    assert printed[key]["fields"] == layout.describe(dtype)
+
+
+def test_points_block_and_versions_agree(printed):
+    arrays = [(a["name"], a["type"], a["per_point"]) for a in printed["points_block"]["arrays"]]
+    assert arrays == [
+        (n, np.dtype(c).kind + str(np.dtype(c).itemsize), k) for n, c, k in layout.POINT_ARRAYS
+    ]
+    assert printed["points_block"]["align"] == 8
+    assert printed["frame_version"] == layout.FRAME_VERSION
+    assert printed["record_version"] == layout.RECORD_VERSION
+    assert printed["max_frame_bytes"] == layout.MAX_FRAME_BYTES
+    for points in (1, 7, 50, 500):
+        assert layout.blade_dtype(points).itemsize == layout.BLADE_BLOCK.itemsize + (
+            layout.points_block_bytes(points)
+        )
+        assert layout.blade_dtype(points).itemsize % 8 == 0
+
+
+def test_servo_path_names_a_missing_override(monkeypatch, tmp_path):
+    monkeypatch.setenv("HAPTICUT_SERVO", str(tmp_path / "nope"))
+    with pytest.raises(FileNotFoundError, match="HAPTICUT_SERVO"):
+        servo_path()
+    monkeypatch.delenv("HAPTICUT_SERVO")
+    assert os.access(servo_path(), os.X_OK)
