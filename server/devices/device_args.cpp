@@ -24,8 +24,11 @@ std::map<std::string, std::string> parse_device_args(const std::string& args, co
     if (std::find(known_keys.begin(), known_keys.end(), key) == known_keys.end()) {
       std::string known;
       for (const std::string& k : known_keys) known += (known.empty() ? "" : ", ") + k;
-      throw std::invalid_argument(std::string(kind) + ": unknown option '" + key +
-                                  "' (known: " + known + ")");
+      std::string message = kind;
+      message += ": unknown option '" + key;
+      message += "' (known: " + known;
+      message += ")";
+      throw std::invalid_argument(message);
     }
     if (out.count(key) != 0) {
       throw std::invalid_argument(std::string(kind) + ": option '" + key + "' given twice");

@@ -326,6 +326,11 @@ std::string format_hid_device_list(const std::vector<HidDeviceRow>& rows) {
   return out.str();
 }
 
+std::string list_hid_devices_text(const std::string& profile_directory) {
+  return format_hid_device_list(
+      list_hid_devices(load_profiles(find_profile_directory(profile_directory))));
+}
+
 std::unique_ptr<Device> make_hid_device(const std::string& args) {
   return make_hid_device(args, make_hidapi_transport());
 }

@@ -144,6 +144,10 @@ std::vector<HidDeviceRow> list_hid_devices(HidTransport& transport,
 std::vector<HidDeviceRow> list_hid_devices(const std::vector<DeviceProfile>& profiles);
 // The table --list-devices prints; "no HID devices found" when there are none.
 std::string format_hid_device_list(const std::vector<HidDeviceRow>& rows);
+// `hapticut-servo --list-devices` in one call: the shipped profiles (from
+// find_profile_directory(profile_directory)), real hidapi, the table.
+// Throws ProfileError or std::runtime_error with a message naming the problem.
+std::string list_hid_devices_text(const std::string& profile_directory = "");
 
 // `--device NAME=hid:ARGS`. ARGS (all optional, comma-separated):
 //   profile=NAME|FILE.json  the profile (else the first connected device any profile matches)

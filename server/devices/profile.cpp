@@ -78,9 +78,10 @@ struct Field {
   }
   void only_keys(std::initializer_list<const char*> keys) const {
     if (!value.is_object()) fail("must be an object");
-    for (const auto& [key, unused] : value.items()) {
+    for (const auto& item : value.items()) {
+      const std::string& key = item.key();
       if (std::none_of(keys.begin(), keys.end(), [&](const char* k) { return key == k; })) {
-        Field{unused, pointer + "/" + key, source}.fail("unknown field");
+        Field{item.value(), pointer + "/" + key, source}.fail("unknown field");
       }
     }
   }

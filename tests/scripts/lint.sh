@@ -7,8 +7,8 @@ mapfile -t cpp_files < <(git ls-files '*.cpp' '*.h')
 echo "lint: clang-format (${#cpp_files[@]} files)"
 clang-format --dry-run --Werror "${cpp_files[@]}"
 
-echo "lint: clang-tidy (core/src)"
-mapfile -t tidy_files < <(git ls-files 'core/src/*.cpp' 'core/src/**/*.cpp')
+echo "lint: clang-tidy (core/src, server/devices)"
+mapfile -t tidy_files < <(git ls-files 'core/src/*.cpp' 'core/src/**/*.cpp' 'server/devices/*.cpp')
 tidy_output=$(clang-tidy -p build/tests --quiet "${tidy_files[@]}" 2>&1 || true)
 if grep -qE '(warning|error):' <<<"$tidy_output"; then
   grep -vE '^[0-9]+ warnings? generated\.$' <<<"$tidy_output" >&2

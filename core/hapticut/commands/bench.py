@@ -1,4 +1,4 @@
-"""``hapticut bench transitions|blade``: the engine's benchmarks, beside their anchors."""
+"""``hapticut bench transitions|blade|stability``: benchmarks, beside their anchors."""
 
 from __future__ import annotations
 
@@ -6,11 +6,13 @@ import argparse
 import platform
 
 NAME = "bench"
-HELP = "Print the engine's benchmark tables (Table 2 transitions, blade ticks)."
+HELP = "Print the benchmark tables (Table 2 transitions, blade ticks, loop stability)."
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("which", choices=["transitions", "blade"], help="which benchmark")
+    parser.add_argument(
+        "which", choices=["transitions", "blade", "stability"], help="which benchmark"
+    )
     parser.add_argument("--repeats", type=int, default=20000, help="calls per timed batch")
     parser.add_argument("--batches", type=int, default=15, help="batches (the median is shown)")
     parser.add_argument(
@@ -32,6 +34,10 @@ def run(args: argparse.Namespace) -> int:
         from hapticut.bench import transitions
 
         print(transitions.run(args.repeats, args.batches, args.rounds))
+    elif args.which == "stability":
+        from hapticut.bench import stability
+
+        print(stability.run())
     else:
         from hapticut.bench import blade
 

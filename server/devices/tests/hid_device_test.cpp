@@ -293,6 +293,8 @@ TEST(HidDeviceList, RealHidapiEnumerationPrintsWhatItFinds) {
     EXPECT_EQ(table.rfind("path ", 0), 0U);
     for (const HidDeviceRow& row : rows) EXPECT_NE(table.find(row.info.path), std::string::npos);
   }
+  EXPECT_EQ(list_hid_devices_text(HAPTICUT_PROFILE_DIR).rfind(rows.empty() ? "no HID" : "path ", 0),
+            0U);
   EXPECT_FALSE(hidapi_version_string().empty());
   std::printf("hidapi %s: %s", hidapi_version_string().c_str(), table.c_str());
 }
