@@ -11,8 +11,6 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "devices/device_args.h"
-
 namespace hapticut::servo {
 namespace {
 
@@ -153,11 +151,20 @@ void BridgeDevice::write(const Vec3& force_N, const Vec3& torque_N_mm) {
 }
 
 std::unique_ptr<Device> make_bridge_device(const std::string& args) {
-  const auto options = parse_device_args(
-      args, "bridge",
+  std::string bare;
+  const DeviceOptions options = parse_device_options(args, "bridge", bare);
+  if (!bare.empty()) {
+    throw std::invalid_argument("bridge: option '" + bare + "' is not key=value");
+  }
+  return make_bridge_device(options);
+}
+
+std::unique_ptr<Device> make_bridge_device(const DeviceOptions& options) {
+  check_device_options(
+      options, "bridge",
       {"port", "bind", "timeout_ms", "max_force", "max_torque", "max_stiffness", "workspace"});
   BridgeDeviceOptions device;
-  const double port = device_arg_number(options, "port", device.port, "bridge");
+  const double port = device_option_number(options, "port", device.port, "bridge");
   if (port < 0 || port > 65535 || port != std::floor(port)) {
     throw std::invalid_argument("bridge: option 'port' must be an integer in [0, 65535]");
   }
@@ -166,18 +173,19 @@ std::unique_ptr<Device> make_bridge_device(const std::string& args) {
     device.bind_address = bind->second;
   }
   const double timeout_ms =
-      device_arg_number(options, "timeout_ms", 1e3 * device.timeout_s, "bridge");
+      device_option_number(options, "timeout_ms", 1e3 * device.timeout_s, "bridge");
   if (timeout_ms < 1.0 || timeout_ms > 10000.0) {
     throw std::invalid_argument("bridge: option 'timeout_ms' must be in [1, 10000]");
   }
   device.timeout_s = timeout_ms * 1e-3;
   DeviceLimits& limits = device.limits;
-  limits.max_force_N = device_arg_number(options, "max_force", limits.max_force_N, "bridge");
+  limits.max_force_N = device_option_number(options, "max_force", limits.max_force_N, "bridge");
   limits.max_torque_N_mm =
-      device_arg_number(options, "max_torque", limits.max_torque_N_mm, "bridge");
+      device_option_number(options, "max_torque", limits.max_torque_N_mm, "bridge");
   limits.max_stiffness_N_per_mm =
-      device_arg_number(options, "max_stiffness", limits.max_stiffness_N_per_mm, "bridge");
-  const double half = device_arg_number(options, "workspace", limits.workspace_max_mm.x, "bridge");
+      device_option_number(options, "max_stiffness", limits.max_stiffness_N_per_mm, "bridge");
+  const double half =
+      device_option_number(options, "workspace", limits.workspace_max_mm.x, "bridge");
   if (limits.max_force_N < 0.0 || limits.max_force_N > 100.0 || limits.max_torque_N_mm < 0.0 ||
       limits.max_stiffness_N_per_mm < 0.0 || half <= 0.0) {
     throw std::invalid_argument(

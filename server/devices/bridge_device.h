@@ -19,6 +19,7 @@
 
 #include "devices/bridge_datagram.h"
 #include "devices/device.h"
+#include "devices/device_options.h"
 #include "latest_value.h"
 
 namespace hapticut::servo {
@@ -104,9 +105,16 @@ class BridgeDevice final : public Device {
   BridgeDeviceCounters counters_;
 };
 
-// `--device NAME=bridge:ARGS`. ARGS (all optional, comma-separated):
+// `--device NAME=bridge:ARGS` (kBridgeDeviceUsage). ARGS, all optional, comma-separated:
 //   port=47810, bind=127.0.0.1, timeout_ms=100,
 //   max_force=N, max_torque=N_MM, max_stiffness=N_PER_MM, workspace=MM (half-width of a cube)
+// Throws std::invalid_argument naming a bad option.
+inline constexpr const char* kBridgeDeviceUsage =
+    "  bridge:[port=47810][,bind=127.0.0.1][,timeout_ms=100][,max_force=N][,max_torque=N_MM]\n"
+    "      [,max_stiffness=N_PER_MM][,workspace=MM]\n"
+    "      a force device behind a UDP bridge (examples/bridge_example.py; docs/devices.md)\n";
+std::unique_ptr<Device> make_bridge_device(const DeviceOptions& options);
+// From the ARGS text ("port=47810,max_force=2").
 std::unique_ptr<Device> make_bridge_device(const std::string& args);
 
 }  // namespace hapticut::servo

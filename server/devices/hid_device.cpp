@@ -9,8 +9,6 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "devices/device_args.h"
-
 namespace hapticut::servo {
 namespace {
 
@@ -332,21 +330,33 @@ std::string list_hid_devices_text(const std::string& profile_directory) {
 }
 
 std::unique_ptr<Device> make_hid_device(const std::string& args) {
-  return make_hid_device(args, make_hidapi_transport());
+  std::string bare;
+  const DeviceOptions options = parse_device_options(args, "hid", bare);
+  return make_hid_device(bare, options, make_hidapi_transport());
 }
 
-std::unique_ptr<Device> make_hid_device(const std::string& args,
+std::unique_ptr<Device> make_hid_device(const std::string& bare_profile,
+                                        const DeviceOptions& options) {
+  return make_hid_device(bare_profile, options, make_hidapi_transport());
+}
+
+std::unique_ptr<Device> make_hid_device(const std::string& bare_profile,
+                                        const DeviceOptions& options,
                                         std::unique_ptr<HidTransport> transport) {
-  const auto options = parse_device_args(
-      args, "hid",
+  check_device_options(
+      options, "hid",
       {"profile", "profiles", "path", "serial", "mode", "gain", "range", "dead_zone", "home"});
   const auto get = [&](const char* key) {
     const auto found = options.find(key);
     return found == options.end() ? std::string() : found->second;
   };
+  if (!bare_profile.empty() && options.count("profile") != 0) {
+    throw std::invalid_argument("hid: the profile is given twice ('" + bare_profile +
+                                "' and profile=" + get("profile") + ")");
+  }
 
   DeviceProfile profile;
-  const std::string wanted = get("profile");
+  const std::string wanted = bare_profile.empty() ? get("profile") : bare_profile;
   if (!wanted.empty() && (wanted.find('/') != std::string::npos ||
                           std::filesystem::path(wanted).extension() == ".json")) {
     profile = load_profile(wanted);
@@ -396,10 +406,10 @@ std::unique_ptr<Device> make_hid_device(const std::string& args,
   }
   PoseMappingSettings& mapping = device_options.mapping;
   mapping.translation_gain_mm_per_s =
-      device_arg_number(options, "gain", mapping.translation_gain_mm_per_s, "hid");
+      device_option_number(options, "gain", mapping.translation_gain_mm_per_s, "hid");
   mapping.translation_range_mm =
-      device_arg_number(options, "range", mapping.translation_range_mm, "hid");
-  mapping.dead_zone = device_arg_number(options, "dead_zone", mapping.dead_zone, "hid");
+      device_option_number(options, "range", mapping.translation_range_mm, "hid");
+  mapping.dead_zone = device_option_number(options, "dead_zone", mapping.dead_zone, "hid");
   if (mapping.dead_zone < 0.0 || mapping.dead_zone > 0.9) {
     throw std::invalid_argument("hid: option 'dead_zone' must be in [0, 0.9]");
   }

@@ -24,6 +24,7 @@
 #include <thread>
 #include <vector>
 
+#include "devices/device_options.h"
 #include "devices/hid_report.h"
 #include "devices/hid_transport.h"
 #include "devices/pose_mapping.h"
@@ -149,7 +150,8 @@ std::string format_hid_device_list(const std::vector<HidDeviceRow>& rows);
 // Throws ProfileError or std::runtime_error with a message naming the problem.
 std::string list_hid_devices_text(const std::string& profile_directory = "");
 
-// `--device NAME=hid:ARGS`. ARGS (all optional, comma-separated):
+// `--device NAME=hid:ARGS` (kHidDeviceUsage). ARGS, all optional: a bare
+// first value is the profile (as profile=), then comma-separated options:
 //   profile=NAME|FILE.json  the profile (else the first connected device any profile matches)
 //   profiles=DIR            where profiles live (else find_profile_directory())
 //   path=/dev/hidrawN       open this node
@@ -157,9 +159,18 @@ std::string list_hid_devices_text(const std::string& profile_directory = "");
 //   mode=rate|position      deflection mapping (else the profile's)
 //   gain=MM_PER_S, range=MM, dead_zone=F  mapping overrides
 //   home=X:Y:Z              start position of the tool (mm)
-std::unique_ptr<Device> make_hid_device(const std::string& args);
+// Throws std::invalid_argument (bad option), ProfileError, std::runtime_error (no device).
+inline constexpr const char* kHidDeviceUsage =
+    "  hid:[PROFILE][,profile=NAME|FILE.json][,profiles=DIR][,path=/dev/hidrawN][,serial=S]\n"
+    "      [,mode=rate|position][,gain=MM_PER_S][,range=MM][,dead_zone=F][,home=X:Y:Z]\n"
+    "      a HID device a profile describes (SpaceMouse: docs/devices.md)\n";
+std::unique_ptr<Device> make_hid_device(const std::string& bare_profile,
+                                        const DeviceOptions& options);
 // The same with a given transport (tests: a scripted one).
-std::unique_ptr<Device> make_hid_device(const std::string& args,
+std::unique_ptr<Device> make_hid_device(const std::string& bare_profile,
+                                        const DeviceOptions& options,
                                         std::unique_ptr<HidTransport> transport);
+// From the ARGS text ("spacemouse-wireless,mode=position").
+std::unique_ptr<Device> make_hid_device(const std::string& args);
 
 }  // namespace hapticut::servo

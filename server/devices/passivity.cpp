@@ -5,13 +5,14 @@
 
 namespace hapticut::servo {
 
-PassivityController::PassivityController(const PassivitySettings& settings) : settings_(settings) {
+HannafordRyuPassivity::HannafordRyuPassivity(const PassivitySettings& settings)
+    : settings_(settings) {
   const double delay = settings_.link_delay_ticks;
   settings_.link_delay_ticks =
       std::isfinite(delay) ? std::clamp(delay, 0.0, kMaxLinkDelayTicks) : 0.0;
 }
 
-void PassivityController::reset() {
+void HannafordRyuPassivity::reset() {
   outputs_.fill(Vec3{});
   head_ = 0;
   filled_ = 0;
@@ -22,7 +23,8 @@ void PassivityController::reset() {
   has_velocity_ = false;
 }
 
-Vec3 PassivityController::observe(const Vec3& force_N, const Vec3& velocity_mm_per_s, double dt_s) {
+Vec3 HannafordRyuPassivity::observe(const Vec3& force_N, const Vec3& velocity_mm_per_s,
+                                    double dt_s) {
   const int size = static_cast<int>(outputs_.size());
   // outputs_ ago k: the force rendered k + 1 ticks before this one.
   const auto ago = [&](int k) {

@@ -1,4 +1,4 @@
-// PassivityController: Hannaford and Ryu's time-domain passivity observer
+// HannafordRyuPassivity: Hannaford and Ryu's time-domain passivity observer
 // and controller ("Time-domain passivity control of haptic interfaces",
 // IEEE Trans. Robotics and Automation 18(1), 2002), one per force device.
 //
@@ -17,6 +17,10 @@
 // - the force already sent but not yet observed ("in flight") is counted as
 //   doing work at the newest velocity, so the controller acts before the
 //   hand has been given the energy, not a link delay after.
+//
+// The servo's safety layer runs one per force device through its passivity
+// hook: observe() and reset() have that interface's signatures, so an adapter
+// (or deriving from the hook's interface) is all the wiring it needs.
 #pragma once
 
 #include <array>
@@ -37,11 +41,11 @@ struct PassivitySettings {
   double max_damping_N_s_per_mm = 0.5;
 };
 
-class PassivityController {
+class HannafordRyuPassivity {
  public:
   static constexpr double kMaxLinkDelayTicks = 62.0;
 
-  explicit PassivityController(const PassivitySettings& settings = {});
+  explicit HannafordRyuPassivity(const PassivitySettings& settings = {});
 
   // One tick: the force the environment asks for (N, on the hand), the
   // hand's velocity measured over the last tick (mm/s) and the tick (s).

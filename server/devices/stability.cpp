@@ -54,7 +54,7 @@ StabilityResult run_stability_case(const StabilityCase& c) {
   PassivitySettings passivity_settings;
   passivity_settings.enabled = c.passivity;
   passivity_settings.link_delay_ticks = c.link_delay_s / tick_s;
-  PassivityController passivity(passivity_settings);
+  HannafordRyuPassivity passivity(passivity_settings);
 
   std::vector<Vec3> history(static_cast<std::size_t>(total_substeps) + 1, start);
   StabilityResult result;

@@ -106,6 +106,7 @@ TEST(BridgeDevice, FactoryChecksItsOptions) {
   EXPECT_EQ(error_of("port=70000"), "bridge: option 'port' must be an integer in [0, 65535]");
   EXPECT_EQ(error_of("timeout_ms=0"), "bridge: option 'timeout_ms' must be in [1, 10000]");
   EXPECT_EQ(error_of("host=x").rfind("bridge: unknown option 'host'", 0), 0U);
+  EXPECT_EQ(error_of("47810"), "bridge: option '47810' is not key=value");
   auto device = make_bridge_device("port=0,max_force=2.5,max_stiffness=0.8,workspace=100");
   EXPECT_EQ(device->limits().max_force_N, 2.5);
   EXPECT_EQ(device->limits().max_stiffness_N_per_mm, 0.8);

@@ -302,7 +302,9 @@ TEST(HidDeviceList, RealHidapiEnumerationPrintsWhatItFinds) {
 TEST(HidDeviceFactory, ArgumentsAreCheckedAndNamed) {
   const auto error_of = [](const std::string& args) {
     try {
-      make_hid_device(args, std::make_unique<ScriptedHidTransport>());
+      std::string bare;
+      const DeviceOptions options = parse_device_options(args, "hid", bare);
+      make_hid_device(bare, options, std::make_unique<ScriptedHidTransport>());
     } catch (const std::exception& error) {
       return std::string(error.what());
     }
@@ -323,6 +325,11 @@ TEST(HidDeviceFactory, ArgumentsAreCheckedAndNamed) {
   EXPECT_EQ(
       error_of(dir.substr(1)).rfind("hid: no connected HID device matches a shipped profile", 0),
       0U);
+  EXPECT_EQ(error_of("spacemouse-wireless,mode=position" + dir), "");  // Bare first value.
+  EXPECT_EQ(error_of("spacenavigator,profile=spacenavigator" + dir)
+                .rfind("hid: the profile is given twice", 0),
+            0U);
+  EXPECT_EQ(error_of("profile=a,profile=b"), "hid: option 'profile' given twice");
   // A profile file by path.
   const std::string file = std::string(HAPTICUT_DEVICES_TEST_DATA) + "/example-force-device.json";
   EXPECT_EQ(error_of("profile=" + file), "");

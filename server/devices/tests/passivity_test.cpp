@@ -8,7 +8,7 @@ namespace hapticut::servo {
 namespace {
 
 TEST(Passivity, PassesForceWhileTheEnvironmentAbsorbsEnergy) {
-  PassivityController controller;
+  HannafordRyuPassivity controller;
   // A wall pushing back against a hand moving into it (f . v < 0): absorbing.
   for (int i = 0; i < 10; ++i) {
     const Vec3 out = controller.observe({0, 0, 1.0}, {0, 0, -10.0}, 1e-3);
@@ -19,7 +19,7 @@ TEST(Passivity, PassesForceWhileTheEnvironmentAbsorbsEnergy) {
 }
 
 TEST(Passivity, DampsWhenTheObservedEnergyWouldTurnNegative) {
-  PassivityController controller;
+  HannafordRyuPassivity controller;
   // A force along the motion gives the hand energy from the first tick.
   const Vec3 out = controller.observe({0, 0, 2.0}, {0, 0, 10.0}, 1e-3);
   EXPECT_LT(out.z, 2.0);
@@ -34,12 +34,12 @@ TEST(Passivity, DampsWhenTheObservedEnergyWouldTurnNegative) {
 TEST(Passivity, DisabledControllerPassesEverything) {
   PassivitySettings settings;
   settings.enabled = false;
-  PassivityController controller(settings);
+  HannafordRyuPassivity controller(settings);
   EXPECT_EQ(controller.observe({0, 0, 2.0}, {0, 0, 10.0}, 1e-3), (Vec3{0, 0, 2.0}));
 }
 
 TEST(Passivity, NonFiniteInputRendersNothing) {
-  PassivityController controller;
+  HannafordRyuPassivity controller;
   EXPECT_EQ(controller.observe({0, 0, NAN}, {0, 0, 1.0}, 1e-3), Vec3{});
   EXPECT_EQ(controller.observe({0, 0, 1.0}, {0, 0, INFINITY}, 1e-3), Vec3{});
   EXPECT_EQ(controller.observe({0, 0, 1.0}, {0, 0, 1.0}, 0.0), Vec3{});
