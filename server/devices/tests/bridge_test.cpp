@@ -129,6 +129,7 @@ class ExampleBridge {
                                     "127.0.0.1:" + std::to_string(port), "--summary"};
       args.insert(args.end(), extra.begin(), extra.end());
       std::vector<char*> argv;
+      argv.reserve(args.size() + 1);
       for (std::string& a : args) argv.push_back(a.data());
       argv.push_back(nullptr);
       ::execv(argv[0], argv.data());
