@@ -5,7 +5,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 
-apt_packages=(cmake ninja-build g++ nlohmann-json3-dev libgtest-dev clang-format clang-tidy)
+apt_packages=(cmake ninja-build g++ nlohmann-json3-dev libgtest-dev clang-format clang-tidy
+  pkg-config libhidapi-dev)
 missing=()
 for package in "${apt_packages[@]}"; do
   dpkg -s "$package" >/dev/null 2>&1 || missing+=("$package")
