@@ -11,16 +11,26 @@ namespace hapticut::servo {
 namespace {
 
 // One blade: read, admit, step, render, write. Returns the tick's result in
-// binding.result.
-void tick_blade(Binding& b, double now_s, double dt_s, bool engaged, bool stopping,
-                double force_scale) {
+// binding.result. A change of the sample's kEngageRequestBit (a HID puck's
+// engage button toggles it) sets the servo's engage state, from this tick on.
+void tick_blade(Binding& b, double now_s, double dt_s, std::atomic<bool>& engage_state,
+                bool stopping, double force_scale) {
   BladeTickResult& r = b.result;
   r.status = b.device->read(now_s, r.sample);
   r.step = StepKind::None;
   r.engine_force_N = Vec3{};
   r.engine_torque_N_mm = Vec3{};
   bool engine_ok = false;
-  if (b.safety->admit(r.status, r.sample)) {
+  const bool admitted = b.safety->admit(r.status, r.sample);
+  if (admitted) {
+    const bool engage_bit = (r.sample.buttons & kEngageRequestBit) != 0U;
+    if (engage_bit != b.engage_bit) {
+      b.engage_bit = engage_bit;
+      engage_state.store(engage_bit, std::memory_order_relaxed);
+    }
+  }
+  const bool engaged = engage_state.load(std::memory_order_relaxed);
+  if (admitted) {
     r.step = b.has_reset ? StepKind::Step : StepKind::ResetAndStep;
     if (!b.has_reset) {
       b.blade->reset(r.sample.pose);
@@ -127,13 +137,12 @@ void run_loop(Session& session, LoopShared& shared) {
       stopping = true;
       stop_started_s = now_s;
     }
-    const bool engaged = shared.engaged.load(std::memory_order_relaxed);
     const double force_scale = shared.force_scale.load(std::memory_order_relaxed);
     const bool recording = shared.record_wanted.load(std::memory_order_acquire);
     shared.recording.store(recording, std::memory_order_release);
 
     // The tick: devices -> engine -> safety -> devices.
-    for (Binding& b : bindings) tick_blade(b, now_s, dt_s, engaged, stopping, force_scale);
+    for (Binding& b : bindings) tick_blade(b, now_s, dt_s, shared.engaged, stopping, force_scale);
     const double compute_us = (monotonic_now_s() - woke_s) * 1e6;
 
     // Counters.

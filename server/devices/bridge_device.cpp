@@ -6,6 +6,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -90,16 +91,21 @@ void BridgeDevice::receive_loop() {
         counters_.refused[static_cast<int>(result)].fetch_add(1, std::memory_order_relaxed);
         continue;
       }
-      if (pose.sequence <= receive_newest_sequence_) {
+      const double arrival_s = monotonic_s();
+      // After a silence longer than the timeout a bridge may have restarted
+      // (its sequence begins again): its first pose starts a new count.
+      const bool restarted = arrival_s - receive_newest_s_ > options_.timeout_s;
+      if (pose.sequence <= receive_newest_sequence_ && !restarted) {
         counters_.out_of_order.fetch_add(1, std::memory_order_relaxed);
         continue;
       }
       receive_newest_sequence_ = pose.sequence;
+      receive_newest_s_ = arrival_s;
       counters_.poses.fetch_add(1, std::memory_order_relaxed);
       if ((pose.flags & kBridgePoseFaultFlag) != 0U) {
         counters_.faults.fetch_add(1, std::memory_order_relaxed);
       }
-      received_.publish({pose, monotonic_s(), peer});
+      received_.publish({pose, arrival_s, peer});
     }
   }
 }
@@ -124,6 +130,7 @@ DeviceStatus BridgeDevice::read(double now_s, DeviceSample& sample) {
   sample.buttons = last_pose_.buttons;
   sample.time_s = received.arrival_s;
   sample.sequence = sample_sequence_;
+  sample.dt_s = 0.0;  // A live device: the engine steps with the measured tick.
   const bool silent = now_s - received.arrival_s > options_.timeout_s;
   if (silent || (last_pose_.flags & kBridgePoseFaultFlag) != 0U) return DeviceStatus::Lost;
   return fresh ? DeviceStatus::Fresh : DeviceStatus::Stale;
@@ -148,6 +155,26 @@ void BridgeDevice::write(const Vec3& force_N, const Vec3& torque_N_mm) {
   } else {
     counters_.send_failures.fetch_add(1, std::memory_order_relaxed);
   }
+}
+
+std::vector<std::pair<std::string, std::uint64_t>> BridgeDevice::status_counters() const {
+  const auto load = [](const std::atomic<std::uint64_t>& count) {
+    return count.load(std::memory_order_relaxed);
+  };
+  std::vector<std::pair<std::string, std::uint64_t>> out = {
+      {"poses", load(counters_.poses)},
+      {"garbage", counters_.garbage()},
+      {"out_of_order", load(counters_.out_of_order)},
+      {"faults", load(counters_.faults)},
+      {"forces_sent", load(counters_.forces_sent)},
+      {"send_failures", load(counters_.send_failures)},
+  };
+  for (int reason = 1; reason < kBridgeDecodeCount; ++reason) {
+    std::string name = std::string("refused_") + bridge_decode_name(static_cast<BridgeDecode>(reason));
+    std::replace(name.begin(), name.end(), ' ', '_');
+    out.emplace_back(std::move(name), load(counters_.refused[reason]));
+  }
+  return out;
 }
 
 std::unique_ptr<Device> make_bridge_device(const std::string& args) {

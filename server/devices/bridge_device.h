@@ -67,6 +67,9 @@ class BridgeDevice final : public Device {
   void stop() override;
   DeviceStatus read(double now_s, DeviceSample& sample) override;
   void write(const Vec3& force_N, const Vec3& torque_N_mm) override;
+  // poses, garbage (all refused) and refused_<reason>, out_of_order, faults,
+  // forces_sent, send_failures.
+  std::vector<std::pair<std::string, std::uint64_t>> status_counters() const override;
 
   int bound_port() const { return bound_port_; }
   const BridgeDeviceCounters& counters() const { return counters_; }
@@ -91,6 +94,7 @@ class BridgeDevice final : public Device {
   std::thread receive_thread_;
   LatestValue<Received> received_;
   std::uint64_t receive_newest_sequence_ = 0;  // Receive thread only.
+  double receive_newest_s_ = 0.0;              // Arrival of that pose (receive thread only).
 
   // Real-time side.
   BridgePose last_pose_;

@@ -285,6 +285,19 @@ void HidDevice::maintain() {
   connection_.store(kConnected, std::memory_order_release);
 }
 
+std::vector<std::pair<std::string, std::uint64_t>> HidDevice::status_counters() const {
+  const auto load = [](const std::atomic<std::uint64_t>& count) {
+    return count.load(std::memory_order_relaxed);
+  };
+  return {{"reports", load(counters_.reports)},
+          {"unknown_reports", load(counters_.unknown_reports)},
+          {"wrong_length", load(counters_.wrong_length)},
+          {"disconnects", load(counters_.disconnects)},
+          {"reconnects", load(counters_.reconnects)},
+          {"reconnect_attempts", load(counters_.reconnect_attempts)},
+          {"force_reports", load(counters_.force_reports)}};
+}
+
 std::vector<HidDeviceRow> list_hid_devices(HidTransport& transport,
                                            const std::vector<DeviceProfile>& profiles) {
   std::vector<HidDeviceRow> rows;

@@ -70,6 +70,9 @@ class HidDevice final : public Device {
   DeviceStatus read(double now_s, DeviceSample& sample) override;
   void write(const Vec3& force_N, const Vec3& torque_N_mm) override;
   void maintain() override;
+  // reports, unknown_reports, wrong_length, disconnects, reconnects,
+  // reconnect_attempts, force_reports.
+  std::vector<std::pair<std::string, std::uint64_t>> status_counters() const override;
 
   // One I/O pass: drain the pending reports (waiting up to timeout_ms for the
   // first), publish the state, write the newest force. The I/O thread's body.

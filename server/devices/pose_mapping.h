@@ -16,10 +16,7 @@
 
 namespace hapticut::servo {
 
-// DeviceSample::buttons: bits 0-15 are the device's own buttons; this bit is
-// set while the engage request is on (toggled by the engage button). The
-// servo's engage state may follow it.
-inline constexpr std::uint32_t kEngageRequestBit = 1U << 31;
+// The engage request is DeviceSample bit kEngageRequestBit (devices/device.h).
 
 struct PoseMappingSettings {
   bool rate_control = true;
