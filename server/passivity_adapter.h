@@ -26,7 +26,6 @@ class HannafordRyuController final : public PassivityController {
 
 // link_delay_s: the device link's delay beyond the one-tick hold (0 for a
 // local device), turned into ticks at rate_Hz and capped at the controller's maximum.
-std::unique_ptr<PassivityController> make_passivity_controller(double link_delay_s,
-                                                               double rate_Hz);
+std::unique_ptr<PassivityController> make_passivity_controller(double link_delay_s, double rate_Hz);
 
 }  // namespace hapticut::servo

@@ -231,6 +231,7 @@ nlohmann::json Servo::stats_locked() const {
            {"device", b.device_text},
            {"kind", b.device->kind()},
            {"device_counters", device_counters},
+           {"device_error", b.device->last_error()},
            {"passivity", b.passivity},
            {"device_status", has ? status_name(report.device_status) : "none"},
            {"flags", flag_names(report.flags)},

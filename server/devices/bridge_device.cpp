@@ -170,7 +170,8 @@ std::vector<std::pair<std::string, std::uint64_t>> BridgeDevice::status_counters
       {"send_failures", load(counters_.send_failures)},
   };
   for (int reason = 1; reason < kBridgeDecodeCount; ++reason) {
-    std::string name = std::string("refused_") + bridge_decode_name(static_cast<BridgeDecode>(reason));
+    std::string name =
+        std::string("refused_") + bridge_decode_name(static_cast<BridgeDecode>(reason));
     std::replace(name.begin(), name.end(), ' ', '_');
     out.emplace_back(std::move(name), load(counters_.refused[reason]));
   }

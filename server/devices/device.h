@@ -88,9 +88,9 @@ class Device {
 
   // The backend's own counters (garbage refused, reconnections...) by name,
   // for the servo's status and statistics. Not real-time; any thread.
-  virtual std::vector<std::pair<std::string, std::uint64_t>> status_counters() const {
-    return {};
-  }
+  virtual std::vector<std::pair<std::string, std::uint64_t>> status_counters() const { return {}; }
+  // The last open or reconnection failure ("" when none), for status. Any thread.
+  virtual std::string last_error() const { return {}; }
 };
 
 }  // namespace hapticut::servo

@@ -83,7 +83,7 @@ class HidDevice final : public Device {
   const HidDeviceCounters& counters() const { return counters_; }
   const DeviceProfile& profile() const { return options_.profile; }
   // The last open or reconnection failure, for status lines.
-  std::string last_error() const;
+  std::string last_error() const override;
 
  private:
   enum : std::uint32_t { kConnected = 0, kLost = 1 };

@@ -86,6 +86,7 @@ def test_bridge_drives_the_servo(tmp_path):
         assert servo.stop() == 0
     blade = status["blades"][0]
     assert blade["kind"] == "bridge" and blade["passivity"] is True
+    assert blade["device_error"] == ""
     counters = blade["device_counters"]
     assert counters["poses"] > 500 and counters["garbage"] == 0
     assert counters["forces_sent"] > 500
