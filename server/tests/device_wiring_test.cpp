@@ -71,7 +71,7 @@ TEST(DeviceWiring, PassivityAdapterDampsEnergyTheLoopWouldGive) {
     DeviceSample sample;
     sample.pose.position_mm = {0.1 * k, 0, 0};  // Moving +x at 100 mm/s.
     sample.time_s = 1e-3 * k;
-    sample.sequence = static_cast<std::uint64_t>(k + 1);
+    sample.sequence = static_cast<std::uint64_t>(k) + 1;
     ASSERT_TRUE(channel.admit(DeviceStatus::Fresh, sample));
     const SafetyOutput out = channel.render({1, 0, 0}, {}, true, 1e-3, true, false);
     if (out.flags & kSafetyPassivity) {
