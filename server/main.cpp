@@ -12,6 +12,9 @@
 
 #include "clock.h"
 #include "control_server.h"
+#ifdef HAPTICUT_WITH_DEVICES
+#include "devices/hid_device.h"
+#endif
 #include "hapticut/scene_io.h"
 #include "histogram.h"
 #include "layout.h"
@@ -61,6 +64,23 @@ int run_bare_loop(const Options& options) {
                                 {"count", histogram->count()}}}};
   std::printf("%s\n", out.dump().c_str());
   return kExitOk;
+}
+
+// --list-devices: the HID devices hidapi finds, and the profile each matches.
+int list_devices(const Options& options) {
+#ifdef HAPTICUT_WITH_DEVICES
+  try {
+    std::printf("%s", list_hid_devices_text(options.profiles_dir).c_str());
+    return kExitOk;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "hapticut-servo: --list-devices: %s\n", e.what());
+    return kExitDevice;
+  }
+#else
+  (void)options;
+  std::fprintf(stderr, "hapticut-servo: built without HID devices (HAPTICUT_BUILD_DEVICES=OFF)\n");
+  return kExitDevice;
+#endif
 }
 
 int run(const Options& options) {
@@ -157,6 +177,7 @@ int run_main(int argc, char** argv) {
                 kFrameVersion, kRecordVersion);
     return kExitOk;
   }
+  if (options.list_devices) return list_devices(options);
   if (options.print_layout) {
     std::printf("%s\n", layout_json().c_str());
     return kExitOk;

@@ -42,6 +42,14 @@ constexpr const char* kUsage =
     "  --ramp S                force ramp at start, engage and after a fault (scene's)\n"
     "  --stop-ramp S           ramp down on stop, SIGINT and SIGTERM (0.1)\n"
     "  --watchdog-ms MS        no new device sample for MS: zero force (100)\n"
+    "  --no-passivity          no passivity controller (on by default for every\n"
+    "                          device with force output: docs/stability.md)\n"
+    "  --passivity-delay-ms MS the device link's delay the controller allows for (0)\n"
+    "  --list-devices          list the HID devices hidapi finds, marking those a\n"
+    "                          shipped profile matches (\"no HID devices found\" when\n"
+    "                          none), and exit\n"
+    "  --profiles DIR          device profiles for --list-devices (default: next to\n"
+    "                          the binary in the package, or $HAPTICUT_PROFILE_DIR)\n"
     "  --no-realtime           do not ask for SCHED_FIFO\n"
     "  --priority P            SCHED_FIFO priority, 1 to 99 (80)\n"
     "  --bare-loop             measure a bare clock_nanosleep loop at --rate for\n"
@@ -134,6 +142,17 @@ Options parse_options(int argc, const char* const* argv) {
       if (o.stop_ramp_s < 0) throw UsageError("--stop-ramp: must not be negative");
     } else if (arg == "--watchdog-ms") {
       o.watchdog_ms = positive(number(arg, value()));
+    } else if (arg == "--no-passivity") {
+      o.passivity = false;
+    } else if (arg == "--passivity-delay-ms") {
+      o.passivity_delay_ms = number(arg, value());
+      if (o.passivity_delay_ms < 0 || o.passivity_delay_ms > 1000) {
+        throw UsageError("--passivity-delay-ms: 0 to 1000");
+      }
+    } else if (arg == "--list-devices") {
+      o.list_devices = true;
+    } else if (arg == "--profiles") {
+      o.profiles_dir = value();
     } else if (arg == "--no-realtime") {
       o.realtime = false;
     } else if (arg == "--priority") {

@@ -51,6 +51,10 @@ struct Options {
   bool help = false;
   bool version = false;
   bool quiet = false;
+  bool passivity = true;
+  double passivity_delay_ms = 0.0;
+  bool list_devices = false;
+  std::string profiles_dir;  // "": find_profile_directory()'s search.
 };
 
 // Throws UsageError naming the option that is wrong.

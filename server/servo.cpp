@@ -85,6 +85,8 @@ SessionConfig Servo::config_from_options() const {
   c.safety_request.ramp_time_s = options_.ramp_s;
   c.safety_request.stop_ramp_time_s = options_.stop_ramp_s;
   c.safety_request.engage_buttons = options_.engage_buttons;
+  c.passivity = options_.passivity;
+  c.passivity_link_delay_s = options_.passivity_delay_ms / 1000.0;
   return c;
 }
 
@@ -132,7 +134,15 @@ void Servo::start() {
   std::size_t started = 0;
   try {
     for (Binding& b : session_->bindings()) {
-      b.device->start();
+      try {
+        b.device->start();
+      } catch (const DeviceError&) {
+        throw;
+      } catch (const std::exception& e) {
+        // A device that cannot open (no HID device, bridge port in use).
+        throw DeviceError("blade '" + b.blade_name + "': device '" + b.device_text +
+                          "': " + e.what());
+      }
       ++started;
     }
   } catch (...) {
@@ -214,10 +224,15 @@ nlohmann::json Servo::stats_locked() const {
       for (int bit = 0; bit < kSafetyFlagCount; ++bit) {
         if (report.events[bit]) events[safety_flag_name(bit)] = report.events[bit];
       }
+      nlohmann::json device_counters = nlohmann::json::object();
+      for (const auto& [name, count] : b.device->status_counters()) device_counters[name] = count;
       out["blades"].push_back(
           {{"name", b.blade_name},
            {"device", b.device_text},
            {"kind", b.device->kind()},
+           {"device_counters", device_counters},
+           {"device_error", b.device->last_error()},
+           {"passivity", b.passivity},
            {"device_status", has ? status_name(report.device_status) : "none"},
            {"flags", flag_names(report.flags)},
            {"faults", report.faults},

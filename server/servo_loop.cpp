@@ -23,9 +23,11 @@ std::uint32_t engine_refusal(const Blade& blade, const Pose& pose) {
 }
 
 // One blade: read, admit, step with this tick's settings, render, write.
-// Returns the tick's result in binding.result.
-void tick_blade(Binding& b, double now_s, double dt_s, bool engaged, bool stopping,
-                const RuntimeSettings& settings) {
+// Returns the tick's result in binding.result. A change of the sample's
+// kEngageRequestBit (a HID puck's engage button toggles it) sets the servo's
+// engage state, from this tick on.
+void tick_blade(Binding& b, double now_s, double dt_s, std::atomic<bool>& engage_state,
+                bool stopping, const RuntimeSettings& settings) {
   BladeTickResult& r = b.result;
   r.status = b.device->read(now_s, r.sample);
   r.step = StepKind::None;
@@ -35,7 +37,16 @@ void tick_blade(Binding& b, double now_s, double dt_s, bool engaged, bool stoppi
   r.force_shading = settings.force_shading;
   r.engine_rejected = false;
   bool engine_ok = false;
-  if (b.safety->admit(r.status, r.sample)) {
+  const bool admitted = b.safety->admit(r.status, r.sample);
+  if (admitted) {
+    const bool engage_bit = (r.sample.buttons & kEngageRequestBit) != 0U;
+    if (engage_bit != b.engage_bit) {
+      b.engage_bit = engage_bit;
+      engage_state.store(engage_bit, std::memory_order_relaxed);
+    }
+  }
+  const bool engaged = engage_state.load(std::memory_order_relaxed);
+  if (admitted) {
     const std::uint32_t refusal = b.has_reset ? 0U : engine_refusal(*b.blade, r.sample.pose);
     if (refusal != 0) {
       r.engine_rejected = true;
@@ -159,13 +170,12 @@ void run_loop(Session& session, LoopShared& shared) {
       stopping = true;
       stop_started_s = now_s;
     }
-    const bool engaged = shared.engaged.load(std::memory_order_relaxed);
     shared.settings.read(settings);  // Newest settings (a sequence lock, no waiting).
     const bool recording = shared.record_wanted.load(std::memory_order_acquire);
     shared.recording.store(recording, std::memory_order_release);
 
     // The tick: devices -> engine -> safety -> devices.
-    for (Binding& b : bindings) tick_blade(b, now_s, dt_s, engaged, stopping, settings);
+    for (Binding& b : bindings) tick_blade(b, now_s, dt_s, shared.engaged, stopping, settings);
     const double compute_us = (monotonic_now_s() - woke_s) * 1e6;
 
     // Counters.

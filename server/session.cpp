@@ -6,6 +6,9 @@
 
 #include "devices/viewport_device.h"
 #include "hapticut/scene_io.h"
+#ifdef HAPTICUT_WITH_DEVICES
+#include "passivity_adapter.h"
+#endif
 
 namespace hapticut::servo {
 
@@ -108,8 +111,14 @@ Session::Session(const SessionConfig& config) {
     binding.blade = std::make_unique<Blade>(space_, blade_spec, shading_);
     binding.requested = request;
     binding.safety = std::make_unique<SafetyChannel>(request, binding.device->limits());
-    // A per-device passivity controller plugs in here:
-    // binding.safety->set_passivity(make_passivity_controller(*spec, ...));
+#ifdef HAPTICUT_WITH_DEVICES
+    // Passivity for every device that renders force (docs/stability.md).
+    if (config.passivity && binding.device->limits().has_force_output) {
+      binding.safety->set_passivity(
+          make_passivity_controller(config.passivity_link_delay_s, rate_Hz_));
+      binding.passivity = true;
+    }
+#endif
     binding.frame = BladeFrame(blade_spec.points);
     bindings_.push_back(std::move(binding));
   }

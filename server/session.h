@@ -30,6 +30,9 @@ struct SessionConfig {
   double watchdog_ms = 100.0;
   SafetySettings safety_request;      // Lowered to each device's limits.
   bool lower_to_scene_limits = true;  // The scene may lower the limits too.
+  // A Hannaford-Ryu passivity controller on every device with force output.
+  bool passivity = true;
+  double passivity_link_delay_s = 0.0;  // The device link's delay beyond one tick.
 };
 
 struct Binding {
@@ -43,6 +46,8 @@ struct Binding {
   BladeFrame frame;
   BladeTickResult result;
   bool has_reset = false;
+  bool engage_bit = false;  // kEngageRequestBit of the last admitted sample.
+  bool passivity = false;   // A passivity controller is plugged in.
 };
 
 class Session {

@@ -8,11 +8,20 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "hapticut/blade.h"
 #include "hapticut/vec3.h"
 
 namespace hapticut::servo {
+
+// DeviceSample::buttons: bits 0-15 are the device's own buttons; this bit is
+// set while the device's engage request is on (a HID puck toggles it with its
+// engage button, pose_mapping.h; a bridge may set it). Each change of it sets
+// the servo's engage state (servo_loop.cpp).
+inline constexpr std::uint32_t kEngageRequestBit = 1U << 31;
 
 // One sample of the tool: its pose in the scene's world frame (mm), the
 // button bits, and when it was taken (seconds on CLOCK_MONOTONIC).
@@ -76,6 +85,12 @@ class Device {
   // A scripted device (sim, replay) that has played its whole path. The
   // servo may then end the run (--exit-when-done). Any thread.
   virtual bool finished() const { return false; }
+
+  // The backend's own counters (garbage refused, reconnections...) by name,
+  // for the servo's status and statistics. Not real-time; any thread.
+  virtual std::vector<std::pair<std::string, std::uint64_t>> status_counters() const { return {}; }
+  // The last open or reconnection failure ("" when none), for status. Any thread.
+  virtual std::string last_error() const { return {}; }
 };
 
 }  // namespace hapticut::servo

@@ -1,17 +1,57 @@
 #include "devices/device_factory.h"
 
+#include <exception>
+
 #include "devices/replay_device.h"
 #include "devices/sim_device.h"
 #include "devices/viewport_device.h"
+#ifdef HAPTICUT_WITH_DEVICES
+#include "devices/bridge_device.h"
+#include "devices/hid_device.h"
+#endif
 
 namespace hapticut::servo {
 
+namespace {
+
+#ifdef HAPTICUT_WITH_DEVICES
+// The hid and bridge factories throw std::invalid_argument, ProfileError or
+// std::runtime_error; the servo reports a DeviceError naming the binding.
+template <typename Make>
+std::unique_ptr<Device> as_device_error(const DeviceSpec& spec, Make make) {
+  try {
+    return make();
+  } catch (const DeviceError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw DeviceError(spec.describe() + ": " + e.what());
+  }
+}
+
+std::unique_ptr<Device> make_hid(const DeviceSpec& spec, const DeviceContext& /*context*/) {
+  return as_device_error(spec, [&] { return make_hid_device(spec.value, spec.options); });
+}
+
+std::unique_ptr<Device> make_bridge(const DeviceSpec& spec, const DeviceContext& /*context*/) {
+  if (!spec.value.empty()) {
+    throw DeviceError(spec.describe() + ": bridge: option '" + spec.value + "' is not key=value");
+  }
+  return as_device_error(spec, [&] { return make_bridge_device(spec.options); });
+}
+#endif
+
+}  // namespace
+
 const std::vector<DeviceKind>& device_kinds() {
-  // One row per backend (the HID and UDP-bridge devices add theirs here).
+  // One row per backend.
   static const std::vector<DeviceKind> kinds = {
       {"sim", kSimDeviceUsage, make_sim_device},
       {"replay", kReplayDeviceUsage, make_replay_device},
       {"viewport", kViewportDeviceUsage, make_viewport_device},
+#ifdef HAPTICUT_WITH_DEVICES
+      {"hid", kHidDeviceUsage, make_hid},
+      {"bridge", kBridgeDeviceUsage, make_bridge},
+#endif
   };
   return kinds;
 }

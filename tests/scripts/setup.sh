@@ -5,9 +5,10 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 
-# clang and its runtime libraries: the scene reader's libFuzzer harness (tests/scripts/fuzz.sh).
+# clang and its runtime libraries: the scene reader's libFuzzer harness (tests/scripts/fuzz.sh);
+# hidapi (through pkg-config): the HID devices.
 apt_packages=(cmake ninja-build g++ nlohmann-json3-dev libgtest-dev clang-format clang-tidy clang
-  libclang-rt-14-dev)
+  libclang-rt-14-dev pkg-config libhidapi-dev)
 missing=()
 for package in "${apt_packages[@]}"; do
   dpkg -s "$package" >/dev/null 2>&1 || missing+=("$package")

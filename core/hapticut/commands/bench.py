@@ -1,4 +1,4 @@
-"""``hapticut bench transitions|blade``: the engine's benchmarks, beside their anchors."""
+"""``hapticut bench transitions|blade|stability``: benchmarks, beside their anchors."""
 
 from __future__ import annotations
 
@@ -8,11 +8,16 @@ import sys
 from pathlib import Path
 
 NAME = "bench"
-HELP = "Print the benchmark tables (Table 2 transitions, blade ticks, the servo process)."
+HELP = (
+    "Print the benchmark tables (Table 2 transitions, blade ticks, the servo process, "
+    "loop stability)."
+)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("which", choices=["transitions", "blade", "servo"], help="which benchmark")
+    parser.add_argument(
+        "which", choices=["transitions", "blade", "servo", "stability"], help="which benchmark"
+    )
     parser.add_argument("--repeats", type=int, default=20000, help="calls per timed batch")
     parser.add_argument("--batches", type=int, default=15, help="batches (the median is shown)")
     parser.add_argument(
@@ -47,6 +52,10 @@ def run(args: argparse.Namespace) -> int:
         from hapticut.bench import servo
 
         print(servo.run(duration_s=args.duration))
+    elif args.which == "stability":
+        from hapticut.bench import stability
+
+        print(stability.run())
     else:
         from hapticut.bench import blade
 

@@ -1,0 +1,137 @@
+#include "devices/stability.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "devices/virtual_hand.h"
+#include "hapticut/proxy.h"
+#include "hapticut/reference_meshes.h"
+#include "hapticut/space.h"
+
+namespace hapticut::servo {
+namespace {
+
+constexpr double kHandStep_s = 1e-4;  // The hand's physics runs at 10 kHz.
+constexpr double kStartHeight_mm = 10.0;
+constexpr double kPressDepth_mm = -15.0;  // Where the hand aims below the bone's surface (z = 0).
+constexpr double kPressSpeed_mm_per_s = 60.0;
+
+// A block of bone under z = 0: every tet rigid.
+Space bone_block(const StabilityCase& c) {
+  const MeshData block = grid_mesh({-30.0, 0.0, 30.0}, {-30.0, 0.0, 30.0}, {-30.0, 0.0});
+  EngineSettings settings;
+  settings.stiffness_N_per_mm = c.stiffness_N_per_mm;
+  settings.servo_rate_Hz = c.servo_rate_Hz;
+  Material bone{"bone", MaterialModel::Rigid};
+  return Space(
+      TetMesh(block.vertices_mm, block.tets, std::vector<std::int32_t>(block.tets.size(), 0)),
+      {bone}, settings);
+}
+
+// The hand aims down at a steady speed, then holds below the surface.
+Vec3 hand_target(double t_s) {
+  return {0.0, 0.0, std::max(kPressDepth_mm, kStartHeight_mm - kPressSpeed_mm_per_s * t_s)};
+}
+
+}  // namespace
+
+StabilityResult run_stability_case(const StabilityCase& c) {
+  const Space space = bone_block(c);
+  Proxy proxy(space);
+  const Vec3 start{0.0, 0.0, kStartHeight_mm};
+  proxy.reset(start);
+  VirtualHand hand;
+  hand.reset(start);
+
+  const int substeps_per_tick =
+      std::max(1, static_cast<int>(std::lround(1.0 / (c.servo_rate_Hz * kHandStep_s))));
+  const double tick_s = substeps_per_tick * kHandStep_s;
+  const int delay_substeps = static_cast<int>(std::lround(c.link_delay_s / kHandStep_s));
+  const int total_substeps = static_cast<int>(std::lround(c.duration_s / kHandStep_s));
+
+  PassivitySettings passivity_settings;
+  passivity_settings.enabled = c.passivity;
+  passivity_settings.link_delay_ticks = c.link_delay_s / tick_s;
+  HannafordRyuPassivity passivity(passivity_settings);
+
+  std::vector<Vec3> history(static_cast<std::size_t>(total_substeps) + 1, start);
+  StabilityResult result;
+  Vec3 rendered_N;
+  Vec3 last_seen = start;
+  double energy_mJ = 0.0;
+  double late_min_z = 1e300;
+  double late_max_z = -1e300;
+  for (int i = 0; i < total_substeps; ++i) {
+    if (i % substeps_per_tick == 0) {
+      // The servo sees the hand as it was a link delay ago.
+      const Vec3 seen = history[static_cast<std::size_t>(std::max(0, i - delay_substeps))];
+      proxy.step(seen, tick_s);
+      const Vec3 velocity = (seen - last_seen) / tick_s;
+      last_seen = seen;
+      rendered_N = passivity.observe(proxy.force_N(), velocity, tick_s);
+      result.peak_force_N = std::max(result.peak_force_N, norm(rendered_N));
+    }
+    const Vec3 before = hand.position_mm();
+    hand.step(hand_target(i * kHandStep_s), rendered_N, kHandStep_s);
+    // The force is held over the step: its work is f . dx exactly.
+    energy_mJ += dot(rendered_N, hand.position_mm() - before);
+    result.max_energy_to_hand_mJ = std::max(result.max_energy_to_hand_mJ, energy_mJ);
+    history[static_cast<std::size_t>(i) + 1] = hand.position_mm();
+    if (i >= total_substeps / 2) {
+      late_min_z = std::min(late_min_z, hand.position_mm().z);
+      late_max_z = std::max(late_max_z, hand.position_mm().z);
+    }
+  }
+  result.final_energy_to_hand_mJ = energy_mJ;
+  result.late_swing_mm = late_max_z - late_min_z;
+  result.passivity_active_ticks = passivity.active_ticks();
+  return result;
+}
+
+std::string stability_table(const std::vector<double>& rates_Hz,
+                            const std::vector<double>& delays_s,
+                            const std::vector<double>& stiffnesses_N_per_mm) {
+  std::ostringstream out;
+  out << "Energy the loop gives the hand (mJ, largest running sum; <= 0: passive) and the\n"
+         "contact's swing in the last second (mm), without and with the passivity controller.\n\n";
+  out << "| rate Hz | delay ms | k N/mm | without: energy mJ | swing mm | with: energy mJ | swing "
+         "mm "
+         "| damped ticks |\n";
+  out << "|--------:|---------:|-------:|-------------------:|---------:|----------------:|--------"
+         "-:"
+         "|-------------:|\n";
+  int active_without = 0;
+  int active_with = 0;
+  for (double rate : rates_Hz) {
+    for (double delay : delays_s) {
+      for (double k : stiffnesses_N_per_mm) {
+        StabilityCase c;
+        c.servo_rate_Hz = rate;
+        c.link_delay_s = delay;
+        c.stiffness_N_per_mm = k;
+        c.passivity = false;
+        const StabilityResult without = run_stability_case(c);
+        c.passivity = true;
+        const StabilityResult with = run_stability_case(c);
+        active_without += without.max_energy_to_hand_mJ > 0.0 ? 1 : 0;
+        active_with += with.max_energy_to_hand_mJ > 0.0 ? 1 : 0;
+        char line[256];
+        std::snprintf(line, sizeof line,
+                      "| %7.0f | %8.1f | %6.2f | %18.4f | %8.3f | %15.4f | %8.3f | %12llu |\n",
+                      rate, delay * 1e3, k, without.max_energy_to_hand_mJ, without.late_swing_mm,
+                      with.max_energy_to_hand_mJ, with.late_swing_mm,
+                      static_cast<unsigned long long>(with.passivity_active_ticks));
+        out << line;
+      }
+    }
+  }
+  const int cases =
+      static_cast<int>(rates_Hz.size() * delays_s.size() * stiffnesses_N_per_mm.size());
+  out << "\nGives the hand energy: " << active_without << " of " << cases
+      << " cases without the controller, " << active_with << " of " << cases << " with it.\n";
+  return out.str();
+}
+
+}  // namespace hapticut::servo
