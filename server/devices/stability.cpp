@@ -19,13 +19,13 @@ constexpr double kPressDepth_mm = -15.0;  // Where the hand aims below the bone'
 constexpr double kPressSpeed_mm_per_s = 60.0;
 
 // A block of bone under z = 0: every tet rigid.
-Space bone_block(const StabilityCase& c) {
+std::shared_ptr<const Space> bone_block(const StabilityCase& c) {
   const MeshData block = grid_mesh({-30.0, 0.0, 30.0}, {-30.0, 0.0, 30.0}, {-30.0, 0.0});
   EngineSettings settings;
   settings.stiffness_N_per_mm = c.stiffness_N_per_mm;
   settings.servo_rate_Hz = c.servo_rate_Hz;
   Material bone{"bone", MaterialModel::Rigid};
-  return Space(
+  return Space::create(
       TetMesh(block.vertices_mm, block.tets, std::vector<std::int32_t>(block.tets.size(), 0)),
       {bone}, settings);
 }
@@ -38,7 +38,7 @@ Vec3 hand_target(double t_s) {
 }  // namespace
 
 StabilityResult run_stability_case(const StabilityCase& c) {
-  const Space space = bone_block(c);
+  const auto space = bone_block(c);
   Proxy proxy(space);
   const Vec3 start{0.0, 0.0, kStartHeight_mm};
   proxy.reset(start);
