@@ -122,10 +122,11 @@ struct ClippedSegment {
 };
 ClippedSegment clip_far_segment_to_box(const Vec3& a, const Vec3& b, const Aabb& box);
 
-// Whether the closed box holds x; inline, as OUTSIDE asks it every step.
+// Whether the closed box holds x; inline, as OUTSIDE asks it every step and
+// the blade for every point. Bitwise, not short-circuit: no branch per axis.
 inline bool box_holds(const Aabb& box, const Vec3& x) {
-  return x.x >= box.lo.x && x.x <= box.hi.x && x.y >= box.lo.y && x.y <= box.hi.y &&
-         x.z >= box.lo.z && x.z <= box.hi.z;
+  return static_cast<bool>((x.x >= box.lo.x) & (x.x <= box.hi.x) & (x.y >= box.lo.y) &
+                           (x.y <= box.hi.y) & (x.z >= box.lo.z) & (x.z <= box.hi.z));
 }
 
 // clip_far_segment_to_box, with the common case (both ends inside) inline.
