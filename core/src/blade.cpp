@@ -1,11 +1,11 @@
 #include "hapticut/blade.h"
 
-#include "hapticut/geometry.h"
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+
+#include "hapticut/geometry.h"
 
 namespace hapticut {
 
