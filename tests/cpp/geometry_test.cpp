@@ -6,6 +6,7 @@
 
 #include "hapticut/aabb_tree.h"
 #include "hapticut/reference_meshes.h"
+#include "hapticut/tet_mesh.h"
 
 namespace hapticut {
 namespace {

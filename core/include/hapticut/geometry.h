@@ -11,10 +11,19 @@
 #include <cstdint>
 
 #include "hapticut/aabb_tree.h"
-#include "hapticut/tet_mesh.h"
 #include "hapticut/vec3.h"
 
 namespace hapticut {
+
+class TetMesh;
+
+// An oriented plane: signed_distance(x) = dot(normal, x) - offset, normal unit
+// and pointing out of the tet that owns it (eq. 2: outside when >= 0).
+struct Plane {
+  Vec3 normal;
+  double offset = 0.0;
+  double signed_distance(const Vec3& x) const { return dot(normal, x) - offset; }
+};
 
 // Eq. (6): p projected onto the (unbounded) plane.
 inline Vec3 project_to_plane(const Vec3& p, const Plane& plane) {
