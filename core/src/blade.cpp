@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "hapticut/geometry.h"
+
 namespace hapticut {
 
 Vec3 Quaternion::rotate(const Vec3& v) const {
@@ -77,12 +79,22 @@ Blade::Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
 PoseCheck Blade::place_checked(const Pose& pose) {
   const PoseCheck check = check_rotation(pose);
   if (check != PoseCheck::Fine) return check;
+  // Two plain loops, each vectorised by the compiler: placing the points,
+  // then their bounding box; the points are all in the workspace exactly when
+  // it holds that box (Space::in_workspace for each point, without a branch each).
   const Quaternion r = pose.rotation.normalized();
-  bool inside = true;
-  for (std::size_t i = 0; i < tool_points_.size(); ++i) {
-    world_points_[i] = pose.position_mm + r.rotate(tool_points_[i]);
-    inside = inside && space_->in_workspace(world_points_[i]);
+  const Vec3 origin = pose.position_mm;
+  const Vec3* tool = tool_points_.data();
+  Vec3* world = world_points_.data();
+  const std::size_t n = tool_points_.size();
+  for (std::size_t i = 0; i < n; ++i) world[i] = origin + r.rotate(tool[i]);
+  Vec3 lo = world[0];
+  Vec3 hi = world[0];
+  for (std::size_t i = 1; i < n; ++i) {
+    lo = {std::min(lo.x, world[i].x), std::min(lo.y, world[i].y), std::min(lo.z, world[i].z)};
+    hi = {std::max(hi.x, world[i].x), std::max(hi.y, world[i].y), std::max(hi.z, world[i].z)};
   }
+  const bool inside = space_->in_workspace(lo) && space_->in_workspace(hi);
   return inside ? PoseCheck::Fine : PoseCheck::OutOfWorkspace;
 }
 
@@ -147,9 +159,17 @@ BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& sett
     tick.max_transitions = std::max(tick.max_transitions, r.transitions);
     tick.transitions += r.transitions;
   };
+  // account for a point that finished its tick in the first pass (neither capped nor deferred).
+  auto account_finished = [&](std::size_t i) {
+    const Vec3 f = proxies_[i].force_N();
+    tick.force_N += f;
+    tick.torque_N_mm += cross(world_points_[i] - pose.position_mm, f);
+    const int transitions = point_ticks_[i].transitions;
+    tick.max_transitions = std::max(tick.max_transitions, transitions);
+    tick.transitions += transitions;
+  };
   int capped_in_first_pass = 0;
-  for (std::size_t k = 0; k < n; ++k) {
-    const std::size_t i = index(k);
+  for (std::size_t k = 0, i = first_; k < n; ++k, i = i + 1 == n ? 0 : i + 1) {
     TickResult& r = point_ticks_[i];
     r = {};
     Proxy& proxy = proxies_[i];
@@ -165,7 +185,7 @@ BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& sett
       ++capped_in_first_pass;
       continue;
     }
-    account(i);
+    account_finished(i);
   }
   for (std::size_t k = 0; k < n && capped_in_first_pass > 0; ++k) {
     const std::size_t i = index(k);

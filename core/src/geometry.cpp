@@ -4,6 +4,8 @@
 #include <array>
 #include <limits>
 
+#include "hapticut/tet_mesh.h"
+
 namespace hapticut {
 
 Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {

@@ -6,6 +6,7 @@
 
 #include "hapticut/aabb_tree.h"
 #include "hapticut/reference_meshes.h"
+#include "hapticut/tet_mesh.h"
 
 namespace hapticut {
 namespace {
@@ -103,6 +104,60 @@ TEST(Geometry, PointsStrictlyOutOfAClosedConeNeedsOnePlanePassedByMoreThanEps) {
   const std::array<double, 3> in_a_face_plane{-1.0, 0.0, -0.5};
   EXPECT_FALSE(points_strictly_into(in_a_face_plane, eps));
   EXPECT_FALSE(points_strictly_out_of(in_a_face_plane, eps));
+}
+
+TEST(Geometry, WithinToleranceIsClosed) {
+  constexpr double eps = 1e-3;
+  EXPECT_TRUE(within_tolerance({0.0, 0.0, 0.0}, eps));
+  EXPECT_TRUE(within_tolerance({0.0, 1e-3, 0.0}, eps));    // Exactly eps: no motion.
+  EXPECT_TRUE(within_tolerance({6e-4, 0.0, 7e-4}, eps));   // |d| ~ 9.2e-4.
+  EXPECT_FALSE(within_tolerance({8e-4, 0.0, 7e-4}, eps));  // |d| ~ 1.06e-3.
+  EXPECT_FALSE(within_tolerance({-1.0, 0.0, 0.0}, eps));
+}
+
+TEST(Geometry, StrictlyBeyondAndOnOrBeyondAreComplementsAcrossThePlane) {
+  constexpr double eps = 1e-9;
+  EXPECT_TRUE(strictly_beyond(2e-9, eps));
+  EXPECT_FALSE(strictly_beyond(1e-9, eps));  // Within eps: on the plane.
+  EXPECT_FALSE(strictly_beyond(-1.0, eps));
+  EXPECT_TRUE(on_or_beyond(-1e-9, eps));
+  EXPECT_TRUE(on_or_beyond(5.0, eps));
+  EXPECT_FALSE(on_or_beyond(-2e-9, eps));
+  // The one-plane forms agree with the wedge and cone tests.
+  EXPECT_EQ(strictly_beyond(2e-9, eps), points_strictly_out_of(std::array<double, 1>{2e-9}, eps));
+  EXPECT_EQ(!on_or_beyond(-2e-9, eps), points_strictly_into(std::array<double, 1>{-2e-9}, eps));
+}
+
+TEST(Geometry, ProjectedStrictlyIntoMatchesTheProjectedTarget) {
+  constexpr double eps = 1e-9;
+  // Planes through q = 0: m with normal z, g with normal -x (the wedge x > 0, z < 0).
+  const Plane m{{0, 0, 1}, 0.0};
+  const Plane g{{-1, 0, 0}, 0.0};
+  for (const Vec3& p : {Vec3{1, 0, 2}, Vec3{-1, 0, 2}, Vec3{1e-10, 3, -1}, Vec3{2e-9, 0, 5}}) {
+    const double height = m.signed_distance(p);
+    const Vec3 projected = p - m.normal * height;
+    EXPECT_EQ(projected_strictly_into(dot(p, g.normal), height, dot(m.normal, g.normal), eps),
+              dot(projected, g.normal) < -eps)
+        << p.x << " " << p.y << " " << p.z;
+  }
+  EXPECT_TRUE(projected_strictly_into(-1.0, 2.0, 0.0, eps));
+  EXPECT_FALSE(projected_strictly_into(-1e-9, 2.0, 0.0, eps));  // On plane g: closed.
+  // Tilted planes: the height counts through n_m . n_g.
+  EXPECT_FALSE(projected_strictly_into(-1.0, 2.0, -0.5, eps));  // -1 + 1 = 0.
+  EXPECT_TRUE(projected_strictly_into(-1.0, 2.0, 0.25, eps));   // -1 - 0.5.
+}
+
+TEST(Geometry, BeyondAnEdgesEndIsExactAndInclusive) {
+  const Vec3 o0{0, 0, 0};
+  const Vec3 o1{2, 0, 0};
+  const Vec3 a{1, 0, 0};
+  EXPECT_TRUE(beyond_edge_start({0, 1, 0}, o0, a));  // Off the line: its projection counts.
+  EXPECT_TRUE(beyond_edge_start({-1e-300, 0, 0}, o0, a));
+  EXPECT_FALSE(beyond_edge_start({1e-300, 0, 0}, o0, a));
+  EXPECT_FALSE(beyond_edge_end({1.5, 0, 0}, o1, a));
+  EXPECT_TRUE(beyond_edge_end({2, 0, 0}, o1, a));
+  EXPECT_TRUE(beyond_edge_end({3, 0, 0}, o1, a));
+  EXPECT_FALSE(beyond_edge_start({1, 0, 0}, o0, a));
 }
 
 TEST(Geometry, SideOfRimIsClosedWithinEps) {

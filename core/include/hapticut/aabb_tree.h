@@ -87,7 +87,8 @@ class AabbTree {
 template <class Visit>
 void AabbTree::for_each_containing(const Vec3& p, double pad, Visit&& visit) const {
   if (nodes_.empty()) return;
-  std::array<std::int32_t, kMaxDepth + 1> stack{};
+  // Not zeroed: only entries below top are read (zeroing cost ~40 instructions a walk).
+  std::array<std::int32_t, kMaxDepth + 1> stack;  // NOLINT(cppcoreguidelines-pro-type-member-init)
   int top = 0;
   stack[top++] = 0;
   while (top > 0) {
@@ -107,7 +108,8 @@ void AabbTree::for_each_on_segment(const Vec3& a, const Vec3& b, double pad, Vis
   if (nodes_.empty()) return;
   const Vec3 dir = b - a;
   const Vec3 inv_dir{1.0 / dir.x, 1.0 / dir.y, 1.0 / dir.z};
-  std::array<std::int32_t, kMaxDepth + 1> stack{};
+  // Not zeroed: only entries below top are read (zeroing cost ~40 instructions a walk).
+  std::array<std::int32_t, kMaxDepth + 1> stack;  // NOLINT(cppcoreguidelines-pro-type-member-init)
   int top = 0;
   stack[top++] = 0;
   while (top > 0) {

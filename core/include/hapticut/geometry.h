@@ -1,6 +1,8 @@
 // The numeric tests of the method, kept in one place with their tolerance
 // (Geogram's predicates-apart-from-combinatorics habit): the mesh walk in
-// proxy.cpp calls these and never compares floats itself.
+// proxy.cpp calls these and never compares a float with a tolerance itself.
+// What it still compares is order only: which entry or exit parameter is
+// nearest and which candidate's score is widest (ties keep the first).
 #pragma once
 
 #include <array>
@@ -9,10 +11,19 @@
 #include <cstdint>
 
 #include "hapticut/aabb_tree.h"
-#include "hapticut/tet_mesh.h"
 #include "hapticut/vec3.h"
 
 namespace hapticut {
+
+class TetMesh;
+
+// An oriented plane: signed_distance(x) = dot(normal, x) - offset, normal unit
+// and pointing out of the tet that owns it (eq. 2: outside when >= 0).
+struct Plane {
+  Vec3 normal;
+  double offset = 0.0;
+  double signed_distance(const Vec3& x) const { return dot(normal, x) - offset; }
+};
 
 // Eq. (6): p projected onto the (unbounded) plane.
 inline Vec3 project_to_plane(const Vec3& p, const Plane& plane) {
@@ -72,6 +83,35 @@ constexpr bool points_strictly_out_of(const std::array<double, count>& along, do
   return false;
 }
 
+// Whether two points (or a displacement d) are within eps of each other: "no
+// motion" for a step (repair 5: a change of q under the tolerance is no change).
+inline bool within_tolerance(const Vec3& d, double eps) { return squared_norm(d) <= eps * eps; }
+
+// One plane's half of the tests above: a signed distance or along value
+// strictly beyond the plane (past it by more than eps), or on or beyond it
+// (closed: within eps counts as on it).
+constexpr bool strictly_beyond(double distance, double eps) { return distance > eps; }
+constexpr bool on_or_beyond(double distance, double eps) { return distance >= -eps; }
+
+// Eqs. (8) and (12), toward a wedge: the target projected onto face plane m,
+// p' = p - n_m h with h = sd_m(p), points strictly into the half-space of
+// another plane g through q: (p' - q) . n_g = (d . n_g) - h (n_m . n_g) < -eps,
+// written without forming p'.
+constexpr bool projected_strictly_into(double along_other, double height, double normals_dot,
+                                       double eps) {
+  return along_other - height * normals_dot < -eps;
+}
+
+// Eq. (10), beyond an edge's end: x, slid along the edge line with unit
+// direction a from its start o0 toward its end o1, has reached or passed o0
+// (going backwards) or o1. Exact (no eps): at an end the vertex takes over.
+inline bool beyond_edge_start(const Vec3& x, const Vec3& o0, const Vec3& direction) {
+  return dot(x - o0, direction) <= 0.0;
+}
+inline bool beyond_edge_end(const Vec3& x, const Vec3& o1, const Vec3& direction) {
+  return dot(x - o1, direction) >= 0.0;
+}
+
 // Where a point lies against one side plane of a triangle (eq. 14 with
 // repair 4): inside, on the rim (within eps), or outside the triangle.
 enum class RimSide : std::uint8_t { Inside, OnRim, Outside };
@@ -122,10 +162,11 @@ struct ClippedSegment {
 };
 ClippedSegment clip_far_segment_to_box(const Vec3& a, const Vec3& b, const Aabb& box);
 
-// Whether the closed box holds x; inline, as OUTSIDE asks it every step.
+// Whether the closed box holds x; inline, as OUTSIDE asks it every step and
+// the blade for every point. Bitwise, not short-circuit: no branch per axis.
 inline bool box_holds(const Aabb& box, const Vec3& x) {
-  return x.x >= box.lo.x && x.x <= box.hi.x && x.y >= box.lo.y && x.y <= box.hi.y &&
-         x.z >= box.lo.z && x.z <= box.hi.z;
+  return static_cast<bool>((x.x >= box.lo.x) & (x.x <= box.hi.x) & (x.y >= box.lo.y) &
+                           (x.y <= box.hi.y) & (x.z >= box.lo.z) & (x.z <= box.hi.z));
 }
 
 // clip_far_segment_to_box, with the common case (both ends inside) inline.

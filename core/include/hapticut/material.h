@@ -1,13 +1,28 @@
-// The material's move function, eq. (1): given the target p' and the current
-// proxy q, decide whether and where the proxy moves. Pure functions: the same
+// The materials (their models and parameters) and their move function, eq. (1): given the target p'
+// and the current proxy q, decide whether and where the proxy moves. Pure functions: the same
 // inputs give the same output, and q' always lies on the segment [q, p'] so
 // FACE and EDGE motion stays on its constraint (ALGORITHM.md).
 #pragma once
 
-#include "hapticut/scene.h"
+#include <cstdint>
+#include <string>
+
 #include "hapticut/vec3.h"
 
 namespace hapticut {
+
+// The move function a material applies (ALGORITHM.md, "The material's move
+// function"). Names match the scene file's "model" strings.
+enum class MaterialModel : std::uint8_t { Free, Drag, Rigid, Viscous, Membrane };
+
+struct Material {
+  std::string name;
+  MaterialModel model = MaterialModel::Free;
+  double drag_distance_mm = 0.0;      // Drag: the proxy trails its target by at most this.
+  double viscosity_N_s_per_mm = 0.0;  // Viscous: resistance c in f = c v.
+  double max_lag_mm = 50.0;           // Viscous: cap on the speed-dependent lag.
+  double break_force_N = 0.0;         // Membrane: rigid until k|p'-q| exceeds this.
+};
 
 // What a move may depend on besides p' and q; fixed for the whole tick so a
 // tick's transitions see one consistent material.

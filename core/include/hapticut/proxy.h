@@ -140,6 +140,11 @@ class Proxy {
   void walk(const Vec3& p, const MoveContext& context, int limit, TickResult& result);
   void finish_tick(const Vec3& p, TickResult& result, const RuntimeSettings& settings,
                    const ForceShading* shading);
+  // The bodies of walk and finish_tick, inlined into tick_within (proxy.cpp
+  // only): the blade's hot path makes one call per point, not three.
+  void walk_inline(const Vec3& p, const MoveContext& context, int limit, TickResult& result);
+  void finish_tick_inline(const Vec3& p, TickResult& result, const RuntimeSettings& settings,
+                          const ForceShading* shading);
   void defer_tick(TickResult& result, const RuntimeSettings& settings);
   // An unfinished tick: the last finished force, limited from the second in a row on.
   void hold_force(const RuntimeSettings& settings);

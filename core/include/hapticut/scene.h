@@ -8,24 +8,12 @@
 #include <string>
 #include <vector>
 
+#include "hapticut/material.h"  // Material, MaterialModel: scene users keep compiling.
 #include "hapticut/vec3.h"
 
 namespace hapticut {
 
 inline constexpr int kSceneFormatVersion = 1;
-
-// The move function a material applies (ALGORITHM.md, "The material's move
-// function"). Names match the scene file's "model" strings.
-enum class MaterialModel : std::uint8_t { Free, Drag, Rigid, Viscous, Membrane };
-
-struct Material {
-  std::string name;
-  MaterialModel model = MaterialModel::Free;
-  double drag_distance_mm = 0.0;      // Drag: the proxy trails its target by at most this.
-  double viscosity_N_s_per_mm = 0.0;  // Viscous: resistance c in f = c v.
-  double max_lag_mm = 50.0;           // Viscous: cap on the speed-dependent lag.
-  double break_force_N = 0.0;         // Membrane: rigid until k|p'-q| exceeds this.
-};
 
 struct BladeSpec {
   std::string name;

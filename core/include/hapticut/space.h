@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "hapticut/aabb_tree.h"
+#include "hapticut/geometry.h"
 #include "hapticut/parameter_range.h"
 #include "hapticut/scene.h"
 #include "hapticut/tet_mesh.h"
@@ -95,11 +96,7 @@ class Space : public std::enable_shared_from_this<Space> {
   // Blade::step reject it (zero force, state kept, counted).
   static constexpr double kWorkspaceMargin = 10.0;
   const Aabb& workspace() const { return workspace_; }
-  bool in_workspace(const Vec3& p) const {
-    const Vec3& lo = workspace_.lo;
-    const Vec3& hi = workspace_.hi;
-    return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
-  }
+  bool in_workspace(const Vec3& p) const { return box_holds(workspace_, p); }
 
  private:
   TetMesh mesh_;

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "hapticut/aabb_tree.h"
+#include "hapticut/geometry.h"  // Plane.
 #include "hapticut/vec3.h"
 
 namespace hapticut {
@@ -44,14 +45,6 @@ class MeshError : public std::runtime_error {
 
  private:
   std::int64_t index_;
-};
-
-// An oriented plane: signed_distance(x) = dot(normal, x) - offset, normal unit
-// and pointing out of the tet that owns it (eq. 2: outside when >= 0).
-struct Plane {
-  Vec3 normal;
-  double offset = 0.0;
-  double signed_distance(const Vec3& x) const { return dot(normal, x) - offset; }
 };
 
 struct FaceRef {
