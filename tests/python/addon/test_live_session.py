@@ -167,14 +167,15 @@ def test_the_client_is_the_installed_toolkits_own(finger):
     assert modules.servo == found["servo"]
 
 
-def test_force_shading_refused_by_the_servo_is_said_and_the_session_runs(finger):
-    from addon import live
+def test_force_shading_asked_for_is_applied_by_the_servo(finger):
+    from addon import live, live_session
 
     finger.hapticut_live.force_shading = True
     assert bpy.ops.hapticut.go_live() == {"FINISHED"}
-    assert finger.hapticut_live.error.startswith("force shading not applied: ")
+    assert finger.hapticut_live.error == ""
     session = live.current()
     live_support.follow(lambda: session.frame is not None)
+    assert live_session.request(session, "status")["settings"]["shading"] is True
 
 
 def test_the_live_panels_draw_in_every_state(finger):
