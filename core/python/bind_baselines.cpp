@@ -1,4 +1,4 @@
-// Bindings of the evaluation (issue 4): the baseline methods (voxel proxy,
+// Bindings of the evaluation: the baseline methods (voxel proxy,
 // surface god-object), force shading, and one interface for all methods so
 // the same paths run through each of them in C++ (no Python loop per tick):
 // reset(P), step(P, dt_s), run(path, dt_s) -> q, force_N and ns per point update.

@@ -421,8 +421,8 @@ Proxy::Outcome Proxy::step_face(const Vec3& p, const MoveContext& context) {
   const Exit exit = find_face_exit(mesh, t, face, q, moved.q, eps);
   if (exit.face < 0) {
     // The slide ended on an edge of the face, its target not strictly back
-    // inside: the edge's fan decides (defect 3; a FACE held on the edge line
-    // never sees the free tets around the edge, and froze there).
+    // inside: the edge's fan decides (a FACE held on the edge line never sees
+    // the free tets around the edge, and would hold still there).
     if (exit.touching >= 0) {
       const Plane& side = mesh.face_plane(t, exit.touching);
       if (slide_reaches_edge(side.signed_distance(moved.q), dot(target - q, side.normal), eps)) {
@@ -584,8 +584,8 @@ Proxy::Outcome Proxy::step_vertex(const Vec3& p, const MoveContext& context) {
 // OUTSIDE: q' = p unless q->p enters through a boundary triangle (eq. 14,
 // repairs 3 and 4); the nearest entry wins. The boundary tree makes this
 // logarithmic in the number of boundary faces rather than linear. The search
-// runs on q->p clipped to the reach box, exact for any finite p and q
-// (defect 7); see enter_beyond.
+// runs on q->p clipped to the reach box, exact for any finite p and q;
+// see enter_beyond.
 Proxy::Outcome Proxy::step_outside(const Vec3& p) {
   const Vec3& q = place_.q;
   if (box_holds(reach_box_, q) && box_holds(reach_box_, p)) return enter_beyond(q, p, p, 0.0, 0);
@@ -595,7 +595,7 @@ Proxy::Outcome Proxy::step_outside(const Vec3& p) {
 }
 
 // The nearest entry of q->end at parameter `lowest` or beyond. Rim hits are
-// resolved nearest first (defect 1): a rim the segment passes by outside
+// resolved nearest first: a rim the segment passes by outside
 // sends the search on beyond it, up to kRimPassesMax rims; then the safety
 // net. One function with the search inline: a separate search returning a
 // record cost 3 to 5 ns of the 18 an OUTSIDE step takes on the paper's cube.
@@ -707,7 +707,8 @@ Proxy::Outcome Proxy::enter_beyond(const Vec3& q, const Vec3& end, const Vec3& p
 }
 
 // The segment meets boundary face `face` at c on its rim (one side: an edge;
-// two: a vertex). The closed-cone rule of repair 2, at the rim (defect 1):
+// two: a vertex). The closed-cone rule of repair 2, at the rim, so a path
+// along an inner face plane cannot fall through into rigid material:
 // the proxy lands on the vertex or edge unless p - (that vertex or edge
 // point) points strictly out of every closed cone (eq. 11) or wedge (eq. 7)
 // around it; the landed state's own step, which applies the same test to the

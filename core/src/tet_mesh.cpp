@@ -112,7 +112,7 @@ void TetMesh::validate_and_orient() {
 }
 
 // A tet listed twice leaves the body without boundary faces: the proxy would
-// pass through it with zero force (issue 8, defect 8).
+// pass through it with zero force.
 void TetMesh::reject_duplicate_tets() const {
   std::vector<std::pair<std::array<std::int32_t, 4>, std::int32_t>> sorted(tets_.size());
   for (std::size_t t = 0; t < tets_.size(); ++t) {

@@ -33,7 +33,7 @@ SCENE_PATTERN = "*.hapticut.*"
 BLADE_HALF_LENGTH_MM = 50.0  # The paper's 0.1 m edge.
 STROKE_SPEED_MM_PER_S = 100.0
 BUDGET_NS = 100_000.0
-TARGET_P99_NS = 5_000.0  # Issue 8: no tick over 5 µs p99 for a 50-point blade.
+TARGET_P99_NS = 5_000.0  # No tick over 5 µs p99 for a 50-point blade.
 # The paper's names for the examples; any other scene is labelled by its file name.
 LABELS = {
     "sphere80": "sphere 80 faces",

@@ -5,7 +5,7 @@ blade points, 1 kHz and 10 kHz: a sim stroke runs for ``duration_s`` while a
 client subscribed at 120 Hz receives the stream. Printed per row: the tick's
 compute time, the wake latency beside a bare ``clock_nanosleep`` loop run
 just before it at the same rate (``hapticut-servo --bare-loop``), late ticks,
-frames per second received and their age on arrival. Targets (issue 10): a
+frames per second received and their age on arrival. Targets: a
 50-point tick's compute p99 under 2 % of a 1 kHz period; a 500-point tick at
 10 kHz under 25 % of its period at p99; wake latency no worse than 1.2x the
 bare loop's; frame age on arrival p99 under 2 ms at 120 Hz.

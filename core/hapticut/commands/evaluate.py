@@ -1,4 +1,4 @@
-"""`hapticut evaluate`: baselines, accuracy, stability and mesh economy (issue 4)."""
+"""`hapticut evaluate`: baselines, accuracy, stability and mesh economy."""
 
 from __future__ import annotations
 

@@ -2,7 +2,7 @@
 force direction error of the tet proxy without shading, with shading from the
 scene's own rigid surface (what a servo has on an exported scene) and with
 shading from the source surface the scene was built from. Shading must never be
-worse than the plain proxy (issue 8)."""
+worse than the plain proxy."""
 
 from __future__ import annotations
 

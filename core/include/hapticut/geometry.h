@@ -120,7 +120,7 @@ constexpr RimSide side_of_rim(double side_distance, double eps) {
   return side_distance >= -eps ? RimSide::OnRim : RimSide::Inside;
 }
 
-// FACE (b) ending on an edge (issue 8, defect 3): the slide's end q' lies on
+// FACE (b) ending on an edge: the slide's end q' lies on
 // the plane of another face of the tet (|d1| <= eps: on the edge line) and
 // the target p' does not lie strictly behind that plane as seen from q
 // ((p' - q) . n >= -eps). Then the slide has reached the edge, and the edge's
@@ -149,7 +149,7 @@ Aabb mesh_box(const TetMesh& mesh, double pad);
 // mesh is farther than one diagonal from the outside of this box.
 Aabb reach_box(const TetMesh& mesh);
 
-// The part of segment a->b inside box (issue 8, defect 7): an OUTSIDE entry
+// The part of segment a->b inside box: an OUTSIDE entry
 // search on a->b computes the same entry on start->end, but with both ends
 // near the mesh, so q + d s keeps its precision for any finite a and b (a
 // jump from 1e18 mm loses every digit otherwise). An end inside the box is
