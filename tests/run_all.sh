@@ -7,7 +7,7 @@ cd "$(dirname "$0")/.."
 bash tests/scripts/setup.sh
 bash tests/scripts/lint.sh
 echo "== C++ tests (ctest)"
-ctest --test-dir build/tests --output-on-failure -j 2
+ctest --test-dir build/tests --output-on-failure -j 2 --timeout 300
 echo "== C++ tests under ASan and UBSan (ctest in build/asan)"
 bash tests/scripts/sanitizers.sh run
 echo "== Scene reader fuzzing (libFuzzer, bounded time)"

@@ -21,7 +21,7 @@ case "${1:-run}" in
   run)
     ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
       UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-      ctest --test-dir build/asan --output-on-failure -j 2
+      ctest --test-dir build/asan --output-on-failure -j 2 --timeout 600
     ;;
   *)
     echo "usage: $0 [build|run]" >&2

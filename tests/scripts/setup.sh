@@ -38,7 +38,7 @@ if [ ! -x build/venv-bpy42/bin/python ]; then
   python3 -m venv --system-site-packages build/venv-bpy42
 fi
 echo "setup: pip install bpy==4.2.0 into build/venv-bpy42"
-build/venv-bpy42/bin/python -m pip install -q --disable-pip-version-check "bpy==4.2.0" pytest
+build/venv-bpy42/bin/python -m pip install -q --disable-pip-version-check "bpy==4.2.0" pytest pytest-timeout
 
 echo "setup: building the C++ tests"
 cmake -S . -B build/tests -G Ninja -DCMAKE_BUILD_TYPE=Release -DHAPTICUT_BUILD_TESTS=ON \

@@ -2,7 +2,10 @@
 // examples/bridge_example.py over loopback (a bridge that runs, goes silent,
 // sends garbage).
 #include <gtest/gtest.h>
+#include <fcntl.h>
 #include <netinet/in.h>
+#include <poll.h>
+#include <spawn.h>
 #include <signal.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
@@ -12,6 +15,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
@@ -116,26 +120,28 @@ TEST(BridgeDevice, FactoryChecksItsOptions) {
 }
 
 // examples/bridge_example.py as a child process; its summary is its stdout.
+// posix_spawn, not fork: the bridge device's thread is already running, and a
+// forked child that allocates could wait forever on a lock that thread held.
 class ExampleBridge {
  public:
   ExampleBridge(int port, const std::vector<std::string>& extra) {
+    std::vector<std::string> args{HAPTICUT_PYTHON, HAPTICUT_BRIDGE_EXAMPLE, "--servo",
+                                  "127.0.0.1:" + std::to_string(port), "--summary"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    std::vector<char*> argv;
+    argv.reserve(args.size() + 1);
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
     int pipe_fds[2];
-    EXPECT_EQ(::pipe(pipe_fds), 0);
-    pid_ = ::fork();
-    if (pid_ == 0) {
-      ::dup2(pipe_fds[1], STDOUT_FILENO);
-      ::close(pipe_fds[0]);
-      std::vector<std::string> args{HAPTICUT_PYTHON, HAPTICUT_BRIDGE_EXAMPLE, "--servo",
-                                    "127.0.0.1:" + std::to_string(port), "--summary"};
-      args.insert(args.end(), extra.begin(), extra.end());
-      std::vector<char*> argv;
-      argv.reserve(args.size() + 1);
-      for (std::string& a : args) argv.push_back(a.data());
-      argv.push_back(nullptr);
-      ::execv(argv[0], argv.data());
-      std::_Exit(127);
-    }
+    EXPECT_EQ(::pipe2(pipe_fds, O_CLOEXEC), 0);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], STDOUT_FILENO);
+    const int spawned = ::posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
     ::close(pipe_fds[1]);
+    EXPECT_EQ(spawned, 0) << "cannot start " << argv[0] << ": " << std::strerror(spawned);
+    if (spawned != 0) pid_ = -1;
     stdout_ = pipe_fds[0];
   }
   ~ExampleBridge() {
@@ -150,25 +156,41 @@ class ExampleBridge {
     int status = 0;
     if (::waitpid(pid_, &status, WNOHANG) == 0) return true;
     exit_status_ = status;
+    exited_ = true;
     pid_ = -1;
     return false;
   }
-  // Waits for the bridge to exit; its summary line.
+  // Waits (at most 20 s) for the bridge to exit; its summary line.
   nlohmann::json summary() {
     std::string text;
     char buffer[512];
-    for (ssize_t n; (n = ::read(stdout_, buffer, sizeof buffer)) > 0;) text.append(buffer, n);
+    const double give_up = monotonic_s() + 20.0;
+    for (;;) {
+      const double left_s = give_up - monotonic_s();
+      pollfd readable{stdout_, POLLIN, 0};
+      if (left_s <= 0 || ::poll(&readable, 1, static_cast<int>(left_s * 1000) + 1) <= 0) {
+        ADD_FAILURE() << "the bridge example did not finish within 20 s; it printed: " << text;
+        return nlohmann::json::object();
+      }
+      const ssize_t n = ::read(stdout_, buffer, sizeof buffer);
+      if (n <= 0) break;
+      text.append(buffer, static_cast<std::size_t>(n));
+    }
     int status = exit_status_;
-    if (pid_ > 0) ::waitpid(pid_, &status, 0);
+    if (pid_ > 0) {
+      ::waitpid(pid_, &status, 0);
+      exited_ = true;
+    }
     pid_ = -1;
-    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << text;
-    return nlohmann::json::parse(text);
+    EXPECT_TRUE(exited_ && WIFEXITED(status) && WEXITSTATUS(status) == 0) << text;
+    return nlohmann::json::parse(text, nullptr, false);
   }
 
  private:
   pid_t pid_ = -1;
   int stdout_ = -1;
   int exit_status_ = 0;
+  bool exited_ = false;
 };
 
 struct LoopTally {
