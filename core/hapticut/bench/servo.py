@@ -27,7 +27,7 @@ import numpy as np
 
 from hapticut import servo_path
 from hapticut.bench.table import format_table
-from hapticut.scene import load_scene, save_scene
+from hapticut.scenefile import load_scene, save_scene
 from hapticut.servo_client import ServoClient, ServoProcess
 
 # The repository's examples: beside the source tree, or under the working directory.

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "hapticut/vec3.h"
@@ -13,6 +14,7 @@
 namespace hapticut {
 
 inline constexpr int kSceneFormatVersion = 1;
+inline constexpr std::string_view kSceneFormatName = "hapticut.scene";
 
 // The move function a material applies (ALGORITHM.md, "The material's move
 // function"). Names match the scene file's "model" strings.
