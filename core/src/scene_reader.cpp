@@ -49,27 +49,22 @@ void read_units(const Json& root, const Path& root_path) {
   reject_unknown_fields(units, path, {"length", "force", "time"});
 }
 
+// The optional number named after its range ("stiffness_N_per_mm"), kept in `value` when absent.
+void read_setting(const Json& object, const Path& path, const ParameterRange& range,
+                  double& value) {
+  if (const Json* found = find(object, range.name)) {
+    value = read_in_range(*found, Path(path, range.name), range);
+  }
+}
+
 void read_coupling(const Json& root, const Path& root_path, Scene& scene) {
   const Json* coupling = find(root, "coupling");
   if (coupling == nullptr) return;
   const Path path(root_path, "coupling");
   expect_object(*coupling, path);
-  if (const Json* value = find(*coupling, "stiffness_N_per_mm")) {
-    scene.stiffness_N_per_mm =
-        read_in_range(*value, Path(path, "stiffness_N_per_mm"), setting_range::kStiffness);
-  }
-  if (const Json* value = find(*coupling, "servo_rate_Hz")) {
-    scene.servo_rate_Hz =
-        read_in_range(*value, Path(path, "servo_rate_Hz"), setting_range::kServoRate);
-  }
+  read_setting(*coupling, path, setting_range::kStiffness, scene.stiffness_N_per_mm);
+  read_setting(*coupling, path, setting_range::kServoRate, scene.servo_rate_Hz);
   reject_unknown_fields(*coupling, path, {"stiffness_N_per_mm", "servo_rate_Hz"});
-}
-
-void read_tolerance(const Json& root, const Path& root_path, Scene& scene) {
-  if (const Json* value = find(root, "tolerance_mm")) {
-    scene.tolerance_mm =
-        read_in_range(*value, Path(root_path, "tolerance_mm"), setting_range::kTolerance);
-  }
 }
 
 void read_safety(const Json& root, const Path& root_path, SafetyLimits& safety) {
@@ -77,24 +72,14 @@ void read_safety(const Json& root, const Path& root_path, SafetyLimits& safety) 
   if (object == nullptr) return;
   const Path path(root_path, "safety");
   expect_object(*object, path);
-  if (const Json* value = find(*object, "max_force_N")) {
-    safety.max_force_N = read_in_range(*value, Path(path, "max_force_N"), setting_range::kMaxForce);
-  }
-  if (const Json* value = find(*object, "max_torque_N_mm")) {
-    safety.max_torque_N_mm =
-        read_in_range(*value, Path(path, "max_torque_N_mm"), setting_range::kMaxTorque);
-  }
-  if (const Json* value = find(*object, "ramp_time_s")) {
-    safety.ramp_time_s = read_in_range(*value, Path(path, "ramp_time_s"), setting_range::kRampTime);
-  }
+  read_setting(*object, path, setting_range::kMaxForce, safety.max_force_N);
+  read_setting(*object, path, setting_range::kMaxTorque, safety.max_torque_N_mm);
+  read_setting(*object, path, setting_range::kRampTime, safety.ramp_time_s);
   if (const Json* value = find(*object, "max_transitions_per_tick")) {
     safety.max_transitions_per_tick = read_int_in_range(
         *value, Path(path, "max_transitions_per_tick"), setting_range::kMaxTransitions);
   }
-  if (const Json* value = find(*object, "capped_tick_force_N")) {
-    safety.capped_tick_force_N =
-        read_in_range(*value, Path(path, "capped_tick_force_N"), setting_range::kCappedTickForce);
-  }
+  read_setting(*object, path, setting_range::kCappedTickForce, safety.capped_tick_force_N);
   reject_unknown_fields(*object, path,
                         {"max_force_N", "max_torque_N_mm", "ramp_time_s",
                          "max_transitions_per_tick", "capped_tick_force_N"});
@@ -311,7 +296,7 @@ SceneDocument read_scene_tree(const SceneTree& root, const ReadOptions& options)
   read_header(root, root_path);
   read_units(root, root_path);
   read_coupling(root, root_path, scene);
-  read_tolerance(root, root_path, scene);
+  read_setting(root, root_path, setting_range::kTolerance, scene.tolerance_mm);
   read_safety(root, root_path, scene.safety);
   read_materials(root, root_path, scene);
   read_mesh(root, root_path, document, options);

@@ -15,15 +15,7 @@ std::string Path::pointer() const {
   if (parent_ == nullptr) return "";
   std::string out = parent_->pointer() + '/';
   if (is_index_) return out + std::to_string(index_);
-  for (char c : key_) {
-    if (c == '~') {
-      out += "~0";
-    } else if (c == '/') {
-      out += "~1";
-    } else {
-      out += c;
-    }
-  }
+  append_pointer_token(out, key_);
   return out;
 }
 

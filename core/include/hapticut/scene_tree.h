@@ -12,6 +12,8 @@
 
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "hapticut/scene_io.h"
@@ -23,6 +25,9 @@ using SceneTree = nlohmann::ordered_json;
 // Arrays and objects inside each other, the root counting as level 1. A scene
 // needs 4 (root, mesh, vertices, vertex); metadata may use the rest.
 inline constexpr int kMaxSceneNesting = 64;
+
+// Appends one JSON pointer step (RFC 6901: '~' becomes "~0", '/' becomes "~1").
+void append_pointer_token(std::string& out, std::string_view key);
 
 SceneTree decode_scene_tree(const std::vector<std::uint8_t>& bytes, SceneEncoding encoding);
 
