@@ -20,7 +20,7 @@ flags=(-std=c++20 -O1 -g -fno-omit-frame-pointer -ffp-contract=off
   -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined -Icore/include)
 binary="$out/scene_reader_fuzz"
 # An object is rebuilt when its source, or any header, is newer than it.
-newest_header=$(ls -t core/include/hapticut/*.h | head -1)
+newest_header=$(ls -t core/include/hapticut/*.h core/src/*.h | head -1)
 objects=()
 for source in "${sources[@]}"; do
   object="$out/obj/$(basename "${source%.cpp}").o"

@@ -1,7 +1,6 @@
 // Decoding a scene file's bytes (JSON or MessagePack) into one tree, the
-// first step of both readers: scene_io.cpp checks the tree in C++, and
-// hapticut/scene/tree_reader.py checks the same tree after the bindings hand
-// it to Python, so both languages see the same bytes the same way.
+// first step of the scene reader (scene_reader.cpp checks the tree); Python
+// reads through the same reader (core/python/bind_scene.cpp).
 //
 // The decoder trusts nothing (docs/decisions.md, "Reader limits"): nesting is
 // bounded (kMaxSceneNesting), objects are built in linear time, a duplicate
