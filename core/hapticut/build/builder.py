@@ -22,10 +22,10 @@ import os
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import asdict, dataclass, field
-from typing import Any
 
 import numpy as np
 
+from ..scenefile.model import BladeSpec, Material, Scene
 from . import tetwild
 from .errors import BuildCancelled, BuildError
 from .geometry import (
@@ -42,7 +42,6 @@ from .geometry import (
     winding_numbers,
 )
 from .labels import INSIDE_WINDING, containment, innermost
-from ..scenefile.model import BladeSpec, Material, Scene
 from .quality import mesh_report
 from .repair import (
     distance_to_surfaces,
@@ -52,6 +51,7 @@ from .repair import (
     simplify_surface,
     surface_deviation,
 )
+from .report import BuildReport, SurfaceReport
 
 __all__ = [
     "BuildCancelled",
@@ -334,16 +334,6 @@ def _check_boundary(vertices, tets, enclosure: Surface, envelope_mm: float, size
     return result
 
 
-@dataclass
-class SurfaceReport:
-    """One region's surface: faces given and meshed, simplification error, enclosed volume."""
-
-    faces_in: int
-    faces_meshed: int
-    simplification_deviation_mm: float
-    volume_mm3: float | None = None  # Set by the crossing and nesting check.
-
-
 @dataclass(frozen=True)
 class Lengths:
     """The build's lengths in mm, from the settings or derived from the regions' size."""
@@ -353,49 +343,6 @@ class Lengths:
     size_mm: float  # Its diagonal.
     accuracy_mm: float
     envelope_mm: float  # fTetWild's envelope.
-
-
-@dataclass
-class BuildReport:
-    """What a build did and measured; ``as_json()`` is scene.metadata["build_report"]
-    (docs/scene-building.md lists its entries)."""
-
-    tetwild: str  # "pytetwild <version>".
-    repairs: dict[str, dict] = field(default_factory=dict)  # Per region (repair_surface).
-    surfaces: dict[str, SurfaceReport] = field(default_factory=dict)
-    self_intersecting_faces: dict[str, int] = field(default_factory=dict)  # Within one region.
-    nesting: dict[str, str] = field(default_factory=dict)  # Region -> direct parent ("": none).
-    settings: dict[str, Any] = field(default_factory=dict)  # As resolved for this build.
-    enclosure: dict[str, Any] = field(default_factory=dict)
-    boundary: dict[str, Any] = field(default_factory=dict)  # _check_boundary.
-    labels: dict[str, Any] = field(default_factory=dict)  # labels.containment's statistics.
-    tets_per_region: dict[str, int] = field(default_factory=dict)  # "(air)" too.
-    mesh: dict[str, Any] = field(default_factory=dict)  # quality.mesh_report.
-    deviation_mm: dict[str, float] | None = None  # Per region, when measured.
-    timings_s: dict[str, float] = field(default_factory=dict)  # Per step, and "total".
-
-    def as_json(self) -> dict[str, Any]:
-        """Plain JSON values, entries in the order the scene file has always had them."""
-        out: dict[str, Any] = {
-            "tetwild": self.tetwild,
-            "repairs": self.repairs,
-            "surfaces": {
-                name: {k: v for k, v in asdict(surface).items() if v is not None}
-                for name, surface in self.surfaces.items()
-            },
-            "self_intersecting_faces": self.self_intersecting_faces,
-            "nesting": self.nesting,
-            "settings": self.settings,
-            "enclosure": self.enclosure,
-            "boundary": self.boundary,
-            "labels": self.labels,
-            "tets_per_region": self.tets_per_region,
-            **self.mesh,
-        }
-        if self.deviation_mm is not None:
-            out["deviation_mm"] = self.deviation_mm
-        out["timings_s"] = self.timings_s
-        return _plain(out)
 
 
 def build(
@@ -685,16 +632,3 @@ def _measure(
         meshed = Surface(vertices[used], compact.reshape(-1, 3))
         report.deviation_mm[region.name] = round(surface_deviation(repaired[r], meshed), 6)
         steps((r + 1) / len(regions), "measuring surface deviation")
-
-
-def _plain(value):
-    """The report as plain JSON values (numpy scalars and tuples converted)."""
-    if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, np.ndarray):
-        return _plain(value.tolist())
-    return value

@@ -8,13 +8,25 @@ from .. import build as _build
 from .. import scenefile as _scenefile
 from ..build import *  # noqa: F403
 from ..build import __all__ as _build_all
-from ..build import builder, errors, geometry, labels, quality, repair, tetwild, vtu
+from ..build import builder, errors, geometry, labels, quality, repair, report, tetwild, vtu
 from ..scenefile import *  # noqa: F403
 from ..scenefile import __all__ as _scenefile_all
 from ..scenefile import format, model  # noqa: A004
 
 # The old submodule paths (hapticut.scene.model, hapticut.scene.builder, ...) keep working.
-for _module in (builder, errors, geometry, labels, quality, repair, tetwild, vtu, format, model):
+for _module in (
+    builder,
+    errors,
+    geometry,
+    labels,
+    quality,
+    repair,
+    report,
+    tetwild,
+    vtu,
+    format,
+    model,
+):
     sys.modules[f"{__name__}.{_module.__name__.rsplit('.', 1)[1]}"] = _module
 
 __all__ = [*_build_all, *_scenefile_all]
