@@ -23,7 +23,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-from hapticut.build import BuildSettings, Region, build
+from hapticut.scenebuild import BuildSettings, Region, build
 from hapticut.scenefile import BladeSpec, Material, save_scene
 
 HERE = Path(__file__).resolve().parent

@@ -15,8 +15,8 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from hapticut.build import BuildError, BuildSettings, Region
-from hapticut.build.geometry import signed_volume
+from hapticut.scenebuild import BuildError, BuildSettings, Region
+from hapticut.scenebuild.geometry import signed_volume
 from hapticut.scenefile import BladeSpec, Material
 from hapticut.scenefile.model import MATERIAL_PARAMETERS
 
@@ -172,8 +172,8 @@ def read_request(path: str | os.PathLike) -> BuildRequest:
 def input_problems(regions: list[Region]) -> list[tuple[str, str]]:
     """(region, problem) for each region that is open, self-intersecting or without volume,
     before any repair: the add-on asks its user to fix these rather than have them patched."""
-    from hapticut.build.geometry import Surface
-    from hapticut.build.repair import check_arrays, self_intersecting_faces
+    from hapticut.scenebuild.geometry import Surface
+    from hapticut.scenebuild.repair import check_arrays, self_intersecting_faces
 
     problems = []
     for region in regions:

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from hapticut.build.geometry import tet_signed_volumes
+from hapticut.scenebuild.geometry import tet_signed_volumes
 from hapticut.scenefile import Material, Scene
 
 DATA_DIR = Path(__file__).resolve().parents[1] / "data"

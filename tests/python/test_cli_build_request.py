@@ -11,7 +11,7 @@ import sys
 import numpy as np
 import pytest
 from build_test_support import EXAMPLES, icosphere
-from hapticut.build import Region
+from hapticut.scenebuild import Region
 from hapticut.build_request import RequestError, input_problems, read_request
 from hapticut.preview import preview_arrays
 from hapticut.scenefile import Material, load_scene

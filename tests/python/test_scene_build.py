@@ -1,4 +1,4 @@
-"""hapticut.build.build on small meshes: labels, enclosures, sizing, progress, report."""
+"""hapticut.scenebuild.build on small meshes: labels, enclosures, sizing, progress, report."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from build_test_support import bunny_path, icosphere, materials_at
-from hapticut.build import (
+from hapticut.scenebuild import (
     BuildCancelled,
     BuildError,
     BuildSettings,
@@ -15,13 +15,13 @@ from hapticut.build import (
     Region,
     build,
 )
-from hapticut.build.geometry import (
+from hapticut.scenebuild.geometry import (
     boundary_faces,
     enclosure_planes,
     enclosure_surface,
     winding_numbers,
 )
-from hapticut.build.repair import read_surface
+from hapticut.scenebuild.repair import read_surface
 from hapticut.scenefile import BladeSpec, Material, load_scene, save_scene
 
 FLESH = Material("flesh", "drag", drag_distance_mm=1.0)
@@ -184,8 +184,8 @@ def test_the_bunny_scan_is_repaired_meshed_and_labelled():
     winding = winding_numbers(points, vertices, faces)
     clear_inside = points[winding > 0.99]
     clear_outside = points[winding < 0.01]
-    from hapticut.build.geometry import Surface
-    from hapticut.build.repair import distance_to_surfaces
+    from hapticut.scenebuild.geometry import Surface
+    from hapticut.scenebuild.repair import distance_to_surfaces
 
     surface = [Surface(vertices, faces)]
     far = 8.0  # beyond the 5 mm accuracy

@@ -32,7 +32,7 @@ def material_text(material) -> str:
 
 def scene_summary(scene) -> dict:
     """Everything ``info`` prints, as plain values."""
-    from hapticut.build.quality import mesh_report
+    from hapticut.scenebuild.quality import mesh_report
 
     report = mesh_report(
         scene.vertices, scene.tets, scene.tet_materials, [m.name for m in scene.materials]

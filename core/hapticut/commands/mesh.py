@@ -146,7 +146,7 @@ class ProgressBar:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hapticut.build import BuildSettings
+    from hapticut.scenebuild import BuildSettings
 
     try:
         materials = dict(parse_material(text) for text in args.material)
@@ -200,8 +200,8 @@ def _terminate_as_exit():
 
 
 def _build_and_write(args, materials, names, settings, progress) -> int:
-    from hapticut.build import BuildError, Region, build
-    from hapticut.build.vtu import write_vtu
+    from hapticut.scenebuild import BuildError, Region, build
+    from hapticut.scenebuild.vtu import write_vtu
     from hapticut.scenefile import Material, save_scene
 
     from .info import format_summary, scene_summary

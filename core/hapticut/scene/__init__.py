@@ -1,14 +1,14 @@
 """Compatibility shim for this restructure only: hapticut.scene was split into hapticut.scenefile
-(the file format) and hapticut.build (building scenes). Import from those; the integrator
+(the file format) and hapticut.scenebuild (building scenes). Import from those; the integrator
 removes this module once every branch is merged."""
 
 import sys
 
-from .. import build as _build
+from .. import scenebuild as _build
 from .. import scenefile as _scenefile
-from ..build import *  # noqa: F403
-from ..build import __all__ as _build_all
-from ..build import builder, errors, geometry, labels, quality, repair, report, tetwild, vtu
+from ..scenebuild import *  # noqa: F403
+from ..scenebuild import __all__ as _build_all
+from ..scenebuild import builder, errors, geometry, labels, quality, repair, report, tetwild, vtu
 from ..scenefile import *  # noqa: F403
 from ..scenefile import __all__ as _scenefile_all
 from ..scenefile import format, model  # noqa: A004

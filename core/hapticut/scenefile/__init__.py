@@ -1,5 +1,5 @@
 """The scene file, format version 1: the in-memory Scene (model.py) and reading and writing it
-(format.py, through the one C++ reader and writer). Building scenes is hapticut.build."""
+(format.py, through the one C++ reader and writer). Building scenes is hapticut.scenebuild."""
 
 from .format import (
     JSON,

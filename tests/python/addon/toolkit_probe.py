@@ -5,7 +5,7 @@ import json
 import sys
 
 import numpy as np
-from hapticut.build.geometry import tet_signed_volumes
+from hapticut.scenebuild.geometry import tet_signed_volumes
 from hapticut.scenefile import load_scene
 
 

@@ -1,7 +1,7 @@
 """Surface meshes to a labelled tetrahedral scene: ``build(regions, blades, settings)``.
 
     from hapticut.scenefile import Material
-    from hapticut.build import BuildSettings, Region, build
+    from hapticut.scenebuild import BuildSettings, Region, build
     bone = Region.from_file("bone.obj", Material("bone", "rigid"))
     flesh = Region.from_file("flesh.obj", Material("flesh", "drag", drag_distance_mm=1.0))
     scene = build([flesh, bone], settings=BuildSettings(enclosure="cube"))
