@@ -23,7 +23,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       continue;
     }
     try {
-      const hapticut::Space space = hapticut::Space::from_scene(document.scene);
+      const auto space = hapticut::Space::from_scene(document.scene);
       (void)space;
     } catch (const hapticut::MeshError&) {
     } catch (const std::invalid_argument&) {

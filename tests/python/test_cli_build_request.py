@@ -11,9 +11,9 @@ import sys
 import numpy as np
 import pytest
 from build_test_support import EXAMPLES, icosphere
-from hapticut.scenebuild import Region
 from hapticut.build_request import RequestError, input_problems, read_request
 from hapticut.preview import preview_arrays
+from hapticut.scenebuild import Region
 from hapticut.scenefile import Material, load_scene
 
 

@@ -110,8 +110,8 @@ def run(args: argparse.Namespace) -> int:
 def _build(request, out: str, events: JsonLines) -> int:
     from dataclasses import replace
 
-    from hapticut.scenebuild import BuildError, build
     from hapticut.preview import scene_report, write_preview
+    from hapticut.scenebuild import BuildError, build
     from hapticut.scenefile import save_scene
 
     start = time.perf_counter()
