@@ -23,8 +23,8 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-from hapticut.scene import BladeSpec, Material, save_scene
-from hapticut.scene.builder import BuildSettings, Region, build
+from hapticut.scenebuild import BuildSettings, Region, build
+from hapticut.scenefile import BladeSpec, Material, save_scene
 
 HERE = Path(__file__).resolve().parent
 MESHES = HERE / "meshes"

@@ -15,10 +15,10 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from hapticut.scene import BladeSpec, Material
-from hapticut.scene.builder import BuildError, BuildSettings, Region
-from hapticut.scene.geometry import signed_volume
-from hapticut.scene.model import MATERIAL_PARAMETERS
+from hapticut.scenebuild import BuildError, BuildSettings, Region
+from hapticut.scenebuild.geometry import signed_volume
+from hapticut.scenefile import BladeSpec, Material
+from hapticut.scenefile.model import MATERIAL_PARAMETERS
 
 REQUEST_FORMAT = "hapticut.build-request"
 REQUEST_VERSION = 1
@@ -172,7 +172,8 @@ def read_request(path: str | os.PathLike) -> BuildRequest:
 def input_problems(regions: list[Region]) -> list[tuple[str, str]]:
     """(region, problem) for each region that is open, self-intersecting or without volume,
     before any repair: the add-on asks its user to fix these rather than have them patched."""
-    from hapticut.scene.repair import Surface, check_arrays, self_intersecting_faces
+    from hapticut.scenebuild.geometry import Surface
+    from hapticut.scenebuild.repair import check_arrays, self_intersecting_faces
 
     problems = []
     for region in regions:

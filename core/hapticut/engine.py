@@ -25,7 +25,7 @@ from dataclasses import asdict
 import numpy as np
 
 from hapticut import _core
-from hapticut.scene import BladeSpec, Scene, load_scene
+from hapticut.scenefile import BladeSpec, Scene, load_scene
 
 Space = _core.Space
 ProxySet = _core.ProxySet

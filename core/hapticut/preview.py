@@ -18,7 +18,7 @@ import os
 import numpy as np
 
 from hapticut.atomic_file import write_atomically
-from hapticut.scene.geometry import interface_faces
+from hapticut.scenebuild.geometry import interface_faces
 
 PREVIEW_VERSION = 1
 
@@ -58,7 +58,7 @@ def write_preview(scene, path: str | os.PathLike) -> None:
 def scene_report(scene) -> dict:
     """The scene's build report (from its metadata), or for a scene without one its counts,
     quality and valence."""
-    from hapticut.scene.quality import mesh_report
+    from hapticut.scenebuild.quality import mesh_report
 
     report = scene.metadata.get("build_report")
     if report:

@@ -1,7 +1,7 @@
-// Python access to the C++ scene reader and writer (hapticut._core), so tests
-// can read with one language what the other wrote. A scene crosses as a dict
-// shaped like hapticut.scene.scene_to_dict(): plain values plus numpy arrays
-// (vertices (n, 3) float64, tets (m, 4) int32, tet_materials (m,) int32).
+// Python access to the C++ scene reader and writer (hapticut._core): the only
+// ones, hapticut.scenefile reads and writes through them. A scene crosses as a
+// dict shaped like hapticut.scenefile.scene_to_dict(): plain values plus numpy
+// arrays (vertices (n, 3) float64, tets (m, 4) int32, tet_materials (m,) int32).
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/string.h>
@@ -10,9 +10,12 @@
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
+#include "hapticut/material_table.h"
+#include "hapticut/parameter_range.h"
 #include "hapticut/scene_io.h"
 #include "hapticut/scene_tree.h"
 
@@ -161,9 +164,25 @@ nb::dict document_to_dict(const SceneDocument& document) {
 // Python -> C++. Shape and dtype problems of the arrays are reported with the
 // field they would have in the file; the writer's own checks do the rest.
 
+// A Python value of the wrong type is named by its field, as the reader names a
+// wrong value in a file ("/materials/0/name: expected a string, got int").
 template <typename T>
-T get_or(const nb::dict& mapping, const char* key, T fallback) {
-  return mapping.contains(key) ? nb::cast<T>(mapping[key]) : fallback;
+T cast_at(nb::handle value, const std::string& field) {
+  try {
+    return nb::cast<T>(value);
+  } catch (const nb::cast_error&) {
+    const char* expected = std::is_same_v<T, std::string> ? "a string"
+                           : std::is_integral_v<T>        ? "an integer"
+                           : std::is_floating_point_v<T>  ? "a number"
+                                                          : "a mapping";
+    const auto type = nb::cast<std::string>(nb::str(value.type().attr("__name__")));
+    throw SceneError(field, std::string("expected ") + expected + ", got " + type);
+  }
+}
+
+template <typename T>
+T get_or(const nb::dict& mapping, const char* key, T fallback, const std::string& prefix) {
+  return mapping.contains(key) ? cast_at<T>(mapping[key], prefix + "/" + key) : fallback;
 }
 
 // An (n, columns) or (n,) array of `dtype_name`, C-contiguous, from any array-like.
@@ -212,20 +231,24 @@ hapticut::Vec3 read_point(nb::handle value, const std::string& field) {
 
 hapticut::Material read_material(const nb::dict& item, std::size_t index) {
   hapticut::Material material;
-  material.name = nb::cast<std::string>(item["name"]);
-  const auto model_name = nb::cast<std::string>(item["model"]);
+  const std::string field = "/materials/" + std::to_string(index);
+  material.name = cast_at<std::string>(item["name"], field + "/name");
+  const auto model_name = cast_at<std::string>(item["model"], field + "/model");
   const auto model = hapticut::material_model_from_name(model_name);
   if (!model) {
-    throw SceneError(
-        "/materials/" + std::to_string(index) + "/model",
-        "unknown model '" + model_name + "' (expected free, drag, rigid, viscous, membrane)");
+    std::string known;
+    for (const hapticut::MaterialModelSpec& spec : hapticut::material_models()) {
+      known += (known.empty() ? "" : ", ") + std::string(spec.name);
+    }
+    throw SceneError(field + "/model",
+                     "unknown model '" + model_name + "' (expected " + known + ")");
   }
   material.model = *model;
-  material.drag_distance_mm = get_or(item, "drag_distance_mm", material.drag_distance_mm);
+  material.drag_distance_mm = get_or(item, "drag_distance_mm", material.drag_distance_mm, field);
   material.viscosity_N_s_per_mm =
-      get_or(item, "viscosity_N_s_per_mm", material.viscosity_N_s_per_mm);
-  material.max_lag_mm = get_or(item, "max_lag_mm", material.max_lag_mm);
-  material.break_force_N = get_or(item, "break_force_N", material.break_force_N);
+      get_or(item, "viscosity_N_s_per_mm", material.viscosity_N_s_per_mm, field);
+  material.max_lag_mm = get_or(item, "max_lag_mm", material.max_lag_mm, field);
+  material.break_force_N = get_or(item, "break_force_N", material.break_force_N, field);
   return material;
 }
 
@@ -234,7 +257,8 @@ SceneDocument document_from_dict(const nb::dict& scene_dict) {
   hapticut::Scene& scene = document.scene;
   std::size_t index = 0;
   for (nb::handle item : scene_dict["materials"]) {
-    scene.materials.push_back(read_material(nb::cast<nb::dict>(item), index++));
+    const std::string field = "/materials/" + std::to_string(index);
+    scene.materials.push_back(read_material(cast_at<nb::dict>(item, field), index++));
   }
   const auto vertices =
       read_array<double>(scene_dict["vertices"], "iuf", "float64", 3, "/mesh/vertices");
@@ -256,32 +280,40 @@ SceneDocument document_from_dict(const nb::dict& scene_dict) {
   if (scene_dict.contains("blades")) {
     index = 0;
     for (nb::handle value : scene_dict["blades"]) {
-      const auto item = nb::cast<nb::dict>(value);
       const std::string field = "/blades/" + std::to_string(index++);
+      const auto item = cast_at<nb::dict>(value, field);
       hapticut::BladeSpec blade;
-      blade.name = nb::cast<std::string>(item["name"]);
+      blade.name = cast_at<std::string>(item["name"], field + "/name");
       blade.start_mm = read_point(item["start_mm"], field + "/start_mm");
       blade.end_mm = read_point(item["end_mm"], field + "/end_mm");
-      blade.points = get_or(item, "points", blade.points);
+      blade.points = get_or(item, "points", blade.points, field);
       scene.blades.push_back(blade);
     }
   }
-  scene.stiffness_N_per_mm = get_or(scene_dict, "stiffness_N_per_mm", scene.stiffness_N_per_mm);
-  scene.servo_rate_Hz = get_or(scene_dict, "servo_rate_Hz", scene.servo_rate_Hz);
-  scene.tolerance_mm = get_or(scene_dict, "tolerance_mm", scene.tolerance_mm);
+  scene.stiffness_N_per_mm =
+      get_or(scene_dict, "stiffness_N_per_mm", scene.stiffness_N_per_mm, "/coupling");
+  scene.servo_rate_Hz = get_or(scene_dict, "servo_rate_Hz", scene.servo_rate_Hz, "/coupling");
+  scene.tolerance_mm = get_or(scene_dict, "tolerance_mm", scene.tolerance_mm, "");
   if (scene_dict.contains("safety")) {
-    const auto safety = nb::cast<nb::dict>(scene_dict["safety"]);
+    const auto safety = cast_at<nb::dict>(scene_dict["safety"], "/safety");
     hapticut::SafetyLimits& limits = scene.safety;
-    limits.max_force_N = get_or(safety, "max_force_N", limits.max_force_N);
-    limits.max_torque_N_mm = get_or(safety, "max_torque_N_mm", limits.max_torque_N_mm);
-    limits.ramp_time_s = get_or(safety, "ramp_time_s", limits.ramp_time_s);
+    limits.max_force_N = get_or(safety, "max_force_N", limits.max_force_N, "/safety");
+    limits.max_torque_N_mm = get_or(safety, "max_torque_N_mm", limits.max_torque_N_mm, "/safety");
+    limits.ramp_time_s = get_or(safety, "ramp_time_s", limits.ramp_time_s, "/safety");
     limits.max_transitions_per_tick =
-        get_or(safety, "max_transitions_per_tick", limits.max_transitions_per_tick);
-    limits.capped_tick_force_N = get_or(safety, "capped_tick_force_N", limits.capped_tick_force_N);
+        get_or(safety, "max_transitions_per_tick", limits.max_transitions_per_tick, "/safety");
+    limits.capped_tick_force_N =
+        get_or(safety, "capped_tick_force_N", limits.capped_tick_force_N, "/safety");
   }
   if (scene_dict.contains("metadata")) {
-    document.metadata_json = nb::cast<std::string>(
-        nb::module_::import_("json").attr("dumps")(scene_dict["metadata"], "allow_nan"_a = false));
+    try {
+      document.metadata_json = nb::cast<std::string>(nb::module_::import_("json").attr("dumps")(
+          scene_dict["metadata"], "ensure_ascii"_a = false, "allow_nan"_a = false));
+    } catch (const nb::python_error& error) {  // TypeError, ValueError: values JSON lacks.
+      if (!error.matches(PyExc_TypeError) && !error.matches(PyExc_ValueError)) throw;
+      const std::string reason = nb::cast<std::string>(nb::str(error.value()));
+      throw SceneError("/metadata", "cannot encode: " + reason);
+    }
   }
   return document;
 }
@@ -322,6 +354,30 @@ void bind_scene(nb::module_& m) {
         hapticut::save_scene_document(document_from_dict(scene), path);
       },
       "scene"_a, "path"_a, "Write a scene dict with the C++ writer, atomically.");
+  m.def(
+      "parse_scene_document",
+      [](const nb::bytes& data, const std::string& encoding, bool strict) {
+        const SceneDocument document = hapticut::parse_scene_document(
+            bytes_of(data), encoding_named(encoding), {.strict = strict});
+        return nb::make_tuple(document_to_dict(document), document.reoriented_tets);
+      },
+      "data"_a, "encoding"_a = "json", "strict"_a = false,
+      "Parse scene bytes with the C++ reader: (scene dict, number of inverted tets it "
+      "re-oriented).");
+  m.def(
+      "range_problem",
+      [](const std::string& name, double value) {
+        for (const hapticut::MaterialParameterSpec& parameter : hapticut::material_parameters()) {
+          if (parameter.range.name == name) {
+            return hapticut::range_reason(parameter.range, value,
+                                          hapticut::SceneTree(value).dump());
+          }
+        }
+        throw nb::value_error(("unknown material parameter '" + name + "'").c_str());
+      },
+      "name"_a, "value"_a,
+      "'' when value is in the range of the material parameter `name`, else the reason as the "
+      "scene reader words it.");
   m.def(
       "parse_scene_bytes",
       [](const nb::bytes& data, const std::string& encoding, bool strict) {

@@ -158,15 +158,7 @@ class TreeBuilder {
         out += std::to_string(last ? size : size - 1);
         continue;
       }
-      for (const char c : frame.key) {
-        if (c == '~') {
-          out += "~0";
-        } else if (c == '/') {
-          out += "~1";
-        } else {
-          out += c;
-        }
-      }
+      append_pointer_token(out, frame.key);
     }
     return out.empty() ? "(root)" : out;
   }
@@ -218,6 +210,18 @@ class TreeBuilder {
 };
 
 }  // namespace
+
+void append_pointer_token(std::string& out, std::string_view key) {
+  for (const char c : key) {
+    if (c == '~') {
+      out += "~0";
+    } else if (c == '/') {
+      out += "~1";
+    } else {
+      out += c;
+    }
+  }
+}
 
 SceneTree decode_scene_tree(const std::vector<std::uint8_t>& bytes, SceneEncoding encoding) {
   const bool json = encoding == SceneEncoding::Json;

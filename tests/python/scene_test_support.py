@@ -9,8 +9,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from hapticut.scene import Material, Scene
-from hapticut.scene.mesh_checks import signed_volumes6
+from hapticut.scenebuild.geometry import tet_signed_volumes
+from hapticut.scenefile import Material, Scene
 
 DATA_DIR = Path(__file__).resolve().parents[1] / "data"
 EXAMPLE_PATH = DATA_DIR / "two_tets.hapticut.json"
@@ -73,7 +73,7 @@ def grid_scene(cells_per_side: int) -> Scene:
             path.append(vertex_index(corner))
         blocks.append(np.stack(path, axis=1))
     tets = np.concatenate(blocks)
-    volume6, _ = signed_volumes6(vertices, tets)
+    volume6 = tet_signed_volumes(vertices, tets)
     inverted = volume6 < 0
     tets[inverted, 2], tets[inverted, 3] = tets[inverted, 3], tets[inverted, 2]
     layer = np.tile(k, 6) % 2

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 from hapticut import _core, engine, servo_path
 from hapticut.recording import Recording, read_recording
-from hapticut.scene import BladeSpec, load_scene, save_scene
+from hapticut.scenefile import BladeSpec, load_scene, save_scene
 from hapticut.servo_client import ServoClient, ServoProcess
 
 ROOT = Path(__file__).resolve().parents[2]

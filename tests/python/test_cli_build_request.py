@@ -13,8 +13,8 @@ import pytest
 from build_test_support import EXAMPLES, icosphere
 from hapticut.build_request import RequestError, input_problems, read_request
 from hapticut.preview import preview_arrays
-from hapticut.scene import Material, load_scene
-from hapticut.scene.builder import Region
+from hapticut.scenebuild import Region
+from hapticut.scenefile import Material, load_scene
 
 
 def run_cli(*args, cwd=None):

@@ -8,7 +8,7 @@ import sys
 import pytest
 from build_test_support import EXAMPLES, icosphere, materials_at, write_obj
 from hapticut.commands.mesh import parse_material
-from hapticut.scene import Material, load_scene
+from hapticut.scenefile import Material, load_scene
 
 
 def run_cli(*args, cwd=None):

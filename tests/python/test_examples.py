@@ -62,8 +62,8 @@ def test_example_materials_at_known_points(name):
 def test_mouse_labels_follow_the_scan():
     """Points the bunny scan clearly holds are body; clearly outside, air."""
     build_examples = load_build_examples()
-    from hapticut.scene.geometry import winding_numbers
-    from hapticut.scene.repair import Surface, distance_to_surfaces
+    from hapticut.scenebuild.geometry import Surface, winding_numbers
+    from hapticut.scenebuild.repair import distance_to_surfaces
 
     region = build_examples.mouse_region()
     scene, space = engine.load_space(example("mouse"))

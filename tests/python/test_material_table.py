@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from hapticut import _core
 from hapticut.commands.mesh import parse_material
-from hapticut.scene import SCHEMA_PATH, Material
-from hapticut.scene.model import MODEL_PARAMETERS, PARAMETER_RANGES, SETTING_RANGES
+from hapticut.scenefile import SCHEMA_PATH, Material
+from hapticut.scenefile.model import MODEL_PARAMETERS, PARAMETER_RANGES, SETTING_RANGES
 
 TABLE = _core.material_table()
 SCHEMA = json.loads(SCHEMA_PATH.read_text())

@@ -1,4 +1,4 @@
-"""hapticut.scene.builder.build on small meshes: labels, enclosures, sizing, progress, report."""
+"""hapticut.scenebuild.build on small meshes: labels, enclosures, sizing, progress, report."""
 
 from __future__ import annotations
 
@@ -7,8 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from build_test_support import bunny_path, icosphere, materials_at
-from hapticut.scene import BladeSpec, Material, load_scene, save_scene
-from hapticut.scene.builder import (
+from hapticut.scenebuild import (
     BuildCancelled,
     BuildError,
     BuildSettings,
@@ -16,13 +15,14 @@ from hapticut.scene.builder import (
     Region,
     build,
 )
-from hapticut.scene.geometry import (
+from hapticut.scenebuild.geometry import (
     boundary_faces,
     enclosure_planes,
     enclosure_surface,
     winding_numbers,
 )
-from hapticut.scene.repair import read_surface
+from hapticut.scenebuild.repair import read_surface
+from hapticut.scenefile import BladeSpec, Material, load_scene, save_scene
 
 FLESH = Material("flesh", "drag", drag_distance_mm=1.0)
 BONE = Material("bone", "rigid")
@@ -184,7 +184,8 @@ def test_the_bunny_scan_is_repaired_meshed_and_labelled():
     winding = winding_numbers(points, vertices, faces)
     clear_inside = points[winding > 0.99]
     clear_outside = points[winding < 0.01]
-    from hapticut.scene.repair import Surface, distance_to_surfaces
+    from hapticut.scenebuild.geometry import Surface
+    from hapticut.scenebuild.repair import distance_to_surfaces
 
     surface = [Surface(vertices, faces)]
     far = 8.0  # beyond the 5 mm accuracy

@@ -8,8 +8,8 @@ import sys
 import numpy as np
 import pytest
 from build_test_support import icosphere, write_obj
-from hapticut.scene import Material
-from hapticut.scene.builder import BuildError, BuildSettings, Region, build
+from hapticut.scenebuild import BuildError, BuildSettings, Region, build
+from hapticut.scenefile import Material
 
 BONE = Material("bone", "rigid")
 

@@ -10,7 +10,7 @@ import msgpack
 import numpy as np
 import pytest
 from hapticut import _core
-from hapticut.scene import (
+from hapticut.scenefile import (
     JSON,
     MSGPACK,
     BladeSpec,

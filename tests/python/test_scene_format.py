@@ -12,7 +12,7 @@ import jsonschema
 import msgpack
 import numpy as np
 import pytest
-from hapticut.scene import (
+from hapticut.scenefile import (
     JSON,
     MSGPACK,
     SCHEMA_PATH,

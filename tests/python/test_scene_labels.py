@@ -14,9 +14,9 @@ import sys
 import numpy as np
 import pytest
 from build_test_support import EXAMPLES
-from hapticut.scene import builder, labels
-from hapticut.scene.geometry import face_pairs, tet_signed_volumes, winding_numbers
-from hapticut.scene.repair import distance_to_surfaces
+from hapticut.scenebuild import builder, labels
+from hapticut.scenebuild.geometry import face_pairs, tet_signed_volumes, winding_numbers
+from hapticut.scenebuild.repair import distance_to_surfaces
 
 sys.path.insert(0, str(EXAMPLES))
 import build_examples  # noqa: E402

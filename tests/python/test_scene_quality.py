@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hapticut.scene.geometry import (
+from hapticut.scenebuild.geometry import (
     TET_FACES,
     boundary_faces,
     enclosure_surface,
@@ -15,8 +15,8 @@ from hapticut.scene.geometry import (
     tet_signed_volumes,
     winding_numbers,
 )
-from hapticut.scene.labels import components, innermost
-from hapticut.scene.quality import dihedral_angles_deg, material_counts, tet_quality, valence
+from hapticut.scenebuild.labels import components, innermost
+from hapticut.scenebuild.quality import dihedral_angles_deg, material_counts, tet_quality, valence
 
 REGULAR_TET = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]], float)
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import msgpack
 import pytest
 from hapticut import _core
-from hapticut.scene import JSON, MSGPACK, SceneError, parse_scene
+from hapticut.scenefile import JSON, MSGPACK, SceneError, parse_scene
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 EXAMPLE = (DATA / "two_tets.hapticut.json").read_bytes()

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from build_test_support import bunny_path, icosphere
-from hapticut.scene.geometry import signed_volume
-from hapticut.scene.repair import read_obj, read_surface, repair_surface, simplify_surface
+from hapticut.scenebuild.geometry import signed_volume
+from hapticut.scenebuild.repair import read_obj, read_surface, repair_surface, simplify_surface
 
 MAX_HOLE = 100
 
@@ -63,7 +63,7 @@ def test_small_holes_are_closed_and_large_ones_refused():
     punched = faces[3:]  # three neighbouring-ish faces gone: a small hole or two
     surface, repairs = repair_surface("ball", vertices, punched, MAX_HOLE)
     assert repairs["closed_holes"] >= 1
-    from hapticut.scene.builder import BuildError
+    from hapticut.scenebuild import BuildError
 
     with pytest.raises(BuildError, match="open mesh"):
         repair_surface("ball", vertices, faces[faces[:, 0] % 2 == 0], 4)

@@ -6,8 +6,8 @@ import base64
 import xml.etree.ElementTree as ET
 
 import numpy as np
-from hapticut.scene import Material, Scene
-from hapticut.scene.vtu import write_vtu
+from hapticut.scenebuild.vtu import write_vtu
+from hapticut.scenefile import Material, Scene
 
 DTYPES = {"Float64": "<f8", "Int64": "<i8", "Int32": "<i4", "UInt8": "u1"}
 

@@ -11,7 +11,8 @@ cd "$(dirname "$0")/../.."
 seconds="${HAPTICUT_FUZZ_SECONDS:-60}"
 out=build/fuzz
 mkdir -p "$out/corpus" "$out/findings" "$out/obj"
-sources=(core/src/scene_io.cpp core/src/scene_tree.cpp core/src/scene.cpp
+sources=(core/src/scene_io.cpp core/src/scene_reader.cpp core/src/scene_values.cpp
+  core/src/scene_writer.cpp core/src/file_io.cpp core/src/scene_tree.cpp core/src/scene.cpp
   core/src/material_table.cpp core/src/parameter_range.cpp core/src/material.cpp
   core/src/space.cpp core/src/tet_mesh.cpp core/src/aabb_tree.cpp core/src/geometry.cpp
   tests/fuzz/scene_reader_fuzz.cpp)
@@ -19,7 +20,7 @@ flags=(-std=c++20 -O1 -g -fno-omit-frame-pointer -ffp-contract=off
   -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined -Icore/include)
 binary="$out/scene_reader_fuzz"
 # An object is rebuilt when its source, or any header, is newer than it.
-newest_header=$(ls -t core/include/hapticut/*.h | head -1)
+newest_header=$(ls -t core/include/hapticut/*.h core/src/*.h | head -1)
 objects=()
 for source in "${sources[@]}"; do
   object="$out/obj/$(basename "${source%.cpp}").o"

@@ -9,9 +9,9 @@ table shows each scene's worst tick (time, transitions of all points) and its
 capped points. Then the largest number of blade points whose median tick fits
 in 100 µs (10% of a 1 kHz period on one core) is searched.
 
-The example scenes ship in the package (``hapticut/examples``); a source tree's
-``examples/`` is used when the package has none, and ``--scenes DIR`` names
-another directory. When none is found the table says so instead of dropping them.
+The example scenes ship in the package (``hapticut/examples``); the working directory's
+``examples/`` (a source checkout's) is used when the package has none, and ``--scenes DIR``
+names another directory. When none is found the table says so instead of dropping them.
 """
 
 from __future__ import annotations
@@ -28,7 +28,6 @@ from hapticut.bench.table import format_table
 
 # Where the example scenes are looked for, in this order (see the module docstring).
 PACKAGED_EXAMPLES = Path(hapticut.__file__).resolve().parent / "examples"
-SOURCE_EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
 SCENE_PATTERN = "*.hapticut.*"
 BLADE_HALF_LENGTH_MM = 50.0  # The paper's 0.1 m edge.
 STROKE_SPEED_MM_PER_S = 100.0
@@ -52,7 +51,7 @@ def example_scenes(scenes_dir: Path | None = None) -> tuple[list[Path], str]:
             raise FileNotFoundError(f"--scenes {scenes_dir}: no such directory")
         candidates = [scenes_dir]
     else:
-        candidates = [PACKAGED_EXAMPLES, SOURCE_EXAMPLES]
+        candidates = [PACKAGED_EXAMPLES, Path.cwd() / "examples"]
     for directory in candidates:
         found = sorted(directory.glob(SCENE_PATTERN)) if directory.is_dir() else []
         if found:

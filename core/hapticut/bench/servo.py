@@ -25,13 +25,14 @@ from pathlib import Path
 
 import numpy as np
 
+import hapticut
 from hapticut import servo_path
 from hapticut.bench.table import format_table
-from hapticut.scene import load_scene, save_scene
+from hapticut.scenefile import load_scene, save_scene
 from hapticut.servo_client import ServoClient, ServoProcess
 
-# The repository's examples: beside the source tree, or under the working directory.
-EXAMPLE_DIRS = (Path(__file__).resolve().parents[3] / "examples", Path.cwd() / "examples")
+# The example scenes: shipped in the package, or a source checkout's under the working directory.
+EXAMPLE_DIRS = (Path(hapticut.__file__).resolve().parent / "examples", Path.cwd() / "examples")
 
 
 @dataclasses.dataclass

@@ -1,7 +1,7 @@
 """``hapticut build-request REQUEST.json --out DIR``: the add-on's build (docs/addon.md).
 
 Reads a build request (hapticut.build_request), checks its regions, builds the scene with
-hapticut.scene.builder and writes into DIR: the scene file, ``preview.npz``
+hapticut.scenebuild and writes into DIR: the scene file, ``preview.npz``
 (hapticut.preview) and ``report.json``. DIR appears whole or not at all: everything is
 written into a temporary directory beside it, renamed to DIR at the end (an existing DIR is
 replaced). ``--progress jsonl`` prints one JSON object per line on stdout:
@@ -41,7 +41,7 @@ class JsonLines:
     """Events as JSON lines on a stream, progress thinned to PROGRESS_LINES_PER_S."""
 
     def __init__(self, stream, enabled: bool = True) -> None:
-        from hapticut.scene.builder import _Progress
+        from hapticut.scenebuild.builder import _Progress
 
         self.stream = stream
         self.enabled = enabled
@@ -111,8 +111,8 @@ def _build(request, out: str, events: JsonLines) -> int:
     from dataclasses import replace
 
     from hapticut.preview import scene_report, write_preview
-    from hapticut.scene import save_scene
-    from hapticut.scene.builder import BuildError, build
+    from hapticut.scenebuild import BuildError, build
+    from hapticut.scenefile import save_scene
 
     start = time.perf_counter()
     settings = replace(request.settings, in_subprocess=True)

@@ -15,7 +15,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hapticut.scene import SceneError, load_scene, save_scene
+    from hapticut.scenefile import SceneError, load_scene, save_scene
 
     if not args.output.endswith((".json", ".msgpack")):
         print("hapticut convert: OUT must end in .json or .msgpack", file=sys.stderr)

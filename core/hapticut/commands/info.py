@@ -23,7 +23,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def material_text(material) -> str:
-    from hapticut.scene.model import MODEL_PARAMETERS
+    from hapticut.scenefile.model import MODEL_PARAMETERS
 
     parameters = MODEL_PARAMETERS.get(material.model, {})
     values = ", ".join(f"{p}={getattr(material, p):g}" for p in parameters)
@@ -32,7 +32,7 @@ def material_text(material) -> str:
 
 def scene_summary(scene) -> dict:
     """Everything ``info`` prints, as plain values."""
-    from hapticut.scene.quality import mesh_report
+    from hapticut.scenebuild.quality import mesh_report
 
     report = mesh_report(
         scene.vertices, scene.tets, scene.tet_materials, [m.name for m in scene.materials]
@@ -140,7 +140,7 @@ def format_build_report(build: dict) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hapticut.scene import SceneError, load_scene
+    from hapticut.scenefile import SceneError, load_scene
 
     try:
         scene = load_scene(args.scene)

@@ -60,7 +60,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _models_help() -> str:
     """'free, drag (drag_distance_mm), rigid, ...' from the material table."""
-    from hapticut.scene.model import MODEL_PARAMETERS
+    from hapticut.scenefile.model import MODEL_PARAMETERS
 
     parts = []
     for model, parameters in MODEL_PARAMETERS.items():
@@ -74,8 +74,13 @@ def parse_material(text: str):
     A parameter of another model, or a value outside the table's range, is an error; a required
     parameter left out takes the table's default.
     """
-    from hapticut.scene import Material
-    from hapticut.scene.model import MATERIAL_MODELS, MODEL_PARAMETERS, PARAMETER_RANGES
+    from hapticut.scenefile import Material
+    from hapticut.scenefile.model import (
+        MATERIAL_MODELS,
+        MODEL_PARAMETERS,
+        PARAMETER_RANGES,
+        parameter_problem,
+    )
 
     region, _, spec = text.partition("=")
     if not region or not spec:
@@ -103,25 +108,13 @@ def parse_material(text: str):
             values[key] = float(value)
         except ValueError:
             raise ValueError(f"--material {text!r}: {key} must be a number") from None
-        problem = _range_problem(values[key], PARAMETER_RANGES[key])
+        problem = parameter_problem(key, values[key])
         if problem:
             raise ValueError(f"--material {text!r}: {key} {problem}")
     for key, required in takes.items():
         if required:
             values.setdefault(key, PARAMETER_RANGES[key]["default"])
     return region, Material(name=name, model=model, **values)
-
-
-def _range_problem(value: float, limits: dict) -> str:
-    """'' when the value is in the table's range, else what is wrong (as the readers say it)."""
-    from hapticut.scene.model import SceneError
-    from hapticut.scene.tree_values import read_in_range
-
-    try:
-        read_in_range(value, "", limits)
-    except SceneError as error:
-        return error.reason
-    return ""
 
 
 class ProgressBar:
@@ -153,7 +146,7 @@ class ProgressBar:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hapticut.scene.builder import BuildSettings
+    from hapticut.scenebuild import BuildSettings
 
     try:
         materials = dict(parse_material(text) for text in args.material)
@@ -207,9 +200,9 @@ def _terminate_as_exit():
 
 
 def _build_and_write(args, materials, names, settings, progress) -> int:
-    from hapticut.scene import Material, save_scene
-    from hapticut.scene.builder import BuildError, Region, build
-    from hapticut.scene.vtu import write_vtu
+    from hapticut.scenebuild import BuildError, Region, build
+    from hapticut.scenebuild.vtu import write_vtu
+    from hapticut.scenefile import Material, save_scene
 
     from .info import format_summary, scene_summary
 

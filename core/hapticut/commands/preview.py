@@ -20,7 +20,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from hapticut.preview import write_preview
-    from hapticut.scene import SceneError, load_scene
+    from hapticut.scenefile import SceneError, load_scene
 
     try:
         scene = load_scene(args.scene)

@@ -112,7 +112,7 @@ def sizing_economy(
     return rows
 
 
-# The examples' scenes (examples/build_examples.py, built by hapticut.scene.builder):
+# The examples' scenes (examples/build_examples.py, built by hapticut.scenebuild):
 # the bunny standing in for the paper's mouse, and the layered finger (skin, flesh, bone).
 # examples/ of the source tree (not part of the installed package): beside this
 # package when it runs from the tree, else in the working directory (an installed

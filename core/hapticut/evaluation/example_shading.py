@@ -30,7 +30,7 @@ LABELS = {
 def scene_space(path: Path) -> _core.Space:
     """The scene's tet mesh with every rigid material rigid and every other free,
     so the force is the contact force alone."""
-    from hapticut.scene import load_scene
+    from hapticut.scenefile import load_scene
 
     scene = load_scene(path)
     rigid = np.array([m.model == "rigid" for m in scene.materials])[scene.tet_materials]

@@ -317,7 +317,7 @@ def example_section(rows: list[dict]) -> list[str]:
         return []
     lines = [
         "### The examples: the bunny (the paper's mouse) and the layered finger",
-        "Built by `hapticut.scene.builder` through `examples/build_examples.py` with its "
+        "Built by `hapticut.scenebuild` through `examples/build_examples.py` with its "
         "settings, the sizing and enclosure overridden per row (adaptive: the example's "
         "edge length at the surfaces growing to its far length; uniform: one length "
         "everywhere). Build s: the whole build (repair, simplification, fTetWild, labels, "

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "hapticut/material.h"  // Material, MaterialModel: scene users keep compiling.
@@ -14,6 +15,7 @@
 namespace hapticut {
 
 inline constexpr int kSceneFormatVersion = 1;
+inline constexpr std::string_view kSceneFormatName = "hapticut.scene";
 
 struct BladeSpec {
   std::string name;

@@ -1,4 +1,6 @@
-// Reading and writing scene files in their two encodings (JSON, MessagePack).
+// Reading and writing scene files in their two encodings (JSON, MessagePack):
+// the one reader (core/src/scene_reader.cpp, value checks in scene_values.cpp)
+// and writer (scene_writer.cpp); files go through file_io.h (scene_io.cpp).
 // Every failure throws SceneError whose message starts with the field path
 // (a JSON pointer such as "/mesh/tets/17/2") and states the reason.
 #pragma once

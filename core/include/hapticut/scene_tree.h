@@ -1,7 +1,6 @@
 // Decoding a scene file's bytes (JSON or MessagePack) into one tree, the
-// first step of both readers: scene_io.cpp checks the tree in C++, and
-// hapticut/scene/tree_reader.py checks the same tree after the bindings hand
-// it to Python, so both languages see the same bytes the same way.
+// first step of the scene reader (scene_reader.cpp checks the tree); Python
+// reads through the same reader (core/python/bind_scene.cpp).
 //
 // The decoder trusts nothing (docs/decisions.md, "Reader limits"): nesting is
 // bounded (kMaxSceneNesting), objects are built in linear time, a duplicate
@@ -12,6 +11,8 @@
 
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "hapticut/scene_io.h"
@@ -23,6 +24,9 @@ using SceneTree = nlohmann::ordered_json;
 // Arrays and objects inside each other, the root counting as level 1. A scene
 // needs 4 (root, mesh, vertices, vertex); metadata may use the rest.
 inline constexpr int kMaxSceneNesting = 64;
+
+// Appends one JSON pointer step (RFC 6901: '~' becomes "~0", '/' becomes "~1").
+void append_pointer_token(std::string& out, std::string_view key);
 
 SceneTree decode_scene_tree(const std::vector<std::uint8_t>& bytes, SceneEncoding encoding);
 

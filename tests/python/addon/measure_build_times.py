@@ -39,7 +39,7 @@ import sys
 import numpy as np
 sys.path.insert(0, sys.argv[1])
 from build_examples import mouse_region
-from hapticut.scene.repair import repair_surface
+from hapticut.scenebuild.repair import repair_surface
 region = mouse_region()
 surface, _ = repair_surface(region.name, region.vertices, region.faces, 100)
 np.savez(sys.argv[2], vertices=surface.vertices, faces=surface.faces)

@@ -14,7 +14,7 @@ import pytest
 
 SCENE_WITH_POINTS = """
 import dataclasses, sys
-from hapticut.scene import load_scene, save_scene
+from hapticut.scenefile import load_scene, save_scene
 scene = load_scene(sys.argv[1])
 blades = [dataclasses.replace(b, points=int(sys.argv[3])) for b in scene.blades]
 save_scene(dataclasses.replace(scene, blades=blades), sys.argv[2])

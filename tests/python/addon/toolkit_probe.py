@@ -5,8 +5,8 @@ import json
 import sys
 
 import numpy as np
-from hapticut.scene import load_scene
-from hapticut.scene.geometry import tet_signed_volumes
+from hapticut.scenebuild.geometry import tet_signed_volumes
+from hapticut.scenefile import load_scene
 
 
 def material_at(scene, point) -> str:

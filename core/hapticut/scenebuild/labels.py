@@ -17,8 +17,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .geometry import face_pairs, tet_signed_volumes, winding_numbers
-from .repair import Surface, distance_to_surfaces
+from .geometry import Surface, face_pairs, tet_signed_volumes, winding_numbers
+from .repair import distance_to_surfaces
 
 # Half a turn: the winding number of a closed outward surface is ~1 inside, ~0 outside.
 INSIDE_WINDING = 0.5

@@ -1,7 +1,7 @@
 """Surface meshes to a labelled tetrahedral scene: ``build(regions, blades, settings)``.
 
-    from hapticut.scene import Material
-    from hapticut.scene.builder import BuildSettings, Region, build
+    from hapticut.scenefile import Material
+    from hapticut.scenebuild import BuildSettings, Region, build
     bone = Region.from_file("bone.obj", Material("bone", "rigid"))
     flesh = Region.from_file("flesh.obj", Material("flesh", "drag", drag_distance_mm=1.0))
     scene = build([flesh, bone], settings=BuildSettings(enclosure="cube"))
@@ -25,9 +25,11 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ..scenefile.model import BladeSpec, Material, Scene
 from . import tetwild
 from .errors import BuildCancelled, BuildError
 from .geometry import (
+    Surface,
     boundary_faces,
     enclosure_planes,
     enclosure_surface,
@@ -40,10 +42,8 @@ from .geometry import (
     winding_numbers,
 )
 from .labels import INSIDE_WINDING, containment, innermost
-from .model import BladeSpec, Material, Scene
 from .quality import mesh_report
 from .repair import (
-    Surface,
     distance_to_surfaces,
     read_surface,
     repair_surface,
@@ -51,10 +51,12 @@ from .repair import (
     simplify_surface,
     surface_deviation,
 )
+from .report import BuildReport, SurfaceReport
 
 __all__ = [
     "BuildCancelled",
     "BuildError",
+    "BuildReport",
     "BuildSettings",
     "ProgressCallback",
     "RefineZone",
@@ -332,6 +334,17 @@ def _check_boundary(vertices, tets, enclosure: Surface, envelope_mm: float, size
     return result
 
 
+@dataclass(frozen=True)
+class Lengths:
+    """The build's lengths in mm, from the settings or derived from the regions' size."""
+
+    low_mm: np.ndarray  # The repaired regions' bounding box.
+    high_mm: np.ndarray
+    size_mm: float  # Its diagonal.
+    accuracy_mm: float
+    envelope_mm: float  # fTetWild's envelope.
+
+
 def build(
     regions: Sequence[Region],
     blades: Iterable[BladeSpec] = (),
@@ -345,43 +358,89 @@ def build(
     """
     settings = (settings or BuildSettings()).checked()
     regions = list(regions)
+    materials = _check_regions(regions, settings)
+    steps = _Progress(progress)
+    report = BuildReport(tetwild=f"pytetwild {tetwild.version()}")
+    repaired = _repair(regions, settings, steps, report)
+    lengths = _lengths(repaired, settings)
+    surfaces = _simplify(regions, repaired, lengths, settings, steps, report)
+    volumes = _check_layout(regions, surfaces, lengths, steps, report)
+    enclosure, sizing, edge_mm = _enclose_and_size(surfaces, lengths, settings, steps, report)
+    in_subprocess = (
+        settings.in_subprocess if settings.in_subprocess is not None else progress is not None
+    )
+    vertices, tets = _tetrahedralize(
+        enclosure, surfaces, sizing, edge_mm, lengths, settings, in_subprocess, steps, report
+    )
+    inside, tet_materials = _label(
+        vertices, tets, regions, surfaces, volumes, materials, lengths, steps, report
+    )
+    _measure(
+        vertices, tets, tet_materials, inside, regions, repaired, materials, settings, steps, report
+    )
+    steps.finish()
+    report.timings_s = dict(steps.timings)
+    report.timings_s["total"] = round(sum(steps.timings.values()), 3)
+    return Scene(
+        materials=materials,
+        vertices=vertices,
+        tets=tets.astype(np.int32),
+        tet_materials=tet_materials,
+        blades=list(blades),
+        metadata={"build_report": report.as_json()},
+    )
+
+
+def _check_regions(regions: list[Region], settings: BuildSettings) -> list[Material]:
+    """The scene's materials (the air first); BuildError for no regions or a repeated name."""
     if not regions:
         raise BuildError("", "no regions to build a scene from")
     names = [region.name for region in regions]
     duplicates = sorted({n for n in names if names.count(n) > 1})
     if duplicates:
         raise BuildError(duplicates[0], "two regions have this name")
-    materials = _materials(regions, settings.air)
-    steps = _Progress(progress)
-    report: dict = {"tetwild": f"pytetwild {tetwild.version()}"}
+    return _materials(regions, settings.air)
 
-    # Repair.
+
+def _repair(
+    regions: list[Region], settings: BuildSettings, steps: _Progress, report: BuildReport
+) -> list[Surface]:
     steps.begin("repair", "repairing surfaces")
     repaired: list[Surface] = []
-    report["repairs"] = {}
     for i, region in enumerate(regions):
         surface, repairs = repair_surface(
             region.name, region.vertices, region.faces, settings.max_hole_edges
         )
         repaired.append(surface)
-        report["repairs"][region.name] = repairs
+        report.repairs[region.name] = repairs
         steps((i + 1) / len(regions), f"repaired {region.name}")
+    return repaired
 
+
+def _lengths(repaired: list[Surface], settings: BuildSettings) -> Lengths:
     all_vertices = np.concatenate([s.vertices for s in repaired])
     low, high = all_vertices.min(axis=0), all_vertices.max(axis=0)
     size = float(np.linalg.norm(high - low))
     accuracy = settings.accuracy_mm or DEFAULT_ACCURACY_RATIO * size
     envelope = accuracy * ENVELOPE_SHARE if settings.simplify else accuracy * 0.8
+    return Lengths(low, high, size, accuracy, envelope)
 
-    # Simplify.
+
+def _simplify(
+    regions: list[Region],
+    repaired: list[Surface],
+    lengths: Lengths,
+    settings: BuildSettings,
+    steps: _Progress,
+    report: BuildReport,
+) -> list[Surface]:
     steps.begin("simplify", "simplifying surfaces")
     surfaces: list[Surface] = []
-    report["surfaces"] = {}
     for i, (region, surface) in enumerate(zip(regions, repaired, strict=True)):
         if settings.simplify:
             simple, before, deviation = simplify_surface(
                 surface,
-                accuracy * SIMPLIFY_SHARE,
+                lengths.accuracy_mm * SIMPLIFY_SHARE,
                 on_attempt=lambda f, i=i, n=region.name: steps(
                     (i + f) / len(regions), f"simplifying {n}"
                 ),
@@ -389,26 +448,49 @@ def build(
         else:
             simple, before, deviation = surface, len(surface.faces), 0.0
         surfaces.append(simple)
-        report["surfaces"][region.name] = {
-            "faces_in": int(before),
-            "faces_meshed": int(len(simple.faces)),
-            "simplification_deviation_mm": round(float(deviation), 6),
-        }
+        report.surfaces[region.name] = SurfaceReport(
+            faces_in=int(before),
+            faces_meshed=int(len(simple.faces)),
+            simplification_deviation_mm=round(float(deviation), 6),
+        )
         steps((i + 1) / len(regions), f"simplified {region.name}")
+    return surfaces
 
-    # Check crossings and nesting.
+
+def _check_layout(
+    regions: list[Region],
+    surfaces: list[Surface],
+    lengths: Lengths,
+    steps: _Progress,
+    report: BuildReport,
+) -> np.ndarray:
+    """BuildError unless regions are nested or apart; each region's volume (mm^3)."""
     steps.begin("check", "checking that regions do not cross")
-    report["self_intersecting_faces"] = _check_no_crossings(names, surfaces, envelope, steps)
+    names = [region.name for region in regions]
+    report.self_intersecting_faces = _check_no_crossings(
+        names, surfaces, lengths.envelope_mm, steps
+    )
     volumes = np.array([signed_volume(s.vertices, s.faces) for s in surfaces])
-    report["nesting"] = _nesting(names, surfaces, volumes)
-    for region, volume in zip(regions, volumes, strict=True):
-        report["surfaces"][region.name]["volume_mm3"] = round(float(volume), 3)
+    report.nesting = _nesting(names, surfaces, volumes)
+    for name, volume in zip(names, volumes, strict=True):
+        report.surfaces[name].volume_mm3 = round(float(volume), 3)
+    return volumes
 
-    # Enclosure and sizing field.
+
+def _enclose_and_size(
+    surfaces: list[Surface],
+    lengths: Lengths,
+    settings: BuildSettings,
+    steps: _Progress,
+    report: BuildReport,
+) -> tuple[Surface, tuple | None, float]:
+    """The enclosure, the sizing field (None: uniform) and fTetWild's edge length."""
     steps.begin("sizing", "sizing field")
-    extent = float((high - low).max())
+    extent = float((lengths.high_mm - lengths.low_mm).max())
     margin = settings.margin_mm or DEFAULT_MARGIN_RATIO * extent
-    enclosure = Surface(*enclosure_surface(settings.enclosure, low, high, margin))
+    enclosure = Surface(
+        *enclosure_surface(settings.enclosure, lengths.low_mm, lengths.high_mm, margin)
+    )
     edges = np.concatenate(
         [
             np.linalg.norm(
@@ -422,13 +504,14 @@ def build(
     sizing = None
     if settings.adaptive and (far > near or settings.refine):
         sizing = _sizing_field(enclosure, surfaces, near, far, settings.grading, settings.refine)
-    report["settings"] = {
+    edge_mm = far if sizing is not None else near
+    report.settings = {
         "enclosure": settings.enclosure,
         "margin_mm": round(margin, 6),
-        "accuracy_mm": round(accuracy, 6),
-        "envelope_mm": round(envelope, 6),
+        "accuracy_mm": round(lengths.accuracy_mm, 6),
+        "envelope_mm": round(lengths.envelope_mm, 6),
         "edge_near_mm": round(near, 6),
-        "edge_far_mm": round(far if sizing is not None else near, 6),
+        "edge_far_mm": round(edge_mm, 6),
         "grading": settings.grading,
         "adaptive": sizing is not None,
         "simplify": settings.simplify,
@@ -436,28 +519,39 @@ def build(
         "refine_zones": [asdict(zone) for zone in settings.refine],
         "max_hole_edges": settings.max_hole_edges,
     }
-    report["enclosure"] = {
+    report.enclosure = {
         "kind": settings.enclosure,
         "low_mm": enclosure.vertices.min(axis=0).round(6).tolist(),
         "high_mm": enclosure.vertices.max(axis=0).round(6).tolist(),
         "faces": int(len(enclosure.faces)),
     }
+    return enclosure, sizing, edge_mm
 
-    # Tetrahedralize: the enclosure and every region surface in one input.
+
+def _tetrahedralize(
+    enclosure: Surface,
+    surfaces: list[Surface],
+    sizing: tuple | None,
+    edge_mm: float,
+    lengths: Lengths,
+    settings: BuildSettings,
+    in_subprocess: bool,
+    steps: _Progress,
+    report: BuildReport,
+) -> tuple[np.ndarray, np.ndarray]:
+    """One conforming tet mesh of the enclosure and every region surface (fTetWild), its
+    unused vertices dropped and every tet positively oriented."""
     steps.begin("tetrahedralize", "tetrahedralizing (fTetWild)")
     pieces = [enclosure, *surfaces]
     offsets = np.cumsum([0] + [len(p.vertices) for p in pieces[:-1]])
     input_vertices = np.concatenate([p.vertices for p in pieces])
     input_faces = np.concatenate([p.faces + o for p, o in zip(pieces, offsets, strict=True)])
     params = tetwild.TetWildParams(
-        edge_length_mm=far if sizing is not None else near,
-        envelope_mm=envelope,
+        edge_length_mm=edge_mm,
+        envelope_mm=lengths.envelope_mm,
         simplify=settings.simplify,
         coarsen=settings.coarsen,
         threads=settings.threads,
-    )
-    in_subprocess = (
-        settings.in_subprocess if settings.in_subprocess is not None else progress is not None
     )
 
     def poll(elapsed_s: float) -> None:
@@ -478,12 +572,27 @@ def build(
         remap[used] = np.arange(len(used))
         vertices, tets = vertices[used], remap[tets]
     tets = orient_tets(vertices, tets)
-    report["boundary"] = _check_boundary(vertices, tets, enclosure, envelope, size)
+    report.boundary = _check_boundary(
+        vertices, tets, enclosure, lengths.envelope_mm, lengths.size_mm
+    )
+    return vertices, tets
 
-    # Label.
+
+def _label(
+    vertices: np.ndarray,
+    tets: np.ndarray,
+    regions: list[Region],
+    surfaces: list[Surface],
+    volumes: np.ndarray,
+    materials: list[Material],
+    lengths: Lengths,
+    steps: _Progress,
+    report: BuildReport,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Which regions hold each tet ((regions, tets) bool) and each tet's material index."""
     steps.begin("label", "labelling tets")
     inside, label_stats = containment(
-        vertices, tets, surfaces, envelope, lambda f: steps(f, "labelling tets")
+        vertices, tets, surfaces, lengths.envelope_mm, lambda f: steps(f, "labelling tets")
     )
     holder = innermost(inside, volumes)
     material_index = {m.name: i for i, m in enumerate(materials)}
@@ -491,44 +600,35 @@ def build(
     tet_materials = np.where(holder >= 0, region_material[np.maximum(holder, 0)], 0).astype(
         np.int32
     )
-    report["labels"] = label_stats
-    report["tets_per_region"] = {name: int((holder == r).sum()) for r, name in enumerate(names)}
-    report["tets_per_region"]["(air)"] = int((holder < 0).sum())
+    report.labels = label_stats
+    report.tets_per_region = {r.name: int((holder == i).sum()) for i, r in enumerate(regions)}
+    report.tets_per_region["(air)"] = int((holder < 0).sum())
+    return inside, tet_materials
 
-    # Report.
+
+def _measure(
+    vertices: np.ndarray,
+    tets: np.ndarray,
+    tet_materials: np.ndarray,
+    inside: np.ndarray,
+    regions: list[Region],
+    repaired: list[Surface],
+    materials: list[Material],
+    settings: BuildSettings,
+    steps: _Progress,
+    report: BuildReport,
+) -> None:
+    """Quality and valence, and each region's meshed surface's deviation from its input."""
     steps.begin("report", "measuring quality")
-    report.update(mesh_report(vertices, tets, tet_materials, [m.name for m in materials]))
-    if settings.measure_deviation:
-        report["deviation_mm"] = {}
-        for r, name in enumerate(names):
-            faces = interface_faces(tets, inside[r])
-            if len(faces) == 0:
-                raise BuildError(name, "no tet lies inside this region after meshing")
-            used, compact = np.unique(faces, return_inverse=True)
-            meshed = Surface(vertices[used], compact.reshape(-1, 3))
-            report["deviation_mm"][name] = round(surface_deviation(repaired[r], meshed), 6)
-            steps((r + 1) / len(names), "measuring surface deviation")
-    steps.finish()
-    report["timings_s"] = dict(steps.timings)
-    report["timings_s"]["total"] = round(sum(steps.timings.values()), 3)
-    return Scene(
-        materials=materials,
-        vertices=vertices,
-        tets=tets.astype(np.int32),
-        tet_materials=tet_materials,
-        blades=list(blades),
-        metadata={"build_report": _plain(report)},
-    )
-
-
-def _plain(value):
-    """The report as plain JSON values (numpy scalars and tuples converted)."""
-    if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, np.ndarray):
-        return _plain(value.tolist())
-    return value
+    report.mesh = mesh_report(vertices, tets, tet_materials, [m.name for m in materials])
+    if not settings.measure_deviation:
+        return
+    report.deviation_mm = {}
+    for r, region in enumerate(regions):
+        faces = interface_faces(tets, inside[r])
+        if len(faces) == 0:
+            raise BuildError(region.name, "no tet lies inside this region after meshing")
+        used, compact = np.unique(faces, return_inverse=True)
+        meshed = Surface(vertices[used], compact.reshape(-1, 3))
+        report.deviation_mm[region.name] = round(surface_deviation(repaired[r], meshed), 6)
+        steps((r + 1) / len(regions), "measuring surface deviation")

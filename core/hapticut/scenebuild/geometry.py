@@ -6,6 +6,7 @@ Shapes: vertices (n, 3) float64 in mm; faces (f, 3) int triangles; tets (m, 4) i
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -15,6 +16,17 @@ TET_FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])
 TET_EDGES = np.array([[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]])
 # Work per chunk of winding-number evaluation: points x triangles (~30 MB per array).
 _WINDING_CHUNK = 250_000
+
+
+@dataclass
+class Surface:
+    """A closed, outward-oriented triangle surface: vertices (n, 3) float64, faces (f, 3) int32.
+
+    The one triangle-surface type of the product (regions, the enclosure, meshed interfaces).
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
 
 
 def signed_volume(vertices: np.ndarray, faces: np.ndarray) -> float:

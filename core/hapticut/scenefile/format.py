@@ -1,9 +1,11 @@
 """Scene files, format version 1: reading, checking and atomic writing (docs/scene-format.md).
 
 Two encodings of one tree: JSON (``*.hapticut.json``) and MessagePack (``*.hapticut.msgpack``,
-for big meshes), chosen from the file name. Every problem raises SceneError whose message starts
-with the JSON pointer of the offending field; core/src/scene_io.cpp reads and writes the same
-files with the same checks and wording.
+for big meshes), chosen from the file name. The reader and the writer are the C++ ones
+(core/src/scene_reader.cpp, scene_writer.cpp, called through hapticut._core), so the servo and
+Python read every file the same way; this module adds only the Python Scene model and the
+atomic write. Every problem raises SceneError whose message starts with the JSON pointer of the
+offending field.
 """
 
 from __future__ import annotations
@@ -15,41 +17,7 @@ from pathlib import Path
 from hapticut import _core
 
 from ..atomic_file import write_atomically
-from .model import (
-    FORMAT_NAME,
-    FORMAT_VERSION,
-    MATERIAL_MODELS,
-    BladeSpec,
-    Material,
-    Safety,
-    Scene,
-    SceneError,
-    scene_from_dict,
-    scene_to_dict,
-)
-from .tree_reader import read_tree
-from .tree_writer import encode_json, encode_msgpack, scene_to_tree
-
-__all__ = [
-    "FORMAT_NAME",
-    "FORMAT_VERSION",
-    "JSON",
-    "MATERIAL_MODELS",
-    "MSGPACK",
-    "SCHEMA_PATH",
-    "BladeSpec",
-    "Material",
-    "Safety",
-    "Scene",
-    "SceneError",
-    "encoding_for_path",
-    "load_scene",
-    "parse_scene",
-    "save_scene",
-    "scene_from_dict",
-    "scene_to_dict",
-    "serialize_scene",
-]
+from .model import Scene, SceneError, scene_from_dict, scene_to_dict
 
 JSON = "json"
 MSGPACK = "msgpack"
@@ -65,20 +33,21 @@ def encoding_for_path(path: str | os.PathLike) -> str:
 
 def parse_scene(data: bytes, encoding: str = JSON, *, strict: bool = False) -> Scene:
     """The scene in ``data``; strict also rejects inverted tets instead of re-orienting them."""
-    scene, reoriented = read_tree(_decode(data, encoding), strict=strict)
+    try:
+        as_dict, reoriented = _core.parse_scene_document(bytes(data), _checked(encoding), strict)
+    except _core.SceneError as error:
+        raise SceneError(error.field, error.reason) from None
     if reoriented:
         _log.info("re-oriented %d inverted tets (swapped their last two vertices)", reoriented)
-    return scene
+    return scene_from_dict(as_dict)
 
 
 def serialize_scene(scene: Scene, encoding: str = JSON) -> bytes:
     """The file's bytes; raises SceneError (naming the field as in the file) for a bad scene."""
-    tree = scene_to_tree(scene)
-    read_tree(tree)  # Never write what the reader would reject.
     try:
-        return encode_json(tree) if _checked(encoding) == JSON else encode_msgpack(tree)
-    except (TypeError, ValueError) as error:  # Only "metadata" can hold such values.
-        raise SceneError("/metadata", f"cannot encode: {error}") from None
+        return _core.serialize_scene_bytes(scene_to_dict(scene), _checked(encoding))
+    except _core.SceneError as error:
+        raise SceneError(error.field, error.reason) from None
 
 
 def load_scene(path: str | os.PathLike, *, strict: bool = False) -> Scene:
@@ -97,13 +66,3 @@ def _checked(encoding: str) -> str:
     if encoding not in (JSON, MSGPACK):
         raise ValueError(f"unknown encoding {encoding!r} (expected {JSON!r} or {MSGPACK!r})")
     return encoding
-
-
-def _decode(data: bytes, encoding: str):
-    """The tree in ``data``, decoded by the C++ decoder the C++ reader uses too (scene_tree.h):
-    nesting bounded, duplicate keys, invalid UTF-8, NUL bytes and trailing bytes rejected, so
-    both readers see every file the same way."""
-    try:
-        return _core.decode_scene_tree(bytes(data), _checked(encoding))
-    except _core.SceneError as error:
-        raise SceneError(error.field, error.reason) from None

@@ -8,25 +8,16 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 
 from .errors import BuildError
-from .geometry import signed_volume, triangle_areas
+from .geometry import Surface, signed_volume, triangle_areas
 
 # Faces with area below this fraction of (mean edge length)^2 count as zero-area (degenerate).
 DEGENERATE_AREA_RATIO = 1e-12
 # A region whose volume is below this fraction of its bounding box's volume encloses nothing.
 MIN_VOLUME_RATIO = 1e-9
-
-
-@dataclass
-class Surface:
-    """A closed, outward-oriented triangle surface: vertices (n, 3) float64, faces (f, 3) int32."""
-
-    vertices: np.ndarray
-    faces: np.ndarray
 
 
 def _meshlab():

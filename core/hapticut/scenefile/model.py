@@ -35,6 +35,12 @@ PARAMETER_RANGES: dict[str, dict[str, Any]] = {
 MATERIAL_PARAMETERS = tuple(PARAMETER_RANGES)
 
 
+def parameter_problem(name: str, value: float) -> str:
+    """'' when ``value`` is in the range of the material parameter or setting ``name``, else
+    what is wrong, worded as the scene reader says it ("must be > 0, got -0.5")."""
+    return _core.range_problem(name, float(value))
+
+
 class SceneError(ValueError):
     """A scene the format does not allow.
 

@@ -1,0 +1,17 @@
+"""Building a scene from surface meshes (builder.py; docs/scene-building.md): repair, enclosure,
+sizing, fTetWild (tetwild.py), labels (labels.py), quality (quality.py). The file format is
+hapticut.scenefile."""
+
+from .builder import BuildSettings, RefineZone, Region, build
+from .errors import BuildCancelled, BuildError
+from .report import BuildReport
+
+__all__ = [
+    "BuildCancelled",
+    "BuildError",
+    "BuildReport",
+    "BuildSettings",
+    "RefineZone",
+    "Region",
+    "build",
+]
