@@ -14,7 +14,6 @@ COMMAND_MODULES = (
     "mesh",
     "info",
     "materials",
-    "evaluate",
     "build_request",
     "preview",
     "convert",

@@ -4,7 +4,9 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 
+#include <array>
 #include <cstddef>
+#include <cstdint>
 #include <initializer_list>
 #include <vector>
 
@@ -16,6 +18,8 @@ namespace nb = nanobind;
 
 using PointsIn = nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
 using TetsIn = nb::ndarray<const std::int32_t, nb::shape<-1, 4>, nb::c_contig, nb::device::cpu>;
+using TrianglesIn =
+    nb::ndarray<const std::int32_t, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
 using IndicesIn = nb::ndarray<const std::int32_t, nb::shape<-1>, nb::c_contig, nb::device::cpu>;
 
 // A new numpy array of the given shape that owns its memory.
@@ -31,6 +35,12 @@ nb::ndarray<nb::numpy, T> new_array(std::initializer_list<std::size_t> shape) {
 inline std::vector<Vec3> to_points(const PointsIn& a) {
   std::vector<Vec3> out(a.shape(0));
   for (std::size_t i = 0; i < out.size(); ++i) out[i] = {a(i, 0), a(i, 1), a(i, 2)};
+  return out;
+}
+
+inline std::vector<std::array<std::int32_t, 3>> to_triangles(const TrianglesIn& a) {
+  std::vector<std::array<std::int32_t, 3>> out(a.shape(0));
+  for (std::size_t t = 0; t < out.size(); ++t) out[t] = {a(t, 0), a(t, 1), a(t, 2)};
   return out;
 }
 

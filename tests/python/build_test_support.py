@@ -5,19 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from hapticut.shapes import icosphere  # noqa: F401 (the tests import it from here)
 
 REPO = Path(__file__).resolve().parents[2]
 EXAMPLES = REPO / "examples"
-
-
-def icosphere(radius_mm: float, subdivisions: int = 1, centre=(0.0, 0.0, 0.0)):
-    """(vertices, faces) of a subdivided icosahedron: 80 faces at 1, 320 at 2."""
-    import pymeshlab
-
-    meshes = pymeshlab.MeshSet()
-    meshes.create_sphere(radius=radius_mm, subdiv=subdivisions)
-    mesh = meshes.current_mesh()
-    return mesh.vertex_matrix() + np.asarray(centre), mesh.face_matrix()
 
 
 def bunny_path() -> Path:

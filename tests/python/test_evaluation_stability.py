@@ -11,8 +11,12 @@ pytest.importorskip("hapticut._core")
 
 import importlib.util  # noqa: E402
 
-from hapticut import _core  # noqa: E402
-from hapticut.evaluation import meshes, methods, stability  # noqa: E402
+from hapticut_evaluation import (  # noqa: E402
+    _baselines,
+    meshes,
+    methods,
+    stability,
+)
 
 OURS = (methods.TET, methods.SHADED)
 # pytetwild's package imports pyvista; the evaluation loads only its native wrapper.
@@ -74,7 +78,7 @@ def test_voxel_wall_thinner_than_a_cell_is_lost():
 
 @needs_tetwild
 def test_force_shading_smooths_the_faceted_sphere(cache):
-    from hapticut.evaluation import accuracy, paths
+    from hapticut_evaluation import accuracy, paths
 
     scene = meshes.sphere_in_cube(80, cache)
     space = scene.space()
@@ -91,7 +95,7 @@ def test_force_shading_smooths_the_faceted_sphere(cache):
 def test_rigid_surface_is_closed_and_outward():
     grid = [-10.0, -5.0, 0.0, 5.0, 10.0]
     scene = meshes.grid_scene("block", grid, grid, grid, ((-5, -5, -5), (5, 5, 5)))
-    vertices, triangles = _core.rigid_surface(scene.space())
+    vertices, triangles = _baselines.rigid_surface(scene.space())
     a, b, c = (vertices[triangles[:, k]] for k in range(3))
     volume = np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0
     assert volume == pytest.approx(1000.0)

@@ -12,8 +12,14 @@ import pytest
 
 pytest.importorskip("hapticut._core")
 
-from hapticut import _core  # noqa: E402
-from hapticut.evaluation import accuracy, meshes, methods, paths, report  # noqa: E402
+from hapticut_evaluation import (  # noqa: E402
+    _baselines,
+    accuracy,
+    meshes,
+    methods,
+    paths,
+    report,
+)
 
 
 @pytest.fixture(scope="module")
@@ -31,10 +37,10 @@ def stroke():
 
 def method_sets(scene, path):
     space = scene.space()
-    sv, st = _core.rigid_surface(space)
+    sv, st = _baselines.rigid_surface(space)
     return [
-        methods.start(_core.TetMethodSet(space, path.shape[1]), path),
-        methods.start(_core.GodObjectSet(sv, st, path.shape[1]), path),
+        methods.start(_baselines.TetMethodSet(space, path.shape[1]), path),
+        methods.start(_baselines.GodObjectSet(sv, st, path.shape[1]), path),
     ]
 
 

@@ -10,7 +10,7 @@ import pytest
 pytest.importorskip("hapticut._core")
 
 from hapticut import _core  # noqa: E402
-from hapticut.evaluation import meshes, surface, valence  # noqa: E402
+from hapticut_evaluation import meshes, surface, valence  # noqa: E402
 
 FREE = [{"name": "air", "model": "free"}]
 

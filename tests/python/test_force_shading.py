@@ -10,7 +10,10 @@ import pytest
 pytest.importorskip("hapticut._core")
 
 from hapticut import _core  # noqa: E402
-from hapticut.evaluation import meshes  # noqa: E402
+from hapticut_evaluation import (
+    _baselines,
+    meshes,
+)
 
 
 def _source_field(vertices, triangles):
@@ -57,7 +60,7 @@ def test_force_shading_follows_the_source_field_across_split_faces():
     for x, y in spots:
         start = np.array([[x, y, 20.0]])
         pressed = np.array([[x, y, 15.0 - depth]])
-        method = _core.TetMethodSet(space, 1, shading)
+        method = _baselines.TetMethodSet(space, 1, shading)
         method.reset(start)
         method.step(pressed, 0.001)
         q = method.q[0]
@@ -76,7 +79,7 @@ def test_shading_is_never_worse_than_the_plain_proxy_on_the_scanned_bunny():
     # has bumps finer than its facets and a sharp crease where its holes were
     # closed. Shading must not err more than the plain proxy, mean and p95,
     # with normals from its own rigid surface or from the scan.
-    from hapticut.evaluation import example_shading
+    from hapticut_evaluation import example_shading
 
     (row,) = example_shading.run_example_shading(
         quick=True, repeats=0, scenes=("mouse",), log=lambda *_: None

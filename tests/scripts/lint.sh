@@ -7,8 +7,9 @@ mapfile -t cpp_files < <(git ls-files '*.cpp' '*.h')
 echo "lint: clang-format (${#cpp_files[@]} files)"
 clang-format --dry-run --Werror "${cpp_files[@]}"
 
-echo "lint: clang-tidy (core/src, server)"
-mapfile -t tidy_files < <(git ls-files 'core/src/*.cpp' 'core/src/**/*.cpp' 'server/*.cpp' 'server/**/*.cpp')
+echo "lint: clang-tidy (core/src, server, tools/evaluation/src)"
+mapfile -t tidy_files < <(git ls-files 'core/src/*.cpp' 'core/src/**/*.cpp' 'server/*.cpp' 'server/**/*.cpp' \
+  'tools/evaluation/src/*.cpp')
 tidy_output=$(clang-tidy -p build/tests --quiet "${tidy_files[@]}" 2>&1 || true)
 if grep -qE '(warning|error):' <<<"$tidy_output"; then
   grep -vE '^[0-9]+ warnings? generated\.$' <<<"$tidy_output" >&2

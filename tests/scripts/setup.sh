@@ -24,11 +24,17 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 python3 -m pip install -q --disable-pip-version-check "numpy>=1.26,<2" "scikit-build-core>=0.10" "nanobind>=2.4"
-echo "setup: pip install .[build,test,charts] (builds hapticut._core)"
+echo "setup: pip install .[build,test] (builds hapticut._core)"
 # Tuned for this machine (-march=native): the tests, benchmarks and evaluation
 # run where they are built. Wheels for elsewhere are built without it.
 python3 -m pip install -q --disable-pip-version-check -C cmake.define.HAPTICUT_NATIVE=ON \
-  ".[build,test,charts]"
+  ".[build,test]"
+# The evaluation (tools/evaluation, not in the product's wheel): its package and its
+# module hapticut_evaluation._baselines, built beside its own copy of the engine (and
+# matplotlib for its charts).
+echo "setup: pip install ./tools/evaluation (builds hapticut_evaluation._baselines)"
+python3 -m pip install -q --disable-pip-version-check -C cmake.define.HAPTICUT_NATIVE=ON \
+  ./tools/evaluation
 
 # The add-on's tests run inside Blender's Python module (about 370 MB), and once more under
 # the oldest Blender the manifest admits (bpy 4.2.0) in a virtual environment of its own.

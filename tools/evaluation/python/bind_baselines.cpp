@@ -1,5 +1,6 @@
-// Bindings of the evaluation: the baseline methods (voxel proxy,
-// surface god-object), force shading, and one interface for all methods so
+// hapticut_evaluation._baselines: the baseline methods (voxel proxy, surface
+// god-object), the tet proxy with and without force shading, and one interface
+// for all methods so
 // the same paths run through each of them in C++ (no Python loop per tick):
 // reset(P), step(P, dt_s), run(path, dt_s) -> q, force_N and ns per point update.
 #include <nanobind/stl/string.h>
@@ -25,8 +26,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 using PathIn = nb::ndarray<const double, nb::shape<-1, -1, 3>, nb::c_contig, nb::device::cpu>;
-using TrianglesIn =
-    nb::ndarray<const std::int32_t, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
 using Vec3In = nb::ndarray<const double, nb::shape<3>, nb::device::cpu>;
 
 // The tetrahedral proxy, with force shading when `shading` is set.
@@ -239,12 +238,6 @@ void bind_method_set(nb::class_<MethodSet<Method>>& cls) {
           "Per proxy: '' when its invariants hold, else why.");
 }
 
-std::vector<std::array<std::int32_t, 3>> to_triangles(const TrianglesIn& a) {
-  std::vector<std::array<std::int32_t, 3>> out(a.shape(0));
-  for (std::size_t t = 0; t < out.size(); ++t) out[t] = {a(t, 0), a(t, 1), a(t, 2)};
-  return out;
-}
-
 // Solid flags of a grid from the rigid tets of a Space: a cell is solid when
 // its centre lies in a rigid tet (each rigid tet rasterised over its box).
 baselines::VoxelGrid voxelize_space(const Space& space, const Vec3& origin, double cell_mm,
@@ -280,32 +273,9 @@ baselines::VoxelGrid voxelize_space(const Space& space, const Vec3& origin, doub
 
 }  // namespace
 
-void bind_baselines_impl(nb::module_& m) {
+void bind_baselines(nb::module_& m) {
   using Solid =
       nb::ndarray<const std::uint8_t, nb::shape<-1, -1, -1>, nb::c_contig, nb::device::cpu>;
-
-  nb::class_<ForceShading>(m, "ForceShading",
-                           "Per-vertex normals of a Space's rigid surface, for force shading.")
-      .def(nb::init<const Space&>(), nb::arg("space"), nb::keep_alive<1, 2>())
-      .def(
-          "__init__",
-          [](ForceShading* self, const Space& space, const PointsIn& vertices,
-             const TrianglesIn& triangles) {
-            new (self) ForceShading(space, to_points(vertices), to_triangles(triangles));
-          },
-          nb::arg("space"), nb::arg("source_vertices"), nb::arg("source_triangles"),
-          nb::keep_alive<1, 2>(),
-          "Vertex normals taken from the source surface the scene was built from.")
-      .def_prop_ro(
-          "vertex_normals",
-          [](const ForceShading& s) {
-            std::vector<Vec3> normals(s.vertex_count());
-            for (std::int32_t v = 0; v < s.vertex_count(); ++v) normals[v] = s.vertex_normal(v);
-            return from_points(normals);
-          },
-          "Unit normal out of the rigid region per mesh vertex; zero off the rigid surface.",
-          nb::rv_policy::move)
-      .def_prop_ro("memory_bytes", &ForceShading::memory_bytes, nb::rv_policy::move);
 
   m.def(
       "rigid_surface",
@@ -433,4 +403,9 @@ void bind_baselines_impl(nb::module_& m) {
 
 }  // namespace hapticut::python
 
-void bind_baselines(nb::module_& m) { hapticut::python::bind_baselines_impl(m); }
+NB_MODULE(_baselines, m) {
+  m.doc() = "Hapticut's evaluation: baseline methods and the timing harness (C++).";
+  // Space and ForceShading come from hapticut._core (nanobind shares its types across modules).
+  nb::module_::import_("hapticut._core");
+  hapticut::python::bind_baselines(m);
+}

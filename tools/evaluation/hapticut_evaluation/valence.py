@@ -12,9 +12,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-
 from hapticut import _core
-from hapticut.evaluation import meshes, paths
+
+from hapticut_evaluation import meshes, paths
 
 EDGE_VALENCES = (4, 6, 8, 12, 16, 20, 24, 32, 48, 64)
 # (mesh name, builder): the centre vertex in 2 x ring tets, or 20 x 4^k.
@@ -233,9 +233,15 @@ def fit(rows: list[dict]) -> list[dict]:
 def transition_share(cache: Path, *, faces: int = 320, points: int = 8) -> dict:
     """How often a tick of the 1 kHz press-and-slide stroke on the rigid sphere
     leaves an EDGE or a VERTEX, and the valences of that mesh."""
-    scene = meshes.sphere_in_cube(faces, cache)
-    space = scene.space()
     path, _ = paths.press_and_slide(0.001, points=points)
+    return stroke_share(meshes.sphere_in_cube(faces, cache), path)
+
+
+def stroke_share(scene: meshes.TetScene, path: np.ndarray) -> dict:
+    """Transitions per tick by the state they leave along a (ticks, N, 3) 1 kHz path
+    through the scene, and the scene's valences."""
+    space = scene.space()
+    points = path.shape[1]
     proxies = _core.ProxySet(space, points)
     proxies.reset(np.ascontiguousarray(path[0]))
     proxies.clear_counters()
@@ -254,53 +260,3 @@ def transition_share(cache: Path, *, faces: int = 320, points: int = 8) -> dict:
         "mean_tets_per_vertex": float(stats["mean_tets_per_vertex"]),
         "max_tets_per_vertex": int(stats["max_tets_per_vertex"]),
     }
-
-
-def chart(rows: list[dict], out: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7.5, 4.8))
-    colours = {
-        "widen": "tab:green",
-        "scan": "tab:blue",
-        "stay": "tab:blue",
-        "face": "tab:orange",
-        "edge": "tab:purple",
-    }
-    for element, marker in (("edge", "o"), ("vertex", "s")):
-        for case, colour in colours.items():
-            sel = sorted(
-                (r for r in rows if r["element"] == element and r["case"] == case),
-                key=lambda r: r["valence"],
-            )
-            if not sel:
-                continue
-            x = np.array([r["valence"] for r in sel], float)
-            y = np.array([r["ns"] for r in sel], float)
-            # Points only (the fans come from different mesh families), and the
-            # least-squares line ns = fixed + per tet x valence through them.
-            ax.plot(
-                x,
-                y,
-                marker,
-                color=colour,
-                mfc=colour if element == "edge" else "none",
-                label=f"{element} {case}",
-            )
-            if len(sel) >= 2:
-                slope, fixed = np.polyfit(x, y, 1)
-                span = np.linspace(x.min(), x.max(), 50)
-                ax.plot(span, fixed + slope * span, "-", color=colour, lw=0.8, alpha=0.6)
-    ax.set_xscale("log", base=2)
-    ax.set_yscale("log")
-    ax.set_xlabel("tets around the edge or vertex (valence)")
-    ax.set_ylabel("ns per transition (median; widen: mean over targets)")
-    ax.set_title("One EDGE / VERTEX transition against valence")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8, ncol=2)
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)

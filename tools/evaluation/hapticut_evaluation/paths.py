@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hapticut.evaluation.meshes import CUBE_HALF_MM, SPHERE_RADIUS_MM
+from hapticut_evaluation.meshes import CUBE_HALF_MM, SPHERE_RADIUS_MM
 
 SLIDE_SPEED_MM_S = 100.0
 PRESS_DEPTH_MM = 5.0

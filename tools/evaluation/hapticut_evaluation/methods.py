@@ -7,9 +7,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
 from hapticut import _core
-from hapticut.evaluation.meshes import CUBE_HALF_MM, TetScene
+
+from hapticut_evaluation import _baselines
+from hapticut_evaluation.meshes import CUBE_HALF_MM, TetScene
 
 TET = "tet proxy"
 SHADED = "tet proxy + force shading"
@@ -28,20 +29,22 @@ class Method:
     allowance_mm: float  # depth into the true rigid region that is not a fall-through
 
 
-def voxel_grid(scene: TetScene, space: _core.Space, cell_mm: float, inside=None) -> _core.VoxelGrid:
+def voxel_grid(
+    scene: TetScene, space: _core.Space, cell_mm: float, inside=None
+) -> _baselines.VoxelGrid:
     """A grid over the cube [-45, 45]^3 mm (cells outside count as free). `inside`
     (points -> bool) voxelises an analytic solid; else the Space's rigid tets."""
     n = int(np.ceil(2 * CUBE_HALF_MM / cell_mm))
     origin = np.full(3, -CUBE_HALF_MM)
     if inside is None:
-        return _core.VoxelGrid.from_space(space, origin, cell_mm, [n, n, n])
+        return _baselines.VoxelGrid.from_space(space, origin, cell_mm, [n, n, n])
     centres = origin[0] + (np.arange(n) + 0.5) * cell_mm
     y, x = np.meshgrid(centres, centres, indexing="ij")
     solid = np.zeros((n, n, n), np.uint8)
     for k, z in enumerate(centres):
         points = np.stack([x.ravel(), y.ravel(), np.full(x.size, z)], axis=1)
         solid[k] = inside(points).reshape(n, n)
-    return _core.VoxelGrid(origin, cell_mm, solid)
+    return _baselines.VoxelGrid(origin, cell_mm, solid)
 
 
 def methods_for(
@@ -59,7 +62,7 @@ def methods_for(
     if scene.surface_vertices is not None:
         sv, st = scene.surface_vertices, scene.surface_triangles
     else:
-        sv, st = _core.rigid_surface(space)
+        sv, st = _baselines.rigid_surface(space)
     out = []
     exact = 100.0 * space.tolerance_mm
     # The god-object collides with the source surface, the depth is measured in
@@ -67,19 +70,21 @@ def methods_for(
     # the source (fTetWild keeps it within its envelope).
     source_gap = 0.0
     if scene.surface_vertices is not None:
-        tv, _ = _core.rigid_surface(space)
+        tv, _ = _baselines.rigid_surface(space)
         source_gap = _outside_distance(tv, sv, st)
     if TET in families:
-        out.append(Method(TET, TET, lambda n: _core.TetMethodSet(space, n), exact))
+        out.append(Method(TET, TET, lambda n: _baselines.TetMethodSet(space, n), exact))
     if SHADED in families:
         shading = _core.ForceShading(space, sv, st)
-        out.append(Method(SHADED, SHADED, lambda n: _core.TetMethodSet(space, n, shading), exact))
+        out.append(
+            Method(SHADED, SHADED, lambda n: _baselines.TetMethodSet(space, n, shading), exact)
+        )
     if GOD in families and len(st) > 0:
         out.append(
             Method(
                 GOD,
                 GOD,
-                lambda n: _core.GodObjectSet(sv, st, n, stiffness_N_per_mm=stiffness_N_per_mm),
+                lambda n: _baselines.GodObjectSet(sv, st, n, stiffness_N_per_mm=stiffness_N_per_mm),
                 exact + source_gap,
             )
         )
@@ -90,7 +95,7 @@ def methods_for(
                 Method(
                     VOXEL,
                     f"{VOXEL} {h:g} mm",
-                    lambda n, grid=grid: _core.VoxelProxySet(grid, n, stiffness_N_per_mm),
+                    lambda n, grid=grid: _baselines.VoxelProxySet(grid, n, stiffness_N_per_mm),
                     h * 3**0.5,
                 )
             )

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-
-from hapticut import _core
+from hapticut import _core, shapes
+from hapticut.scenebuild.geometry import enclosure_surface
 
 SPHERE_RADIUS_MM = 30.0
 CUBE_HALF_MM = 45.0
@@ -59,87 +59,17 @@ class TetScene:
 
 
 def icosphere(faces: int, radius_mm: float = SPHERE_RADIUS_MM) -> tuple[np.ndarray, np.ndarray]:
-    """An icosphere of 20 x 4^n faces (80, 320, 1280, 5120), vertices on the sphere,
-    triangles wound counter-clockwise seen from outside."""
+    """hapticut.shapes.icosphere by face count (80, 320, 1280, 5120: 20 x 4^n)."""
     levels = {20: 0, 80: 1, 320: 2, 1280: 3, 5120: 4, 20480: 5}
     if faces not in levels:
         raise ValueError(f"an icosphere has 20 x 4^n faces, not {faces}")
-    t = (1.0 + 5.0**0.5) / 2.0
-    verts = [
-        (-1, t, 0),
-        (1, t, 0),
-        (-1, -t, 0),
-        (1, -t, 0),
-        (0, -1, t),
-        (0, 1, t),
-        (0, -1, -t),
-        (0, 1, -t),
-        (t, 0, -1),
-        (t, 0, 1),
-        (-t, 0, -1),
-        (-t, 0, 1),
-    ]
-    tris = [
-        (0, 11, 5),
-        (0, 5, 1),
-        (0, 1, 7),
-        (0, 7, 10),
-        (0, 10, 11),
-        (1, 5, 9),
-        (5, 11, 4),
-        (11, 10, 2),
-        (10, 7, 6),
-        (7, 1, 8),
-        (3, 9, 4),
-        (3, 4, 2),
-        (3, 2, 6),
-        (3, 6, 8),
-        (3, 8, 9),
-        (4, 9, 5),
-        (2, 4, 11),
-        (6, 2, 10),
-        (8, 6, 7),
-        (9, 8, 1),
-    ]
-    points = [np.array(v, float) / np.linalg.norm(v) for v in verts]
-    for _ in range(levels[faces]):
-        cache: dict[tuple[int, int], int] = {}
-
-        def middle(a: int, b: int, cache=cache) -> int:
-            key = (min(a, b), max(a, b))
-            if key not in cache:
-                m = points[a] + points[b]
-                points.append(m / np.linalg.norm(m))
-                cache[key] = len(points) - 1
-            return cache[key]
-
-        new = []
-        for a, b, c in tris:
-            ab, bc, ca = middle(a, b), middle(b, c), middle(c, a)
-            new += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
-        tris = new
-    vertices = np.array(points) * radius_mm
-    triangles = np.array(tris, np.int32)
-    # Wind outward.
-    a, b, c = (vertices[triangles[:, k]] for k in range(3))
-    flip = np.einsum("ij,ij->i", np.cross(b - a, c - a), a) < 0
-    triangles[flip] = triangles[flip][:, [0, 2, 1]]
-    return vertices, triangles
+    return shapes.icosphere(radius_mm, levels[faces])
 
 
 def cube_surface(half_mm: float) -> tuple[np.ndarray, np.ndarray]:
-    """The 12 triangles of an axis-aligned cube centred at the origin, wound outward."""
-    v = np.array([[x, y, z] for z in (-1, 1) for y in (-1, 1) for x in (-1, 1)], float) * half_mm
-    quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
-    tris = []
-    for a, b, c, d in quads:
-        tris += [(a, b, c), (a, c, d)]
-    triangles = np.array(tris, np.int32)
-    a, b, c = (v[triangles[:, k]] for k in range(3))
-    centre = (a + b + c) / 3
-    flip = np.einsum("ij,ij->i", np.cross(b - a, c - a), centre) < 0
-    triangles[flip] = triangles[flip][:, [0, 2, 1]]
-    return v, triangles
+    """The 12 outward triangles of the cube [-half_mm, half_mm]^3 (the builder's enclosure)."""
+    vertices, faces = enclosure_surface("cube", np.full(3, -half_mm), np.full(3, half_mm), 0.0)
+    return vertices, faces.astype(np.int32)
 
 
 def _tetwild_module():

@@ -8,20 +8,18 @@ import time
 from pathlib import Path
 
 import numpy as np
-
 from hapticut import _core
-from hapticut.evaluation import accuracy, meshes, paths
+from hapticut.scenebuild.geometry import enclosure_surface
+
+from hapticut_evaluation import _baselines, accuracy, meshes, paths
 
 
 def _bounding_tet(half_mm: float) -> tuple[np.ndarray, np.ndarray]:
-    """A regular tet enclosing the cube of half-size half_mm, as 4 outward triangles."""
-    r = 3.0 * half_mm * 3**0.5 * 1.05  # Insphere radius r/3 > the cube's circumradius.
-    v = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]], float) / 3**0.5 * r
-    tris = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]], np.int32)
-    a, b, c = (v[tris[:, k]] for k in range(3))
-    flip = np.einsum("ij,ij->i", np.cross(b - a, c - a), a + b + c) < 0
-    tris[flip] = tris[flip][:, [0, 2, 1]]
-    return v, tris
+    """The builder's regular-tet enclosure (4 outward triangles) whose insphere holds the
+    cube of half-size half_mm grown by 5 %."""
+    low, high = np.full(3, -half_mm), np.full(3, half_mm)
+    vertices, faces = enclosure_surface("tetrahedron", low, high, 0.05 * half_mm)
+    return vertices, faces.astype(np.int32)
 
 
 def _build(
@@ -81,7 +79,7 @@ def sizing_economy(
         key = f"{faces}_" + name.replace(" ", "_").replace(",", "")
         scene = _build(key, faces, enclosure, edge, adaptive, cache)
         space = scene.space()
-        method = _core.TetMethodSet(space, path.shape[1])
+        method = _baselines.TetMethodSet(space, path.shape[1])
         method.reset(np.ascontiguousarray(path[0]))
         built.append((name, scene, space, method))
     # All variants timed in the same rounds (see accuracy.time_round_robin).
@@ -89,6 +87,7 @@ def sizing_economy(
         [method for *_, method in built], path, 0.001, repeats, 0.0 if quick else min_seconds
     )
     rows = []
+    edges = {name: (edge, adaptive) for name, _, edge, adaptive in variants}
     for (name, scene, space, method), ns in zip(built, best_ns, strict=True):
         result = method.run(path, 0.001, timing_repeats=0)
         m = accuracy.contact_metrics(path, slide, result["q"], result["force_N"])
@@ -103,6 +102,9 @@ def sizing_economy(
                 "dir_err_mean_deg": m["dir_err_mean_deg"],
                 "max_tets_per_edge": space.stats["max_tets_per_edge"],
                 "max_tets_per_vertex": space.stats["max_tets_per_vertex"],
+                # The target edge length (of the far field when adaptive).
+                "edge_mm": edges[name][0],
+                "adaptive": edges[name][1],
             }
         )
         log(
@@ -114,24 +116,34 @@ def sizing_economy(
 
 # The examples' scenes (examples/build_examples.py, built by hapticut.scenebuild):
 # the bunny standing in for the paper's mouse, and the layered finger (skin, flesh, bone).
-# examples/ of the source tree (not part of the installed package): beside this
-# package when it runs from the tree, else in the working directory (an installed
-# package run from the repository's root, as the test command does).
-_TREE_EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
-EXAMPLES_DIR = _TREE_EXAMPLES if _TREE_EXAMPLES.is_dir() else Path.cwd() / "examples"
-EXAMPLES_SCRIPT = EXAMPLES_DIR / "build_examples.py"
+# examples/ of the source tree: the working directory's (the evaluation runs from the
+# repository's root), or the folder given with --examples.
+EXAMPLES_DIR = Path("examples")
+
+
+def use_examples(folder: Path) -> None:
+    """Read the examples' scenes and build script from `folder`."""
+    global EXAMPLES_DIR
+    EXAMPLES_DIR = folder
+
+
 # (example, depth of the press into its rigid surface in mm): the finger's bones are
 # capsules of 2.8 to 3.5 mm radius.
 EXAMPLE_DEPTH_MM = {"mouse": 2.0, "finger": 1.0}
+# Sliding after each press, s (at surface.strokes' default speed).
+EXAMPLE_SLIDE_S = 0.5
 
 
 def examples_module():
     """examples/build_examples.py of the source tree."""
     import importlib.util
 
-    if not EXAMPLES_SCRIPT.exists():
-        raise FileNotFoundError(f"{EXAMPLES_SCRIPT} not found: run from the source tree")
-    spec = importlib.util.spec_from_file_location("build_examples", EXAMPLES_SCRIPT)
+    script = EXAMPLES_DIR / "build_examples.py"
+    if not script.exists():
+        raise FileNotFoundError(
+            f"{script} not found: run from the repository's root or pass --examples"
+        )
+    spec = importlib.util.spec_from_file_location("build_examples", script)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -145,7 +157,7 @@ def _example_regions(module, name: str):
 def example_source(module, name: str):
     """The surface an example's rigid material was built from (every rigid region
     together): the truth of its force directions and the source of force shading."""
-    from hapticut.evaluation import surface
+    from hapticut_evaluation import surface
 
     regions, _ = _example_regions(module, name)
     rigid_regions = [r for r in regions if r.material.model == "rigid"]
@@ -236,7 +248,7 @@ def example_economy(
     force is the contact force alone; the truth is the source surface's normal at the
     closest source point to the proxy (facet normal, and the smooth normal
     interpolated from its vertex normals). Returns [] when the examples are missing."""
-    from hapticut.evaluation import surface
+    from hapticut_evaluation import surface
 
     try:
         module = examples_module()
@@ -248,7 +260,7 @@ def example_economy(
         _, settings = _example_regions(module, name)
         source = example_source(module, name)
         path, slide = surface.strokes(
-            source, 0.001, points=points, depth_mm=EXAMPLE_DEPTH_MM[name], slide_s=0.5
+            source, 0.001, points=points, depth_mm=EXAMPLE_DEPTH_MM[name], slide_s=EXAMPLE_SLIDE_S
         )
         own = {"enclosure": settings.enclosure}
         first = _build_example(module, name, _key(settings, own), own, cache)
@@ -278,7 +290,7 @@ def example_economy(
             own_shading = _core.ForceShading(space)
             sets = {}
             for tag, with_shading in (("tet", None), ("shaded", shading), ("own", own_shading)):
-                sets[tag] = _core.TetMethodSet(space, points, with_shading)
+                sets[tag] = _baselines.TetMethodSet(space, points, with_shading)
                 sets[tag].reset(np.ascontiguousarray(path[0]))
             cases.append((row, sets))
         # Every variant of this example, with and without shading, timed in the

@@ -5,7 +5,15 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from hapticut.evaluation import accuracy, economy, example_shading, report, stability, valence
+from hapticut_evaluation import (
+    accuracy,
+    charts,
+    economy,
+    example_shading,
+    report,
+    stability,
+    valence,
+)
 
 
 def run_stability(cache: Path, *, quick: bool, families=None, log=print) -> list[dict]:
@@ -27,7 +35,7 @@ def run_all(out: Path, *, quick: bool = False, log=print) -> dict:
     accuracy_rows = accuracy.run_accuracy(
         cache,
         faces=faces,
-        min_seconds=0.0 if quick else 3.0,
+        min_seconds=0.0 if quick else accuracy.TIMING_MIN_S,
         log=log,
         **({"voxel_sizes": voxel_sizes} if voxel_sizes else {}),
     )
@@ -40,7 +48,7 @@ def run_all(out: Path, *, quick: bool = False, log=print) -> dict:
     valence_rows = valence.run_valence(quick=quick)
     valence_fit = valence.fit(valence_rows)
     valence_share = valence.transition_share(cache, faces=80 if quick else 320)
-    valence.chart(valence_rows, out / "valence.png")
+    charts.valence(valence_rows, out / "valence.png")
     log("mesh economy")
     economy_rows = economy.sizing_economy(cache, quick=quick, log=log)
     example_rows = economy.example_economy(cache, quick=quick, log=log)
@@ -57,7 +65,7 @@ def run_all(out: Path, *, quick: bool = False, log=print) -> dict:
         ("example_shading", shading_rows),
     ]:
         report.write_csv(out / f"{name}.csv", rows)
-    report.chart(accuracy_rows, out / "speed_vs_error.png")
+    charts.speed_vs_error(accuracy_rows, out / "speed_vs_error.png")
     report.write_page(
         out,
         accuracy_rows=accuracy_rows,

@@ -9,10 +9,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-
 from hapticut import _core
-from hapticut.evaluation import meshes, methods, paths
-from hapticut.evaluation.accuracy import sphere_inside
+
+from hapticut_evaluation import _baselines, meshes, methods, paths
+from hapticut_evaluation.accuracy import sphere_inside
 
 
 @dataclass
@@ -143,7 +143,7 @@ def evaluate_scenario(scenario: Scenario, families=None) -> list[dict]:
         result = method_set.run(scenario.path, scenario.dt_s, check=True, timing_repeats=0)
         q = result["q"]
         finite = bool(np.all(np.isfinite(q)) and np.all(np.isfinite(result["force_N"])))
-        depth = _core.rigid_depth(space, np.ascontiguousarray(q.reshape(-1, 3)))
+        depth = _baselines.rigid_depth(space, np.ascontiguousarray(q.reshape(-1, 3)))
         max_depth = float(depth.max()) if depth.size else 0.0
         deep = int((depth > method.allowance_mm).sum())
         wrong = int(scenario.wrong_side(q).sum()) if scenario.wrong_side is not None else 0
@@ -194,6 +194,12 @@ HAND_MASS_KG = 0.1
 HAND_DAMPING_N_S_PER_MM = 0.002  # 2 N s/m
 HAND_STIFFNESS_N_PER_MM = 0.3  # The grip holding the tool toward the scripted target.
 CLOSED_LOOP_K = (0.05, 0.1, 0.2, 0.5, 1.0, 2.0)
+HAND_PRESS_MM = 5.0  # Depth of the scripted stroke's target into the sphere.
+# Chatter: the held force swings by more than this share of its mean (and this much).
+CHATTER_SHARE = 0.05
+CHATTER_MIN_N = 0.01
+# An active loop: the hand gains more than this share of the contact's stored energy.
+ENERGY_SHARE = 0.01
 
 
 def hand_target(dt_s: float) -> tuple[np.ndarray, np.ndarray]:
@@ -204,7 +210,17 @@ def hand_target(dt_s: float) -> tuple[np.ndarray, np.ndarray]:
     u = np.array([0.3, 0.2, 1.0]) / np.linalg.norm([0.3, 0.2, 1.0])
     w = np.cross(u, [1.0, 0.0, 0.0])
     w /= np.linalg.norm(w)
-    radius = np.interp(t, [0, 0.2, 0.9, 1.2, 1.4], [r + 5, r - 5, r - 5, r - 5, r + 5])
+    radius = np.interp(
+        t,
+        [0, 0.2, 0.9, 1.2, 1.4],
+        [
+            r + HAND_PRESS_MM,
+            r - HAND_PRESS_MM,
+            r - HAND_PRESS_MM,
+            r - HAND_PRESS_MM,
+            r + HAND_PRESS_MM,
+        ],
+    )
     angle = np.interp(t, [0, 0.2, 0.7, 1.4], [0, 0, 0.5, 0.5])
     target = radius[:, None] * (np.cos(angle)[:, None] * u + np.sin(angle)[:, None] * w)
     hold = (t > 1.0) & (t < 1.2)
@@ -259,10 +275,12 @@ def run_closed_loop(cache: Path, *, quick: bool, families=None) -> list[dict]:
             # Chatter or a limit cycle: the force still swings by more than 5 %
             # of its mean (and 0.01 N) while the target is held still; an
             # active loop: the hand gained more than 1 % of the contact's
-            # stored energy (0.5 k d^2 at d = 5 mm target depth) over the stroke.
-            stored = 0.5 * k * 25.0
-            chatter = figures["hold_ripple_N"] > max(0.01, 0.05 * figures["hold_force_N"])
-            active = figures["energy_gained_mJ"] > 0.01 * stored
+            # stored energy (0.5 k d^2 at the target depth d) over the stroke.
+            stored = 0.5 * k * HAND_PRESS_MM**2
+            chatter = figures["hold_ripple_N"] > max(
+                CHATTER_MIN_N, CHATTER_SHARE * figures["hold_force_N"]
+            )
+            active = figures["energy_gained_mJ"] > ENERGY_SHARE * stored
             rows.append(
                 {
                     "k_N_per_mm": k,

@@ -9,9 +9,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-
 from hapticut import _core
-from hapticut.evaluation import accuracy, economy, meshes, surface
+
+from hapticut_evaluation import _baselines, accuracy, economy, meshes, surface
 
 # (example, depth of the press into its rigid surface in mm): the finger's bones
 # are capsules of 2.8 to 3.5 mm radius; the spheres and the bunny take 2 mm.
@@ -76,7 +76,7 @@ def run_example_shading(
         source = economy.example_source(module, name)
         space = scene_space(file)
         path, slide = surface.strokes(
-            source, 0.001, points=points, depth_mm=DEPTH_MM[name], slide_s=0.5
+            source, 0.001, points=points, depth_mm=DEPTH_MM[name], slide_s=economy.EXAMPLE_SLIDE_S
         )
         shadings = {
             PLAIN: None,
@@ -85,7 +85,7 @@ def run_example_shading(
         }
         sets = {}
         for kind, shading in shadings.items():
-            sets[kind] = _core.TetMethodSet(space, points, shading)
+            sets[kind] = _baselines.TetMethodSet(space, points, shading)
             sets[kind].reset(np.ascontiguousarray(path[0]))
         row = {"example": name, "tets": space.tet_count, "source_triangles": len(source.triangles)}
         cases.append((row, sets, source, path, slide))
@@ -132,67 +132,3 @@ def economy_never_worse(economy_rows: list[dict]) -> list[tuple[str, bool]]:
         )
         out.append((f"{r['example']} {r['variant']}", ok))
     return out
-
-
-def target_line(rows: list[dict], economy_rows: list[dict]) -> list[str]:
-    """The issue-8 target, as measured: shading never worse than the plain proxy."""
-    if not rows:
-        return []
-    scenes = [(r["example"], r["never_worse"]) for r in rows]
-    variants = economy_never_worse(economy_rows)
-    failed = [name for name, ok in scenes + variants if not ok]
-    return [
-        f"- Force shading never worse than the plain proxy (issue 8; mean and p95 direction "
-        f"error, shading from the scene's own surface and from the source): "
-        f"{sum(ok for _, ok in scenes)} of {len(scenes)} example scenes, "
-        f"{sum(ok for _, ok in variants)} of {len(variants)} mesh-economy variants of the "
-        f"examples ({'met' if not failed else 'NOT met: ' + ', '.join(failed)})."
-    ]
-
-
-def section(rows: list[dict]) -> list[str]:
-    if not rows:
-        return []
-    from hapticut.evaluation.report import markdown_table
-
-    columns = [("example", "example"), ("tets", "tets")]
-    for kind, title in ((PLAIN, "plain"), (OWN, "own surface"), (SOURCE, "source")):
-        columns += [
-            (f"{kind}_dir_err_smooth_mean_deg", f"{title} mean deg"),
-            (f"{kind}_dir_err_smooth_p95_deg", "p95"),
-        ]
-    columns += [
-        (f"{PLAIN}_ns_per_update", "plain ns"),
-        (f"{OWN}_ns_per_update", "own ns"),
-        (f"{SOURCE}_ns_per_update", "source ns"),
-        ("never_worse", "never worse"),
-    ]
-    gains = [
-        r[f"{PLAIN}_dir_err_smooth_mean_deg"] - r[f"{kind}_dir_err_smooth_mean_deg"]
-        for r in rows
-        for kind in (OWN, SOURCE)
-    ]
-    cost = [
-        r[f"{kind}_ns_per_update"] - r[f"{PLAIN}_ns_per_update"]
-        for r in rows
-        for kind in (OWN, SOURCE)
-    ]
-    return [
-        "### Force shading on the example scenes",
-        "The committed scenes (`examples/*.hapticut.msgpack`), every rigid material rigid "
-        "and every other free; strokes as in the examples' economy below (8 presses, 2 mm, "
-        "the finger's bones 1 mm, then 0.5 s of sliding at 100 mm/s, 1 kHz); the error is "
-        "against the smooth normal of the source surface the scene was built from, at the "
-        "closest source point to the proxy. `own surface`: `ForceShading(space)`, normals "
-        "from the scene's own rigid surface (what a servo has on an exported scene); "
-        "`source`: `ForceShading(space, source)`. Both smooth the normals they interpolate "
-        "at the scale of the rigid surface's facets and keep creases of 45 degrees or more "
-        '(docs/decisions.md, "Force shading: nearest source and smoothed normals"). '
-        "`never worse`: both kinds of shading at or below the plain proxy, mean and p95.",
-        "",
-        markdown_table(rows, columns),
-        "",
-        f"Shading lowers the mean error by {min(gains):.2f} to {max(gains):.2f} deg on these "
-        f"scenes, for {min(cost):.0f} to {max(cost):.0f} ns more per point update.",
-        "",
-    ]
