@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 
@@ -48,6 +49,13 @@ def test_mesh_then_info_on_two_nested_spheres(tmp_path):
         assert f"{name}" in info.stdout and str(count) in info.stdout
     assert "min dihedral" in info.stdout and "tets per edge max" in info.stdout
     assert "drag (drag_distance_mm=0.5)" in info.stdout
+    # Every build step with its share of the build, the labelling's included.
+    label = re.search(r"label (\d+\.\d+) s = (\d+\.\d) %", info.stdout)
+    assert label, info.stdout
+    timings = scene.metadata["build_report"]["timings_s"]
+    assert float(label.group(2)) == pytest.approx(
+        100 * timings["label"] / timings["total"], abs=0.06
+    )
 
 
 def test_info_prints_table3_beside_the_paper_for_the_spheres():

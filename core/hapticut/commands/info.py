@@ -130,10 +130,15 @@ def format_build_report(build: dict) -> list[str]:
         )
     timings = build.get("timings_s")
     if timings:
+        total = timings.get("total", 0.0)
+
+        def step(name: str, seconds: float) -> str:
+            share = f" = {100.0 * seconds / total:.1f} %" if total > 0 else ""
+            return f"{name} {seconds:.2f} s{share}"
+
         lines.append(
-            "  build time "
-            + f"{timings.get('total', 0):.2f} s ("
-            + ", ".join(f"{k} {v:.2f}" for k, v in timings.items() if k != "total")
+            f"  build time {total:.2f} s ("
+            + ", ".join(step(k, v) for k, v in timings.items() if k != "total")
             + ")"
         )
     return lines
