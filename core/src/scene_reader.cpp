@@ -14,6 +14,7 @@
 
 #include "hapticut/material_table.h"
 #include "hapticut/parameter_range.h"
+#include "hapticut/tet_mesh.h"
 #include "scene_values.h"
 
 namespace hapticut {
@@ -23,10 +24,6 @@ using namespace scene_values;  // NOLINT(google-build-using-namespace): the read
 namespace {
 
 constexpr std::int64_t kMaxInt32 = std::numeric_limits<std::int32_t>::max();
-// Same test as TetMesh: a tet with |6 V| below this fraction of (longest edge)^3 has no volume.
-constexpr double kZeroVolumeRatio = 1e-12;
-constexpr std::array<std::array<int, 2>, 6> kTetEdges{
-    {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}}};
 
 void read_header(const Json& root, const Path& root_path) {
   expect_exact_string(required(root, root_path, "format"), Path(root_path, "format"),
@@ -188,20 +185,15 @@ void check_distinct_vertices(const Path& tets_path, const Scene& scene) {
   }
 }
 
-// The arithmetic matches TetMesh::validate_and_orient operation for operation,
-// so both agree on which tets have no volume.
+// The flatness test is TetMesh's own (tet_has_no_volume), so both agree on which tets have
+// no volume.
 std::int64_t check_volumes(const Path& tets_path, Scene& scene, const ReadOptions& options) {
   std::int64_t reoriented = 0;
   for (std::size_t t = 0; t < scene.tets.size(); ++t) {
     auto& tet = scene.tets[t];
     const auto& v = scene.vertices_mm;
-    double longest = 0.0;
-    for (const auto& edge : kTetEdges) {
-      longest = std::max(longest, norm(v[tet[edge[0]]] - v[tet[edge[1]]]));
-    }
-    const Vec3& a = v[tet[0]];
-    const double volume6 = 6.0 * (dot(v[tet[1]] - a, cross(v[tet[2]] - a, v[tet[3]] - a)) / 6.0);
-    if (!(std::abs(volume6) > kZeroVolumeRatio * longest * longest * longest)) {
+    const double volume6 = 6.0 * signed_tet_volume(v[tet[0]], v[tet[1]], v[tet[2]], v[tet[3]]);
+    if (tet_has_no_volume({v[tet[0]], v[tet[1]], v[tet[2]], v[tet[3]]}, volume6)) {
       fail(Path(tets_path, t), "zero volume");
     }
     if (volume6 < 0.0) {

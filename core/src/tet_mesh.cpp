@@ -11,9 +11,6 @@ namespace hapticut {
 
 namespace {
 
-// A tet whose |6 V| is below this fraction of (longest edge)^3 has no volume.
-constexpr double kZeroVolumeRatio = 1e-12;
-
 struct KeyedItem {
   std::array<std::int32_t, 3> key;
   std::int32_t tet;
@@ -60,7 +57,7 @@ TetMesh::TetMesh(std::vector<Vec3> vertices_mm, std::vector<std::array<std::int3
 double TetMesh::signed_volume(std::int32_t t) const {
   const auto& tv = tets_[t];
   const Vec3& a = vertices_[tv[0]];
-  return dot(vertices_[tv[1]] - a, cross(vertices_[tv[2]] - a, vertices_[tv[3]] - a)) / 6.0;
+  return signed_tet_volume(a, vertices_[tv[1]], vertices_[tv[2]], vertices_[tv[3]]);
 }
 
 void TetMesh::validate_and_orient() {
@@ -96,12 +93,9 @@ void TetMesh::validate_and_orient() {
     if (materials_[t] < 0) {
       throw MeshError("tet " + std::to_string(t) + " has negative material index", index);
     }
-    double longest = 0.0;
-    for (const auto& e : kEdgeVertices) {
-      longest = std::max(longest, norm(vertices_[tv[e[0]]] - vertices_[tv[e[1]]]));
-    }
     const double volume6 = 6.0 * signed_volume(static_cast<std::int32_t>(t));
-    if (!(std::abs(volume6) > kZeroVolumeRatio * longest * longest * longest)) {
+    if (tet_has_no_volume({vertices_[tv[0]], vertices_[tv[1]], vertices_[tv[2]], vertices_[tv[3]]},
+                          volume6)) {
       throw MeshError("tet " + std::to_string(t) + " has zero volume", index);
     }
     if (volume6 < 0.0) {

@@ -59,7 +59,7 @@ def test_each_timed_case_is_the_transition_it_names():
 
 def test_closest_points_on_a_sphere_are_exact_and_strokes_follow_it():
     vertices, triangles = meshes.icosphere(80)
-    s = surface.Surface(vertices, triangles)
+    s = surface.SurfaceQueries(vertices, triangles)
     rng = np.random.default_rng(1)
     points = rng.normal(size=(200, 3)) * 40.0
     closest, tri, bary = s.closest(points)

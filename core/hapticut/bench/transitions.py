@@ -19,6 +19,7 @@ import numpy as np
 
 from hapticut import _core
 from hapticut.bench.table import format_table
+from hapticut.scenebuild.geometry import TET_EDGES
 
 S = _core.ProxyState
 FREE = {"name": "air", "model": "free"}
@@ -101,7 +102,7 @@ def _places(setup: Setup, state: str):
             corners = [setup.vertices[tets[t][v]] for v in range(4) if v != f]
             yield S.FACE, t, f, np.mean(corners, axis=0)
     elif state == "EDGE":
-        pairs = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]
+        pairs = TET_EDGES.tolist()
         # The fan's axis (vertices 0 and 1) first: the 12-tet edge of Table 2.
         order = sorted(
             itertools.product(range(len(tets)), range(6)),

@@ -47,6 +47,9 @@ class TetWildParams:
     stop_energy: float = 10.0  # Optimization stops at this conformal AMIPS energy.
     max_opt_iterations: int = 80
     threads: int = 0  # 0: all cores.
+    # fTetWild's own envelope, relative to the input's bounding-box diagonal; when set it is
+    # passed as it is and envelope_mm is not used (the evaluation's meshes are made so).
+    envelope_relative: float | None = None
 
 
 def version() -> str:
@@ -99,7 +102,11 @@ def _run_in_process(vertices, faces, params: TetWildParams, sizing, scratch: str
             return _run_in_process(vertices, faces, params, sizing, scratch)
     wrapper = load_wrapper()
     bg_vertices, bg_tets, bg_values = sizing if sizing is not None else _empty_sizing()
-    diagonal = float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0)))
+    if params.envelope_relative is not None:
+        epsilon = float(params.envelope_relative)
+    else:
+        diagonal = float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0)))
+        epsilon = float(params.envelope_mm) / diagonal  # fTetWild's epsilon is relative.
     previous = os.getcwd()
     os.chdir(scratch)
     try:
@@ -110,7 +117,7 @@ def _run_in_process(vertices, faces, params: TetWildParams, sizing, scratch: str
             not params.simplify,
             0.05,  # Relative edge length; unused, edge_length_abs wins.
             float(params.edge_length_mm),
-            float(params.envelope_mm) / diagonal,  # fTetWild's epsilon is relative.
+            epsilon,
             float(params.stop_energy),
             params.coarsen,
             int(params.threads),

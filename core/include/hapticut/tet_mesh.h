@@ -8,7 +8,9 @@
 //   - tets are stored positively oriented (inverted input is re-oriented).
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <stdexcept>
@@ -26,6 +28,23 @@ inline constexpr std::int32_t kNoTet = -1;
 
 inline constexpr std::array<std::array<int, 2>, 6> kEdgeVertices{
     {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}}};
+
+// The signed volume of the tet (a, b, c, d): positive when d lies on the side
+// that (b - a) x (c - a) points to.
+inline double signed_tet_volume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  return dot(b - a, cross(c - a, d - a)) / 6.0;
+}
+
+// The one flatness test of tets (the mesh and the scene reader): a tet whose
+// |6 V| is not above this fraction of (longest edge)^3 has no volume (NaN neither).
+inline constexpr double kZeroVolumeRatio = 1e-12;
+inline bool tet_has_no_volume(const std::array<Vec3, 4>& corners, double volume6) {
+  double longest = 0.0;
+  for (const auto& e : kEdgeVertices) {
+    longest = std::max(longest, norm(corners[e[0]] - corners[e[1]]));
+  }
+  return !(std::abs(volume6) > kZeroVolumeRatio * longest * longest * longest);
+}
 // The two faces that contain local edge e (the faces opposite the other two vertices).
 inline constexpr std::array<std::array<int, 2>, 6> kEdgeFaces{
     {{2, 3}, {1, 3}, {1, 2}, {0, 3}, {0, 2}, {0, 1}}};

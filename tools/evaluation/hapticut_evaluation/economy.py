@@ -162,7 +162,7 @@ def example_source(module, name: str):
     regions, _ = _example_regions(module, name)
     rigid_regions = [r for r in regions if r.material.model == "rigid"]
     offsets = np.cumsum([0] + [len(r.vertices) for r in rigid_regions[:-1]])
-    return surface.Surface(
+    return surface.SurfaceQueries(
         np.vstack([r.vertices for r in rigid_regions]),
         np.vstack([r.faces + o for r, o in zip(rigid_regions, offsets, strict=True)]),
     )

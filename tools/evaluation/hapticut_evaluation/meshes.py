@@ -3,17 +3,14 @@ the paper's fans (reference meshes), cached as .npz inside the output folder."""
 
 from __future__ import annotations
 
-import contextlib
-import importlib.machinery
-import importlib.util
 import os
-import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from hapticut import _core, shapes
+from hapticut.scenebuild import tetwild
 from hapticut.scenebuild.geometry import enclosure_surface
 
 SPHERE_RADIUS_MM = 30.0
@@ -72,24 +69,6 @@ def cube_surface(half_mm: float) -> tuple[np.ndarray, np.ndarray]:
     return vertices, faces.astype(np.int32)
 
 
-def _tetwild_module():
-    """pytetwild's native wrapper without its package __init__ (which imports pyvista)."""
-    spec = importlib.util.find_spec("pytetwild")
-    if spec is None or not spec.submodule_search_locations:
-        raise RuntimeError("pytetwild is not installed (pip install 'hapticut[build]')")
-    folder = Path(next(iter(spec.submodule_search_locations)))
-    library = next(folder.glob("PyfTetWildWrapper*.so"), None) or next(
-        folder.glob("PyfTetWildWrapper*.pyd"), None
-    )
-    if library is None:
-        raise RuntimeError(f"pytetwild's native wrapper not found in {folder}")
-    loader = importlib.machinery.ExtensionFileLoader("PyfTetWildWrapper", str(library))
-    module_spec = importlib.util.spec_from_loader("PyfTetWildWrapper", loader)
-    module = importlib.util.module_from_spec(module_spec)
-    loader.exec_module(module)
-    return module
-
-
 def tetrahedralize(
     vertices: np.ndarray,
     triangles: np.ndarray,
@@ -101,31 +80,14 @@ def tetrahedralize(
 ) -> tuple[np.ndarray, np.ndarray]:
     """fTetWild on a surface (the union of closed shells); returns vertices and tets.
     bg = (vertices, tets, edge lengths) gives a sizing field (adaptive sizing)."""
-    wrapper = _tetwild_module()
-    bg_v, bg_t, bg_s = (
-        bg if bg is not None else (np.zeros((0, 3)), np.zeros((0, 4), np.int32), np.zeros(0))
+    params = tetwild.TetWildParams(
+        edge_length_mm=float(edge_length_mm),
+        envelope_mm=0.0,  # Not used: the envelope is given relative, as fTetWild takes it.
+        simplify=False,
+        threads=threads,
+        envelope_relative=float(epsilon),
     )
-    with tempfile.TemporaryDirectory() as folder, contextlib.chdir(folder):
-        out_v, out_t = wrapper.tetrahedralize_mesh(
-            np.ascontiguousarray(vertices, np.float64),
-            np.ascontiguousarray(triangles, np.uint32),
-            True,
-            True,
-            0.05,
-            float(edge_length_mm),
-            float(epsilon),
-            10.0,
-            False,
-            threads,
-            80,
-            6,
-            True,
-            False,
-            False,
-            np.ascontiguousarray(bg_v, np.float64),
-            np.ascontiguousarray(bg_t, np.int32),
-            np.ascontiguousarray(bg_s, np.float64),
-        )
+    out_v, out_t = tetwild.tetrahedralize(vertices, triangles, params, bg)
     return np.ascontiguousarray(out_v, np.float64), np.ascontiguousarray(out_t, np.int32)
 
 

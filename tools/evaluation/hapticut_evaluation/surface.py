@@ -15,8 +15,10 @@ CHUNK_PAIRS = 4_000_000
 
 
 @dataclass
-class Surface:
-    """A closed triangle surface wound outward, with what the queries need."""
+class SurfaceQueries:
+    """What the evaluation asks of a closed triangle surface wound outward (closest points,
+    facet and vertex normals), precomputed; the surface itself is the product's
+    `hapticut.scenebuild.geometry.Surface` (vertices and faces)."""
 
     vertices: np.ndarray  # (V, 3)
     triangles: np.ndarray  # (T, 3)
@@ -168,7 +170,7 @@ def _corner(i: int):
 
 
 def strokes(
-    surface: Surface,
+    surface: SurfaceQueries,
     dt_s: float,
     *,
     points: int = 8,
@@ -209,7 +211,9 @@ def strokes(
     return np.ascontiguousarray(path), slide
 
 
-def contact_metrics(surface: Surface, mask: np.ndarray, q: np.ndarray, force: np.ndarray) -> dict:
+def contact_metrics(
+    surface: SurfaceQueries, mask: np.ndarray, q: np.ndarray, force: np.ndarray
+) -> dict:
     """Force-direction error (degrees) over the `mask` ticks against the source's
     normal at the closest source point to the proxy: its facet normal, and its
     smooth normal (vertex normals interpolated). Ticks without force are skipped."""
