@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import copy
-import itertools
 import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from hapticut.scenebuild.geometry import tet_signed_volumes
+from hapticut.scenebuild.geometry import kuhn_grid
 from hapticut.scenefile import Material, Scene
 
 DATA_DIR = Path(__file__).resolve().parents[1] / "data"
@@ -56,27 +55,8 @@ def grid_scene(cells_per_side: int) -> Scene:
     """A box of unit cubes, 6 positively oriented Kuhn tets each (6 n^3 tets), two materials
     in alternating layers of cells."""
     n = cells_per_side
-    axis = np.arange(n + 1, dtype=np.float64)
-    x, y, z = np.meshgrid(axis, axis, axis, indexing="ij")
-    vertices = np.stack([x.ravel(), y.ravel(), z.ravel()], axis=1)
-    i, j, k = (a.ravel() for a in np.meshgrid(*(np.arange(n),) * 3, indexing="ij"))
-
-    def vertex_index(cell: list[np.ndarray]) -> np.ndarray:
-        return (cell[0] * (n + 1) + cell[1]) * (n + 1) + cell[2]
-
-    blocks = []
-    for axes in itertools.permutations(range(3)):
-        corner = [i.copy(), j.copy(), k.copy()]
-        path = [vertex_index(corner)]
-        for a in axes:
-            corner[a] = corner[a] + 1
-            path.append(vertex_index(corner))
-        blocks.append(np.stack(path, axis=1))
-    tets = np.concatenate(blocks)
-    volume6 = tet_signed_volumes(vertices, tets)
-    inverted = volume6 < 0
-    tets[inverted, 2], tets[inverted, 3] = tets[inverted, 3], tets[inverted, 2]
-    layer = np.tile(k, 6) % 2
+    vertices, tets = kuhn_grid(np.zeros(3), np.full(3, float(n)), (n, n, n))
+    layer = np.floor(vertices[tets].mean(axis=1)[:, 2]).astype(np.int64) % 2
     return Scene(
         materials=[Material("air", "free"), Material("flesh", "drag", drag_distance_mm=1.0)],
         vertices=vertices,

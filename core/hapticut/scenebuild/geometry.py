@@ -215,26 +215,16 @@ def enclosure_planes(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarra
 
 
 def kuhn_grid(low: np.ndarray, high: np.ndarray, cells: tuple[int, int, int]):
-    """A box split into cells, 6 tets per cell around its main diagonal (conforming).
+    """A box split into cells, 6 positive tets per cell around its main diagonal (conforming):
+    the engine's reference grid (``hapticut._core.grid_mesh``, ``reference_meshes.cpp``).
 
     Returns (vertices ((nx+1)(ny+1)(nz+1), 3), tets (6 nx ny nz, 4) int32).
     """
-    nx, ny, nz = cells
-    axes = [np.linspace(low[i], high[i], n + 1) for i, n in enumerate(cells)]
-    vertices = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-    index = np.arange(len(vertices)).reshape(nx + 1, ny + 1, nz + 1)
-    corners = np.stack(
-        [
-            index[i : i + nx, j : j + ny, k : k + nz].ravel()
-            for i in (0, 1)
-            for j in (0, 1)
-            for k in (0, 1)
-        ],
-        axis=1,
-    )  # Corner 4i + 2j + k of each cell; corners 0 and 7 are the diagonal.
-    paths = ((0, 1, 3, 7), (0, 1, 5, 7), (0, 2, 3, 7), (0, 2, 6, 7), (0, 4, 5, 7), (0, 4, 6, 7))
-    tets = np.concatenate([corners[:, list(path)] for path in paths]).astype(np.int32)
-    return vertices, orient_tets(vertices, tets)
+    from hapticut import _core
+
+    axes = [np.linspace(low[i], high[i], n + 1).tolist() for i, n in enumerate(cells)]
+    vertices, tets = _core.grid_mesh(*axes)
+    return np.asarray(vertices, dtype=np.float64), np.asarray(tets, dtype=np.int32)
 
 
 def point_segment_distance(points: np.ndarray, start: np.ndarray, end: np.ndarray) -> np.ndarray:
