@@ -7,13 +7,15 @@ namespace hapticut::servo {
 SimDevice::SimDevice(SimPath path, const SimOptions& options)
     : path_(std::move(path)), options_(options), hand_(options.hand_parameters) {}
 
-DeviceLimits SimDevice::limits() const {
+DeviceLimits sim_device_limits(const SimOptions& options) {
   DeviceLimits limits;
   limits.has_force_output = true;
-  limits.max_force_N = options_.max_force_N;
-  limits.max_torque_N_mm = options_.max_torque_N_mm;
+  limits.max_force_N = options.max_force_N;
+  limits.max_torque_N_mm = options.max_torque_N_mm;
   return limits;
 }
+
+DeviceLimits SimDevice::limits() const { return sim_device_limits(options_); }
 
 void SimDevice::start() {
   started_ = false;

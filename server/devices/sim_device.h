@@ -41,6 +41,9 @@ struct SimOptions {
   int far_ticks = 1;
 };
 
+// A sim device's limits with these options (force output, no stiffness limit).
+DeviceLimits sim_device_limits(const SimOptions& options);
+
 class SimDevice : public Device {
  public:
   SimDevice(SimPath path, const SimOptions& options);
