@@ -18,6 +18,7 @@ from . import (
     baking,
     build_job,
     building,
+    device_list,
     live_draw,
     live_session,
     preferences,
@@ -81,20 +82,45 @@ def start(context) -> live_session.Session:
     return _session
 
 
-def _devices(scene, mode: str, custom: str) -> list[str]:
-    texts = []
-    for obj in scene_objects(scene, "BLADE"):
-        kind = {
-            "VIEWPORT": "viewport",
-            "SIM": "sim",
-            "BLADES": obj.hapticut.device,
-            "CUSTOM": custom,
-        }[mode]
-        texts.append(f"{obj.name}={kind}")
-    return texts
+def refresh_devices(context) -> dict:
+    """*Refresh devices*: run the servo's listing (at most device_list.LIST_TIMEOUT_S); the
+    panel shows a failure (SessionError)."""
+    live = context.scene.hapticut_live
+    try:
+        listing = device_list.refresh(link(context).servo)
+    except (live_session.SessionError, device_list.DeviceListError) as error:
+        live.device_error = f"devices not listed: {error}"
+        raise live_session.SessionError(live.device_error) from None
+    live.device_error = ""
+    return listing
 
 
-def _settings(live) -> dict:
+def devices(scene) -> list[str]:
+    """The ``--device`` texts of the scene's blades (NAME=BINDING) for the panel's choice."""
+    live = scene.hapticut_live
+    chosen = device_list.binding(live.device_choice, live.bridge_port, live.custom_device)
+    return [f"{obj.name}={chosen or obj.hapticut.device}" for obj in scene_objects(scene, "BLADE")]
+
+
+def check_limits(context, bindings: list[str], settings: dict) -> None:
+    """Refuse settings above a bound device's limits (SessionError naming blade, device and
+    limit); the listing is read first if it was not yet."""
+    if not settings:
+        return
+    listing = device_list.cached()
+    if listing is None:
+        listing = refresh_devices(context)
+    problems = []
+    for text in bindings:
+        name, _, device = text.partition("=")
+        limits = device_list.limits_for(listing, device)
+        found = device_list.settings_problems(settings, limits)
+        problems += [f"{name} ({device}): {problem}" for problem in found]
+    if problems:
+        raise live_session.SessionError("; ".join(problems) + " (lower it in the panel)")
+
+
+def requested_settings(live) -> dict:
     settings = {}
     if live.stiffness_N_per_mm > 0:
         settings["stiffness_N_per_mm"] = live.stiffness_N_per_mm
@@ -123,16 +149,16 @@ def go_live(context) -> None:
     """Start (if needed) and run the scene with the panel's devices and settings."""
     scene = context.scene
     live = scene.hapticut_live
+    bindings, settings = devices(scene), requested_settings(live)
+    try:
+        check_limits(context, bindings, settings)
+    except live_session.SessionError as error:
+        live.error = str(error)
+        raise
     session = _ensure_session(context)
     path, preview = _built_scene(scene)
     try:
-        live_session.run(
-            session,
-            path,
-            _devices(scene, live.device_mode, live.custom_device),
-            live.rate_Hz,
-            settings=_settings(live),
-        )
+        live_session.run(session, path, bindings, live.rate_Hz, settings=settings)
     except live_session.SessionError as error:
         live.error = str(error)
         raise
@@ -180,25 +206,26 @@ def simulate(context) -> dict:
     path, preview = _built_scene(scene)
     blades = scene_objects(scene, "BLADE")
     folder = os.path.join(build_job.work_directory(scene, bpy.data.filepath), "stroke")
-    devices = []
+    bindings = []
     for obj in blades:
         poses = stroke_path.sample_poses(scene, obj, live.rate_Hz)
         file = stroke_path.write_path(poses, os.path.join(folder, f"{obj.name}.path.json"))
         if "," in file or "=" in obj.name:
             raise live_session.SessionError(f"{obj.name}: the path {file} cannot hold ',' ")
         hand = 1 if live.simulated_hand else 0
-        devices.append(f"{obj.name}=sim:{file},hand={hand},hold_s=0")
+        bindings.append(f"{obj.name}=sim:{file},hand={hand},hold_s=0")
     sampled = time.perf_counter()
+    check_limits(context, bindings, requested_settings(live))
     session = _ensure_session(context)
     record = os.path.join(folder, "stroke.rec")
     live_session.run(
         session,
         path,
-        devices,
+        bindings,
         live.rate_Hz,
         as_fast_as_possible=True,
         record_path=record,
-        settings=_settings(live),
+        settings=requested_settings(live),
         engage=True,
     )
     session.preview_path = live.preview_path = preview
