@@ -66,7 +66,7 @@ def run_listing(servo: str, timeout_s: float | None = None) -> dict:
         )
     except subprocess.TimeoutExpired:
         raise DeviceListError(
-            f"{servo} --list-devices did not answer within {timeout_s:g} s"
+            f"{servo} --list-devices did not answer within {timeout_s:.3g} s"
         ) from None
     except OSError as error:
         raise DeviceListError(f"cannot run {servo}: {error}") from None

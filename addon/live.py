@@ -50,9 +50,9 @@ def _scene():
     return bpy.data.scenes.get(_scene_name) if _scene_name else None
 
 
-def link(context=None):
+def link(context=None, timeout_s: float = toolkit.QUICK_TIMEOUT_S):
     try:
-        return toolkit_link.link(preferences.executable(context))
+        return toolkit_link.link(preferences.executable(context), timeout_s=timeout_s)
     except toolkit.ToolkitError as error:
         raise live_session.SessionError(str(error)) from None
 
@@ -83,11 +83,14 @@ def start(context) -> live_session.Session:
 
 
 def refresh_devices(context) -> dict:
-    """*Refresh devices*: run the servo's listing (at most device_list.LIST_TIMEOUT_S); the
-    panel shows a failure (SessionError)."""
+    """*Refresh devices*: run the servo's listing; the panel shows a failure (SessionError).
+    Everything it waits for (asking the toolkit for its servo the first time, then the
+    listing) is bounded by device_list.LIST_TIMEOUT_S together."""
     live = context.scene.hapticut_live
+    deadline = time.monotonic() + device_list.LIST_TIMEOUT_S
     try:
-        listing = device_list.refresh(link(context).servo)
+        servo = link(context, timeout_s=device_list.LIST_TIMEOUT_S).servo
+        listing = device_list.refresh(servo, max(0.1, deadline - time.monotonic()))
     except (live_session.SessionError, device_list.DeviceListError) as error:
         live.device_error = f"devices not listed: {error}"
         raise live_session.SessionError(live.device_error) from None

@@ -181,6 +181,16 @@ def test_a_servo_that_fails_to_list_is_said_so_in_the_panel(scene, tmp_path, mon
     with pytest.raises(RuntimeError, match="devices not listed"):
         bpy.ops.hapticut.go_live()
     settings.stiffness_N_per_mm = 0.0
+    # A toolkit that hangs when asked where its servo is: the same bound.
+    monkeypatch.setattr(toolkit_link, "_link", None)
+    prefs = bpy.context.preferences.addons[blender_scene.ADDON_MODULE].preferences
+    saved, prefs.toolkit_path = prefs.toolkit_path, script(tmp_path, "toolkit", "exec sleep 30")
+    try:
+        with pytest.raises(RuntimeError, match="devices not listed: hapticut paths"):
+            bpy.ops.hapticut.refresh_devices()
+        assert "timed out after 0.5 seconds" in settings.device_error, settings.device_error
+    finally:
+        prefs.toolkit_path = saved
     monkeypatch.undo()
     assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
     assert settings.device_error == ""
