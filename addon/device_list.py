@@ -185,7 +185,8 @@ def _number(options: dict, key: str, default: float) -> float:
 
 def limits_for(listing: dict, device_text: str) -> dict:
     """The limits of the device a ``--device`` text binds, with its limit options applied
-    (sim's max_force_N, the bridge's max_force, max_torque, max_stiffness); {} when the
+    (sim's max_force_N, max_torque_N_mm, max_stiffness_N_per_mm, the bridge's max_force,
+    max_torque, max_stiffness); {} when the
     listing does not know them (a profile file, replay, an unknown kind)."""
     kind, _, args = device_text.strip().partition(":")
     bare, options = _options(args)
@@ -201,6 +202,9 @@ def limits_for(listing: dict, device_text: str) -> dict:
     if kind == "sim" and limits:
         limits["max_force_N"] = _number(options, "max_force_N", limits["max_force_N"])
         limits["max_torque_N_mm"] = _number(options, "max_torque_N_mm", limits["max_torque_N_mm"])
+        limits["max_stiffness_N_per_mm"] = _number(
+            options, "max_stiffness_N_per_mm", limits.get("max_stiffness_N_per_mm", 0.0)
+        )
     elif kind == "bridge" and limits:
         for key, name in (
             ("max_force", "max_force_N"),
@@ -219,15 +223,27 @@ CHECKED = (
 )
 
 
-def settings_problems(settings: dict, limits: dict) -> list[str]:
+# The rate a device's max_stiffness_N_per_mm is stated for; below it the servo lowers the
+# limit in proportion (docs/servo.md, "Stiffness limit").
+STIFFNESS_LIMIT_RATE_HZ = 1000.0
+
+
+def settings_problems(settings: dict, limits: dict, rate_Hz: float = 1000.0) -> list[str]:
     """What of the settings (as sent to the servo's ``set``) lies above the device's limits.
     Only known limits count: a force limit where the device renders force, a stiffness
-    limit where its profile gives one (0: none known)."""
+    limit where its profile gives one (0: none known), scaled as the servo scales it at a
+    rate below 1 kHz (limit x rate / 1000)."""
     problems = []
     for setting, limit, name, unit in CHECKED:
         value, bound = settings.get(setting, 0.0), limits.get(limit, 0.0)
+        at_rate = ""
+        if setting == "stiffness_N_per_mm" and 0 < rate_Hz < STIFFNESS_LIMIT_RATE_HZ:
+            bound *= rate_Hz / STIFFNESS_LIMIT_RATE_HZ
+            at_rate = f" at {rate_Hz:g} Hz"
         if setting != "stiffness_N_per_mm" and not limits.get("has_force_output"):
             continue
         if value > 0 and bound > 0 and value > bound:
-            problems.append(f"{name} {value:g} {unit} is above the device's {bound:g} {unit}")
+            problems.append(
+                f"{name} {value:g} {unit} is above the device's {bound:g} {unit}{at_rate}"
+            )
     return problems

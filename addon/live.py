@@ -105,9 +105,9 @@ def devices(scene) -> list[str]:
     return [f"{obj.name}={chosen or obj.hapticut.device}" for obj in scene_objects(scene, "BLADE")]
 
 
-def check_limits(context, bindings: list[str], settings: dict) -> None:
-    """Refuse settings above a bound device's limits (SessionError naming blade, device and
-    limit); the listing is read first if it was not yet."""
+def check_limits(context, bindings: list[str], settings: dict, rate_Hz: float = 1000.0) -> None:
+    """Refuse settings above a bound device's limits at the servo's rate (SessionError naming
+    blade, device and limit); the listing is read first if it was not yet."""
     if not settings:
         return
     listing = device_list.cached()
@@ -117,7 +117,7 @@ def check_limits(context, bindings: list[str], settings: dict) -> None:
     for text in bindings:
         name, _, device = text.partition("=")
         limits = device_list.limits_for(listing, device)
-        found = device_list.settings_problems(settings, limits)
+        found = device_list.settings_problems(settings, limits, rate_Hz)
         problems += [f"{name} ({device}): {problem}" for problem in found]
     if problems:
         raise live_session.SessionError("; ".join(problems) + " (lower it in the panel)")
@@ -154,7 +154,7 @@ def go_live(context) -> None:
     live = scene.hapticut_live
     bindings, settings = devices(scene), requested_settings(live)
     try:
-        check_limits(context, bindings, settings)
+        check_limits(context, bindings, settings, live.rate_Hz)
     except live_session.SessionError as error:
         live.error = str(error)
         raise
@@ -218,7 +218,7 @@ def simulate(context) -> dict:
         hand = 1 if live.simulated_hand else 0
         bindings.append(f"{obj.name}=sim:{file},hand={hand},hold_s=0")
     sampled = time.perf_counter()
-    check_limits(context, bindings, requested_settings(live))
+    check_limits(context, bindings, requested_settings(live), live.rate_Hz)
     session = _ensure_session(context)
     record = os.path.join(folder, "stroke.rec")
     live_session.run(

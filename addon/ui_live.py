@@ -86,7 +86,8 @@ def draw_device(layout, settings) -> None:
         layout.label(text="device limits: Refresh devices to read them", icon="INFO")
         return
     layout.label(text=f"device limits: {device_list.limits_text(limits)}")
-    for problem in device_list.settings_problems(live.requested_settings(settings), limits):
+    requested = live.requested_settings(settings)
+    for problem in device_list.settings_problems(requested, limits, settings.rate_Hz):
         layout.label(text=f"{problem}: Go Live refuses it", icon="ERROR")
 
 

@@ -77,7 +77,7 @@ double stiffness_limit(const DeviceLimits& device, double rate_Hz);
 // when a limit is known (limit > 0). Never raises it.
 inline double stiffness_in_force(double requested_N_per_mm, double limit_N_per_mm) {
   return limit_N_per_mm > 0.0 && requested_N_per_mm > limit_N_per_mm ? limit_N_per_mm
-                                                                      : requested_N_per_mm;
+                                                                     : requested_N_per_mm;
 }
 
 struct SafetyOutput {

@@ -268,9 +268,8 @@ nlohmann::json Servo::stats_locked() const {
            {"device_error", b.device->last_error()},
            {"passivity", b.passivity},
            {"stiffness_N_per_mm",
-            has_settings
-                ? stiffness_in_force(settings.stiffness_N_per_mm, b.max_stiffness_N_per_mm)
-                : 0.0},
+            has_settings ? stiffness_in_force(settings.stiffness_N_per_mm, b.max_stiffness_N_per_mm)
+                         : 0.0},
            {"max_stiffness_N_per_mm", b.max_stiffness_N_per_mm},
            {"device_status", has ? status_name(report.device_status) : "none"},
            {"flags", flag_names(report.flags)},

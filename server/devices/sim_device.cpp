@@ -68,8 +68,9 @@ void SimDevice::write(const Vec3& force_N, const Vec3& /*torque_N_mm*/) {
 
 std::unique_ptr<Device> make_sim_device(const DeviceSpec& spec, const DeviceContext& context) {
   spec.check_options({"stroke", "speed", "hand", "mass_kg", "damping_N_s_per_mm", "spring_N_per_mm",
-                      "max_force_N", "max_torque_N_mm", "max_stiffness_N_per_mm", "hold_s", "fail_at_s", "recover_at_s",
-                      "nan_at_s", "nan_ticks", "far_at_s", "far_ticks"});
+                      "max_force_N", "max_torque_N_mm", "max_stiffness_N_per_mm", "hold_s",
+                      "fail_at_s", "recover_at_s", "nan_at_s", "nan_ticks", "far_at_s",
+                      "far_ticks"});
   SimOptions options;
   options.hand = spec.number("hand", 1.0) != 0.0;
   options.hand_parameters.mass_kg = spec.number("mass_kg", options.hand_parameters.mass_kg);

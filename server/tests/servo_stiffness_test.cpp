@@ -81,9 +81,10 @@ TEST(ServoStiffness, SetAboveTheLimitIsRefusedBelowItTaken) {
   EXPECT_EQ(command_error(servo, {{"type", "set"}, {"max_transitions_per_tick", 32}}), "");
   const std::string refused = command_error(
       servo, {{"type", "set"}, {"stiffness_N_per_mm", 0.2}, {"max_transitions_per_tick", 8}});
-  EXPECT_EQ(refused, "stiffness_N_per_mm: 0.2 N/mm is above the limit of 0.05 N/mm of blade "
-                     "'scalpel''s device '" +
-                         kLimitedSim + "'; nothing applied");
+  EXPECT_EQ(refused,
+            "stiffness_N_per_mm: 0.2 N/mm is above the limit of 0.05 N/mm of blade "
+            "'scalpel''s device '" +
+                kLimitedSim + "'; nothing applied");
   status = servo.status();
   EXPECT_EQ(status["settings"]["max_transitions_per_tick"], 32);  // Nothing of it applied.
   EXPECT_EQ(status["blades"][0]["stiffness_N_per_mm"], 0.05);

@@ -129,6 +129,15 @@ def test_settings_above_the_devices_limits_are_refused(scene):
     settings.stiffness_N_per_mm = 0.5 * bridge["max_stiffness_N_per_mm"]
     live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
     assert not any("Go Live refuses it" in text for text in panel_texts())
+    # Below 1 kHz the servo lowers the stiffness limit by rate / 1000: so does the check.
+    settings.rate_Hz = 500.0
+    settings.stiffness_N_per_mm = 0.75 * bridge["max_stiffness_N_per_mm"]
+    half = 0.5 * bridge["max_stiffness_N_per_mm"]
+    with pytest.raises(RuntimeError, match=f"above the device's {half:g} N/mm at 500 Hz"):
+        bpy.ops.hapticut.go_live()
+    assert any("Go Live refuses it" in text for text in panel_texts())
+    settings.rate_Hz = 1000.0
+    live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
     # A bridge bound with a lower limit of its own: that one counts.
     settings.device_mode = "CUSTOM"
     lower = 0.25 * bridge["max_stiffness_N_per_mm"]
