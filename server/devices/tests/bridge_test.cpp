@@ -1,12 +1,12 @@
 // The UDP bridge: its datagrams byte by byte, and the bridge device against
 // examples/bridge_example.py over loopback (a bridge that runs, goes silent,
 // sends garbage).
-#include <gtest/gtest.h>
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <poll.h>
-#include <spawn.h>
 #include <signal.h>
+#include <spawn.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <time.h>
