@@ -18,6 +18,7 @@ from . import (
     baking,
     build_job,
     building,
+    device_list,
     live_draw,
     live_session,
     preferences,
@@ -49,9 +50,9 @@ def _scene():
     return bpy.data.scenes.get(_scene_name) if _scene_name else None
 
 
-def link(context=None):
+def link(context=None, timeout_s: float = toolkit.QUICK_TIMEOUT_S):
     try:
-        return toolkit_link.link(preferences.executable(context))
+        return toolkit_link.link(preferences.executable(context), timeout_s=timeout_s)
     except toolkit.ToolkitError as error:
         raise live_session.SessionError(str(error)) from None
 
@@ -81,20 +82,48 @@ def start(context) -> live_session.Session:
     return _session
 
 
-def _devices(scene, mode: str, custom: str) -> list[str]:
-    texts = []
-    for obj in scene_objects(scene, "BLADE"):
-        kind = {
-            "VIEWPORT": "viewport",
-            "SIM": "sim",
-            "BLADES": obj.hapticut.device,
-            "CUSTOM": custom,
-        }[mode]
-        texts.append(f"{obj.name}={kind}")
-    return texts
+def refresh_devices(context) -> dict:
+    """*Refresh devices*: run the servo's listing; the panel shows a failure (SessionError).
+    Everything it waits for (asking the toolkit for its servo the first time, then the
+    listing) is bounded by device_list.LIST_TIMEOUT_S together."""
+    live = context.scene.hapticut_live
+    deadline = time.monotonic() + device_list.LIST_TIMEOUT_S
+    try:
+        servo = link(context, timeout_s=device_list.LIST_TIMEOUT_S).servo
+        listing = device_list.refresh(servo, max(0.1, deadline - time.monotonic()))
+    except (live_session.SessionError, device_list.DeviceListError) as error:
+        live.device_error = f"devices not listed: {error}"
+        raise live_session.SessionError(live.device_error) from None
+    live.device_error = ""
+    return listing
 
 
-def _settings(live) -> dict:
+def devices(scene) -> list[str]:
+    """The ``--device`` texts of the scene's blades (NAME=BINDING) for the panel's choice."""
+    live = scene.hapticut_live
+    chosen = device_list.binding(live.device_choice, live.bridge_port, live.custom_device)
+    return [f"{obj.name}={chosen or obj.hapticut.device}" for obj in scene_objects(scene, "BLADE")]
+
+
+def check_limits(context, bindings: list[str], settings: dict, rate_Hz: float = 1000.0) -> None:
+    """Refuse settings above a bound device's limits at the servo's rate (SessionError naming
+    blade, device and limit); the listing is read first if it was not yet."""
+    if not settings:
+        return
+    listing = device_list.cached()
+    if listing is None:
+        listing = refresh_devices(context)
+    problems = []
+    for text in bindings:
+        name, _, device = text.partition("=")
+        limits = device_list.limits_for(listing, device)
+        found = device_list.settings_problems(settings, limits, rate_Hz)
+        problems += [f"{name} ({device}): {problem}" for problem in found]
+    if problems:
+        raise live_session.SessionError("; ".join(problems) + " (lower it in the panel)")
+
+
+def requested_settings(live) -> dict:
     settings = {}
     if live.stiffness_N_per_mm > 0:
         settings["stiffness_N_per_mm"] = live.stiffness_N_per_mm
@@ -123,16 +152,16 @@ def go_live(context) -> None:
     """Start (if needed) and run the scene with the panel's devices and settings."""
     scene = context.scene
     live = scene.hapticut_live
+    bindings, settings = devices(scene), requested_settings(live)
+    try:
+        check_limits(context, bindings, settings, live.rate_Hz)
+    except live_session.SessionError as error:
+        live.error = str(error)
+        raise
     session = _ensure_session(context)
     path, preview = _built_scene(scene)
     try:
-        live_session.run(
-            session,
-            path,
-            _devices(scene, live.device_mode, live.custom_device),
-            live.rate_Hz,
-            settings=_settings(live),
-        )
+        live_session.run(session, path, bindings, live.rate_Hz, settings=settings)
     except live_session.SessionError as error:
         live.error = str(error)
         raise
@@ -180,25 +209,26 @@ def simulate(context) -> dict:
     path, preview = _built_scene(scene)
     blades = scene_objects(scene, "BLADE")
     folder = os.path.join(build_job.work_directory(scene, bpy.data.filepath), "stroke")
-    devices = []
+    bindings = []
     for obj in blades:
         poses = stroke_path.sample_poses(scene, obj, live.rate_Hz)
         file = stroke_path.write_path(poses, os.path.join(folder, f"{obj.name}.path.json"))
         if "," in file or "=" in obj.name:
             raise live_session.SessionError(f"{obj.name}: the path {file} cannot hold ',' ")
         hand = 1 if live.simulated_hand else 0
-        devices.append(f"{obj.name}=sim:{file},hand={hand},hold_s=0")
+        bindings.append(f"{obj.name}=sim:{file},hand={hand},hold_s=0")
     sampled = time.perf_counter()
+    check_limits(context, bindings, requested_settings(live), live.rate_Hz)
     session = _ensure_session(context)
     record = os.path.join(folder, "stroke.rec")
     live_session.run(
         session,
         path,
-        devices,
+        bindings,
         live.rate_Hz,
         as_fast_as_possible=True,
         record_path=record,
-        settings=_settings(live),
+        settings=requested_settings(live),
         engage=True,
     )
     session.preview_path = live.preview_path = preview

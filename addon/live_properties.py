@@ -5,16 +5,66 @@ from __future__ import annotations
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, StringProperty
 
-DEVICE_MODES = (
-    ("VIEWPORT", "Viewport", "Move the blade objects in the viewport (grab, rotate, playback)"),
-    ("SIM", "Sim", "The servo's built-in simulated stroke (press, then slide)"),
-    ("BLADES", "Blade devices", "Each blade's own Device field (HID profiles, UDP bridge, ...)"),
-    ("CUSTOM", "Custom", "One --device text for every blade (e.g. sim:path.json)"),
-)
+from . import device_list
+
+# Blender keeps only pointers to the items' strings: every list handed out stays referenced
+# here, one per (listing generation, stored choice missing from it).
+_items_cache: dict[tuple[int, str], list[tuple[str, str, str, int]]] = {}
+
+
+def device_items(settings, _context=None) -> list[tuple[str, str, str, int]]:
+    """The Device menu (device_list.choices of the kept listing); a stored choice the
+    listing does not hold (a file saved with a device not listed yet) stays offered."""
+    stored = settings.device_choice
+    choices = device_list.choices(device_list.cached())
+    missing = "" if any(c.identifier == stored for c in choices) else stored
+    key = (device_list.generation(), missing)
+    if key not in _items_cache:  # Kept for good: a few small lists per Refresh devices.
+        if missing:
+            choices.append(
+                device_list.Choice(missing, f"{missing} (not listed: Refresh devices)", missing)
+            )
+        _items_cache[key] = [
+            (c.identifier, c.label, c.description, i) for i, c in enumerate(choices)
+        ]
+    return _items_cache[key]
+
+
+def _get_device(settings) -> int:
+    items = device_items(settings)
+    return next((i[3] for i in items if i[0] == settings.device_choice), 0)
+
+
+def _set_device(settings, value: int) -> None:
+    items = device_items(settings)
+    settings.device_choice = next((i[0] for i in items if i[3] == value), items[0][0])
+
+
+def choice(settings) -> device_list.Choice:
+    """The chosen menu item (its limits from the kept listing, {} without one)."""
+    choices = device_list.choices(device_list.cached())
+    found = next((c for c in choices if c.identifier == settings.device_choice), None)
+    return found or device_list.Choice(settings.device_choice, settings.device_choice, "")
 
 
 class HAPTICUT_PG_live(bpy.types.PropertyGroup):
-    device_mode: EnumProperty(name="Device", items=DEVICE_MODES, default="VIEWPORT")
+    # The chosen item's identifier (what a .blend keeps; the menu below shows and sets it).
+    device_choice: StringProperty(name="Device choice", default="VIEWPORT")
+    device_mode: EnumProperty(
+        name="Device",
+        items=device_items,
+        get=_get_device,
+        set=_set_device,
+        description="The servo device every blade is bound to (Refresh devices lists them)",
+    )
+    bridge_port: IntProperty(
+        name="Bridge port",
+        default=device_list.BRIDGE_DEFAULT_PORT,
+        min=0,
+        max=65535,
+        description="The UDP bridge's port (bridge:port=N)",
+    )
+    device_error: StringProperty(name="Device listing error")
     custom_device: StringProperty(
         name="Device text",
         description="hapticut-servo --device KIND[:ARGS] for every blade",

@@ -52,14 +52,15 @@ def last_error_line(text: str) -> str:
     return lines[-1] if lines else "(no error message)"
 
 
-def run_quick(executable: str, *args: str) -> str:
-    """A short toolkit command's stdout; ToolkitError with its last error line on failure."""
+def run_quick(executable: str, *args: str, timeout_s: float = QUICK_TIMEOUT_S) -> str:
+    """A short toolkit command's stdout; ToolkitError with its last error line on failure
+    (the child is killed after timeout_s)."""
     try:
         done = subprocess.run(
             [executable, *args],
             capture_output=True,
             text=True,
-            timeout=QUICK_TIMEOUT_S,
+            timeout=timeout_s,
             env=child_environment(),
         )
     except (OSError, subprocess.TimeoutExpired) as error:

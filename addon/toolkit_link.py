@@ -23,8 +23,8 @@ MODULES = ("servo_layout", "servo_client", "recording", "cut_surface")
 _link: SimpleNamespace | None = None
 
 
-def toolkit_paths(executable: str) -> dict:
-    text = toolkit.run_quick(executable, "paths", "--json")
+def toolkit_paths(executable: str, timeout_s: float = toolkit.QUICK_TIMEOUT_S) -> dict:
+    text = toolkit.run_quick(executable, "paths", "--json", timeout_s=timeout_s)
     try:
         return json.loads(text)
     except json.JSONDecodeError as error:
@@ -55,13 +55,15 @@ def _package(directory: str):
     return module
 
 
-def link(executable: str, refresh: bool = False) -> SimpleNamespace:
+def link(
+    executable: str, refresh: bool = False, timeout_s: float = toolkit.QUICK_TIMEOUT_S
+) -> SimpleNamespace:
     """The modules (``link.servo_client``, ...) and ``link.servo`` (the servo executable);
-    toolkit.ToolkitError saying what is missing."""
+    toolkit.ToolkitError saying what is missing. Asks the toolkit once (at most timeout_s)."""
     global _link
     if _link is not None and not refresh:
         return _link
-    found = toolkit_paths(executable)
+    found = toolkit_paths(executable, timeout_s)
     if not found.get("servo"):
         raise toolkit.ToolkitError(found.get("servo_error") or "the toolkit has no servo")
     package = _package(found["package"])

@@ -8,6 +8,7 @@ import bpy
 
 from . import toolkit
 from .report_text import report_lines
+from .ui_common import SidebarPanel, SidebarSubpanel, draw_properties, draw_status
 
 
 class HAPTICUT_UL_objects(bpy.types.UIList):
@@ -30,11 +31,8 @@ class HAPTICUT_UL_objects(bpy.types.UIList):
         return flags, []
 
 
-class HAPTICUT_PT_scene(bpy.types.Panel):
+class HAPTICUT_PT_scene(SidebarPanel, bpy.types.Panel):
     bl_label = "Hapticut"
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "Hapticut"
 
     def draw(self, context):
         layout = self.layout
@@ -51,12 +49,8 @@ class HAPTICUT_PT_scene(bpy.types.Panel):
         layout.operator("hapticut.check_scene", icon="CHECKMARK")
 
 
-class HAPTICUT_PT_object(bpy.types.Panel):
+class HAPTICUT_PT_object(SidebarSubpanel, bpy.types.Panel):
     bl_label = "Object"
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "Hapticut"
-    bl_parent_id = "HAPTICUT_PT_scene"
 
     @classmethod
     def poll(cls, context):
@@ -108,18 +102,17 @@ class HAPTICUT_PT_object(bpy.types.Panel):
                 row.label(text=toolkit.range_text(limits))
 
 
-class HAPTICUT_PT_build(bpy.types.Panel):
+class HAPTICUT_PT_build(SidebarSubpanel, bpy.types.Panel):
     bl_label = "Build"
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "Hapticut"
-    bl_parent_id = "HAPTICUT_PT_scene"
 
     def draw(self, context):
         layout = self.layout
         settings = context.scene.hapticut
-        for name in ("accuracy", "edge_near", "edge_far", "enclosure", "coarsen", "work_directory"):
-            layout.prop(settings, name)
+        draw_properties(
+            layout,
+            settings,
+            ("accuracy", "edge_near", "edge_far", "enclosure", "coarsen", "work_directory"),
+        )
         if settings.running:
             layout.progress(
                 factor=settings.progress,
@@ -129,21 +122,14 @@ class HAPTICUT_PT_build(bpy.types.Panel):
             layout.operator("hapticut.cancel_build", icon="CANCEL")
         else:
             layout.operator("hapticut.tetrahedralize", icon="MESH_ICOSPHERE")
-        if settings.status:
-            layout.label(text=settings.status)
-        if settings.error:
-            layout.label(text=settings.error, icon="ERROR")
+        draw_status(layout, settings.status, settings.error)
         row = layout.row()
         row.operator("hapticut.export_scene", icon="EXPORT")
         row.operator("hapticut.import_scene", icon="IMPORT")
 
 
-class HAPTICUT_PT_report(bpy.types.Panel):
+class HAPTICUT_PT_report(SidebarSubpanel, bpy.types.Panel):
     bl_label = "Report"
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "Hapticut"
-    bl_parent_id = "HAPTICUT_PT_scene"
     bl_options = {"DEFAULT_CLOSED"}
 
     @classmethod

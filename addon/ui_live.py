@@ -7,7 +7,18 @@ import json
 
 import bpy
 
-from . import live, live_draw
+from . import device_list, live, live_draw, live_properties
+from .ui_common import SidebarSubpanel, draw_properties, draw_status
+
+SESSION_SETTINGS = (
+    "rate_Hz",
+    "stiffness_N_per_mm",
+    "force_shading",
+    "max_force_N",
+    "max_torque_N_mm",
+    "port",
+    "realtime",
+)
 
 
 def status_lines(session) -> list[str]:
@@ -54,29 +65,40 @@ def status_lines(session) -> list[str]:
     return lines
 
 
-class HAPTICUT_PT_live(bpy.types.Panel):
+BAKE_SETTINGS = ("simulated_hand", "bake_after_simulate", "arrow_mm_per_N", "substeps")
+
+
+def draw_device(layout, settings) -> None:
+    """The device menu with *Refresh devices*, its options, its limits and what of the
+    settings lies above them (Go Live and Simulate stroke refuse it)."""
+    row = layout.row()
+    row.prop(settings, "device_mode")
+    row.operator("hapticut.refresh_devices", text="", icon="FILE_REFRESH")
+    if settings.device_choice == "CUSTOM":
+        layout.prop(settings, "custom_device")
+    elif settings.device_choice == "BRIDGE":
+        layout.prop(settings, "bridge_port")
+    draw_status(layout, error=settings.device_error)
+    if settings.device_choice in ("BLADES", "CUSTOM"):
+        return
+    limits = live_properties.choice(settings).limits
+    if not limits:
+        layout.label(text="device limits: Refresh devices to read them", icon="INFO")
+        return
+    layout.label(text=f"device limits: {device_list.limits_text(limits)}")
+    requested = live.requested_settings(settings)
+    for problem in device_list.settings_problems(requested, limits, settings.rate_Hz):
+        layout.label(text=f"{problem}: Go Live refuses it", icon="ERROR")
+
+
+class HAPTICUT_PT_live(SidebarSubpanel, bpy.types.Panel):
     bl_label = "Live Session"
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "Hapticut"
-    bl_parent_id = "HAPTICUT_PT_scene"
 
     def draw(self, context):
         layout = self.layout
         settings = context.scene.hapticut_live
-        layout.prop(settings, "device_mode")
-        if settings.device_mode == "CUSTOM":
-            layout.prop(settings, "custom_device")
-        for name in (
-            "rate_Hz",
-            "stiffness_N_per_mm",
-            "force_shading",
-            "max_force_N",
-            "max_torque_N_mm",
-            "port",
-            "realtime",
-        ):
-            layout.prop(settings, name)
+        draw_device(layout, settings)
+        draw_properties(layout, settings, SESSION_SETTINGS)
         session = live.current()
         row = layout.row()
         row.operator("hapticut.start_servo", icon="PLAY")
@@ -88,26 +110,20 @@ class HAPTICUT_PT_live(bpy.types.Panel):
         for line in status_lines(session):
             icon = "ERROR" if line.startswith(("servo lost", "error", "not connected:")) else "NONE"
             layout.label(text=line, icon=icon)
-        if settings.error:
-            layout.label(text=settings.error, icon="ERROR")
+        draw_status(layout, error=settings.error)
         if settings.log_path:
             layout.operator("hapticut.open_servo_log", icon="TEXT")
         if live_draw.handler_added():
             layout.label(text="drawing proxies (cyan), device points (pink), force (yellow)")
 
 
-class HAPTICUT_PT_bake(bpy.types.Panel):
+class HAPTICUT_PT_bake(SidebarSubpanel, bpy.types.Panel):
     bl_label = "Stroke and Bake"
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "Hapticut"
-    bl_parent_id = "HAPTICUT_PT_scene"
 
     def draw(self, context):
         layout = self.layout
         settings = context.scene.hapticut_live
-        for name in ("simulated_hand", "bake_after_simulate", "arrow_mm_per_N", "substeps"):
-            layout.prop(settings, name)
+        draw_properties(layout, settings, BAKE_SETTINGS)
         layout.operator("hapticut.simulate_stroke", icon="ANIM")
         row = layout.row()
         row.operator("hapticut.record_live", icon="REC")

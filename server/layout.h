@@ -73,7 +73,7 @@ inline constexpr std::size_t kMaxFrameBytes = 65507;
   F(std::uint8_t, device_status) /* DeviceStatus: 0 fresh, 1 stale, 2 lost. */         \
   F(std::uint8_t, step_kind)     /* StepKind: 0 none, 1 step, 2 reset + step. */       \
   F(std::uint16_t, max_transitions)                                                    \
-  F(double, stiffness_N_per_mm)    /* k of this tick's settings. */                    \
+  F(double, stiffness_N_per_mm)    /* k stepped with (limited to the device). */       \
   F(std::uint64_t, rejected_ticks) /* Engine counters of the run. */                   \
   F(std::uint64_t, out_of_workspace_ticks)                                             \
   F(std::uint64_t, unfinished_ticks)                                                   \

@@ -13,8 +13,11 @@
 #include "clock.h"
 #include "control_server.h"
 #ifdef HAPTICUT_WITH_DEVICES
+#include "devices/bridge_device.h"
 #include "devices/hid_device.h"
 #endif
+#include "devices/sim_device.h"
+#include "devices/viewport_device.h"
 #include "hapticut/scene_io.h"
 #include "histogram.h"
 #include "layout.h"
@@ -66,11 +69,25 @@ int run_bare_loop(const Options& options) {
   return kExitOk;
 }
 
-// --list-devices: the HID devices hidapi finds, and the profile each matches.
+#ifdef HAPTICUT_WITH_DEVICES
+// The kinds besides hid that --list-devices --json offers, with their default limits.
+std::vector<DeviceKindInfo> other_device_kinds() {
+  const BridgeDeviceOptions bridge;
+  return {{"sim", "sim", sim_device_limits(SimOptions{})},
+          {"viewport", "viewport", viewport_device_limits()},
+          {"bridge", "bridge:port=" + std::to_string(bridge.port), bridge.limits}};
+}
+#endif
+
+// --list-devices: the HID devices hidapi finds, and the profile each matches
+// (--json: with the shipped profiles and the other kinds, and their limits).
 int list_devices(const Options& options) {
 #ifdef HAPTICUT_WITH_DEVICES
   try {
-    std::printf("%s", list_hid_devices_text(options.profiles_dir).c_str());
+    const std::string text = options.json
+                                 ? list_devices_json(options.profiles_dir, other_device_kinds())
+                                 : list_hid_devices_text(options.profiles_dir);
+    std::printf("%s", text.c_str());
     return kExitOk;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "hapticut-servo: --list-devices: %s\n", e.what());

@@ -48,6 +48,8 @@ constexpr const char* kUsage =
     "  --list-devices          list the HID devices hidapi finds, marking those a\n"
     "                          shipped profile matches (\"no HID devices found\" when\n"
     "                          none), and exit\n"
+    "  --json                  with --list-devices: print the devices, the shipped\n"
+    "                          profiles and the other kinds with their limits as JSON\n"
     "  --profiles DIR          device profiles for --list-devices (default: next to\n"
     "                          the binary in the package, or $HAPTICUT_PROFILE_DIR)\n"
     "  --no-realtime           do not ask for SCHED_FIFO\n"
@@ -151,6 +153,8 @@ Options parse_options(int argc, const char* const* argv) {
       }
     } else if (arg == "--list-devices") {
       o.list_devices = true;
+    } else if (arg == "--json") {
+      o.json = true;
     } else if (arg == "--profiles") {
       o.profiles_dir = value();
     } else if (arg == "--no-realtime") {
@@ -173,6 +177,7 @@ Options parse_options(int argc, const char* const* argv) {
       throw UsageError("more than one scene given ('" + o.scene_path + "', '" + arg + "')");
     }
   }
+  if (o.json && !o.list_devices) throw UsageError("--json goes with --list-devices");
   return o;
 }
 

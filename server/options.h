@@ -54,6 +54,7 @@ struct Options {
   bool passivity = true;
   double passivity_delay_ms = 0.0;
   bool list_devices = false;
+  bool json = false;         // --list-devices --json: the machine-readable listing.
   std::string profiles_dir;  // "": find_profile_directory()'s search.
 };
 

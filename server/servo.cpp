@@ -50,6 +50,25 @@ double number_field(const nlohmann::json& message, const char* key) {
   return v.get<double>();
 }
 
+std::string newtons_per_mm(double k) {
+  char text[64];
+  std::snprintf(text, sizeof(text), "%g N/mm", k);
+  return text;
+}
+
+// A binding's stiffness limit for messages: "0.2 N/mm", or at a rate below
+// 1 kHz "0.1 N/mm at 500 Hz (0.2 N/mm at 1 kHz)".
+std::string stiffness_limit_text(const Binding& b, double rate_Hz) {
+  std::string text = newtons_per_mm(b.max_stiffness_N_per_mm);
+  if (rate_Hz < kStiffnessLimitRate_Hz) {
+    char rate[32];
+    std::snprintf(rate, sizeof(rate), "%g Hz", rate_Hz);
+    text += std::string(" at ") + rate + " (" +
+            newtons_per_mm(b.device->limits().max_stiffness_N_per_mm) + " at 1 kHz)";
+  }
+  return text;
+}
+
 }  // namespace
 
 Servo::Servo(const Options& options) : options_(options), shared_(std::make_unique<LoopShared>()) {
@@ -103,6 +122,19 @@ void Servo::load(const SessionConfig& config) {
   recorder_ = std::move(recorder);
   shared_->settings.publish(session_->runtime_settings());  // The scene's, until a "set".
   run_ended_.store(false);
+  // The scene's stiffness above a device's limit: that blade runs at the limit
+  // (the loop lowers it every tick, servo_loop.cpp). Said even with --quiet.
+  const double scene_k = session_->runtime_settings().stiffness_N_per_mm;
+  for (const Binding& b : session_->bindings()) {
+    if (stiffness_in_force(scene_k, b.max_stiffness_N_per_mm) == scene_k) continue;
+    std::fprintf(stderr,
+                 "hapticut-servo: blade '%s': the scene's stiffness %s is above device '%s''s "
+                 "limit of %s; lowered to %s\n",
+                 b.blade_name.c_str(), newtons_per_mm(scene_k).c_str(), b.device_text.c_str(),
+                 stiffness_limit_text(b, session_->rate_Hz()).c_str(),
+                 newtons_per_mm(b.max_stiffness_N_per_mm).c_str());
+  }
+  std::fflush(stderr);
   if (!options_.quiet) {
     std::printf("hapticut-servo: loaded %s: %zu blade(s) at %g Hz\n",
                 session_->scene_label().c_str(), session_->bindings().size(), session_->rate_Hz());
@@ -215,6 +247,8 @@ nlohmann::json Servo::stats_locked() const {
                       {"written", recorder_ ? recorder_->written() : 0},
                       {"error", recorder_ ? recorder_->error() : std::string()}};
   out["blades"] = nlohmann::json::array();
+  RuntimeSettings settings;
+  const bool has_settings = session_ && s.settings.read(settings) != 0;
   if (session_) {
     for (std::size_t i = 0; i < session_->bindings().size() && i < kMaxBlades; ++i) {
       const Binding& b = session_->bindings()[i];
@@ -233,6 +267,10 @@ nlohmann::json Servo::stats_locked() const {
            {"device_counters", device_counters},
            {"device_error", b.device->last_error()},
            {"passivity", b.passivity},
+           {"stiffness_N_per_mm",
+            has_settings ? stiffness_in_force(settings.stiffness_N_per_mm, b.max_stiffness_N_per_mm)
+                         : 0.0},
+           {"max_stiffness_N_per_mm", b.max_stiffness_N_per_mm},
            {"device_status", has ? status_name(report.device_status) : "none"},
            {"flags", flag_names(report.flags)},
            {"faults", report.faults},
@@ -371,6 +409,17 @@ nlohmann::json Servo::set_parameters(const nlohmann::json& message) {
     } catch (const std::invalid_argument& e) {
       throw CommandError(std::string(e.what()) + "; nothing applied");
     }
+    // Asked for explicitly: above a device's limit it is refused, not lowered
+    // (the scene's own stiffness, kept when a "set" leaves it out, is lowered by the loop).
+    const Binding* b = message.contains("stiffness_N_per_mm")
+                           ? session_->stiffness_exceeded(settings.stiffness_N_per_mm)
+                           : nullptr;
+    if (b != nullptr) {
+      throw CommandError("stiffness_N_per_mm: " + newtons_per_mm(settings.stiffness_N_per_mm) +
+                         " is above the limit of " + stiffness_limit_text(*b, session_->rate_Hz()) +
+                         " of blade '" + b->blade_name + "''s device '" + b->device_text +
+                         "'; nothing applied");
+    }
     shared_->settings.publish(settings);
   }
   if (limits_changed) shared_->limits.publish(limits);
@@ -405,7 +454,8 @@ nlohmann::json Servo::command(const nlohmann::json& message) {
       blades.push_back({{"name", b.blade_name},
                         {"points", b.frame.point_count()},
                         {"device", b.device_text},
-                        {"kind", b.device->kind()}});
+                        {"kind", b.device->kind()},
+                        {"max_stiffness_N_per_mm", b.max_stiffness_N_per_mm}});
     }
     return {{"blades", blades},
             {"rate_Hz", session_->rate_Hz()},

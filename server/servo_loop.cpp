@@ -22,12 +22,15 @@ std::uint32_t engine_refusal(const Blade& blade, const Pose& pose) {
   return 0;
 }
 
-// One blade: read, admit, step with this tick's settings, render, write.
-// Returns the tick's result in binding.result. A change of the sample's
-// kEngageRequestBit (a HID puck's engage button toggles it) sets the servo's
-// engage state, from this tick on.
+// One blade: read, admit, step with this tick's settings (the stiffness
+// lowered to the device's limit), render, write. Returns the tick's result in
+// binding.result. A change of the sample's kEngageRequestBit (a HID puck's
+// engage button toggles it) sets the servo's engage state, from this tick on.
 void tick_blade(Binding& b, double now_s, double dt_s, std::atomic<bool>& engage_state,
-                bool stopping, const RuntimeSettings& settings) {
+                bool stopping, const RuntimeSettings& tick_settings) {
+  RuntimeSettings settings = tick_settings;  // Trivially copyable: no allocation.
+  settings.stiffness_N_per_mm =
+      stiffness_in_force(tick_settings.stiffness_N_per_mm, b.max_stiffness_N_per_mm);
   BladeTickResult& r = b.result;
   r.status = b.device->read(now_s, r.sample);
   r.step = StepKind::None;

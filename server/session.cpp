@@ -111,6 +111,7 @@ Session::Session(const SessionConfig& config) {
     binding.blade = std::make_unique<Blade>(space_, blade_spec, shading_);
     binding.requested = request;
     binding.safety = std::make_unique<SafetyChannel>(request, binding.device->limits());
+    binding.max_stiffness_N_per_mm = stiffness_limit(binding.device->limits(), rate_Hz_);
 #ifdef HAPTICUT_WITH_DEVICES
     // Passivity for every device that renders force (docs/stability.md).
     if (config.passivity && binding.device->limits().has_force_output) {
@@ -140,6 +141,15 @@ Session::Session(const SessionConfig& config) {
 Binding* Session::find(const std::string& blade_name) {
   for (Binding& b : bindings_) {
     if (b.blade_name == blade_name) return &b;
+  }
+  return nullptr;
+}
+
+const Binding* Session::stiffness_exceeded(double stiffness_N_per_mm) const {
+  for (const Binding& b : bindings_) {
+    if (stiffness_in_force(stiffness_N_per_mm, b.max_stiffness_N_per_mm) != stiffness_N_per_mm) {
+      return &b;
+    }
   }
   return nullptr;
 }

@@ -43,6 +43,9 @@ struct Binding {
   std::unique_ptr<Blade> blade;
   std::unique_ptr<SafetyChannel> safety;
   SafetySettings requested;  // Before the device's limits.
+  // The device's stiffness limit at the session's rate (stiffness_limit, safety.h;
+  // 0: none known): the blade steps with the settings' stiffness lowered to it.
+  double max_stiffness_N_per_mm = 0.0;
   BladeFrame frame;
   BladeTickResult result;
   bool has_reset = false;
@@ -64,6 +67,9 @@ class Session {
   std::vector<Binding>& bindings() { return bindings_; }
   const std::vector<Binding>& bindings() const { return bindings_; }
   Binding* find(const std::string& blade_name);
+  // The first binding whose stiffness limit `stiffness_N_per_mm` exceeds
+  // (nullptr: none does).
+  const Binding* stiffness_exceeded(double stiffness_N_per_mm) const;
   // Bytes of a stream frame and of a recording record.
   std::size_t frame_bytes() const;
   const RecordingInfo& recording_info() const { return recording_info_; }

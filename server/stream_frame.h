@@ -25,7 +25,7 @@ struct BladeTickResult {
   double step_dt_s = 0.0;
   Vec3 engine_force_N;
   Vec3 engine_torque_N_mm;
-  double stiffness_N_per_mm = 0.0;  // Of the settings this tick.
+  double stiffness_N_per_mm = 0.0;  // Stepped with: the settings', lowered to the device's limit.
   bool force_shading = false;
   bool engine_rejected = false;  // The engine refused this tick's sample.
   SafetyOutput safety;

@@ -11,6 +11,7 @@ from .go_live import HAPTICUT_OT_go_live
 from .import_scene import HAPTICUT_OT_import_scene
 from .open_servo_log import HAPTICUT_OT_open_servo_log
 from .record_live import HAPTICUT_OT_record_live
+from .refresh_devices import HAPTICUT_OT_refresh_devices
 from .set_custom_material import HAPTICUT_OT_set_custom_material
 from .set_cutting_edge import HAPTICUT_OT_set_cutting_edge
 from .simulate_stroke import HAPTICUT_OT_simulate_stroke
@@ -27,6 +28,7 @@ classes = (
     HAPTICUT_OT_cancel_build,
     HAPTICUT_OT_export_scene,
     HAPTICUT_OT_import_scene,
+    HAPTICUT_OT_refresh_devices,
     HAPTICUT_OT_start_servo,
     HAPTICUT_OT_stop_servo,
     HAPTICUT_OT_go_live,

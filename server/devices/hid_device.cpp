@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
 
@@ -340,6 +341,72 @@ std::string format_hid_device_list(const std::vector<HidDeviceRow>& rows) {
 std::string list_hid_devices_text(const std::string& profile_directory) {
   return format_hid_device_list(
       list_hid_devices(load_profiles(find_profile_directory(profile_directory))));
+}
+
+namespace {
+
+nlohmann::json limits_json(const DeviceLimits& limits) {
+  const auto xyz = [](const Vec3& v) { return nlohmann::json::array({v.x, v.y, v.z}); };
+  return {{"has_force_output", limits.has_force_output},
+          {"max_force_N", limits.max_force_N},
+          {"max_torque_N_mm", limits.max_torque_N_mm},
+          {"max_stiffness_N_per_mm", limits.max_stiffness_N_per_mm},
+          {"workspace_min_mm", xyz(limits.workspace_min_mm)},
+          {"workspace_max_mm", xyz(limits.workspace_max_mm)}};
+}
+
+nlohmann::json name_or_null(const std::string& text, const std::string& prefix = "") {
+  return text.empty() ? nlohmann::json(nullptr) : nlohmann::json(prefix + text);
+}
+
+}  // namespace
+
+std::string format_device_list_json(const std::vector<HidDeviceRow>& rows,
+                                    const std::vector<DeviceProfile>& profiles,
+                                    const std::vector<DeviceKindInfo>& kinds,
+                                    const std::string& profile_directory) {
+  nlohmann::json devices = nlohmann::json::array();
+  for (const HidDeviceRow& row : rows) {
+    const HidDeviceInfo& info = row.info;
+    devices.push_back({{"path", info.path},
+                       {"vendor_id", info.vendor_id},
+                       {"product_id", info.product_id},
+                       {"serial", info.serial},
+                       {"manufacturer", info.manufacturer},
+                       {"product", info.product},
+                       {"usage_page", info.usage_page},
+                       {"usage", info.usage},
+                       {"interface_number", info.interface_number},
+                       {"profile", name_or_null(row.profile)},
+                       {"binding", name_or_null(row.profile, "hid:")}});
+  }
+  nlohmann::json shipped = nlohmann::json::array();
+  for (const DeviceProfile& profile : profiles) {
+    shipped.push_back({{"name", profile.name},
+                       {"model", profile.model},
+                       {"binding", "hid:" + profile.name},
+                       {"limits", limits_json(profile.limits)}});
+  }
+  nlohmann::json others = nlohmann::json::array();
+  for (const DeviceKindInfo& kind : kinds) {
+    others.push_back(
+        {{"kind", kind.kind}, {"binding", kind.binding}, {"limits", limits_json(kind.limits)}});
+  }
+  const nlohmann::json out = {{"version", 1},
+                              {"hidapi", hidapi_version_string()},
+                              {"profile_directory", profile_directory},
+                              {"devices", devices},
+                              {"profiles", shipped},
+                              {"kinds", others}};
+  // Product names are the device's bytes: never let a stray one break the JSON.
+  return out.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+}
+
+std::string list_devices_json(const std::string& profile_directory,
+                              const std::vector<DeviceKindInfo>& kinds) {
+  const std::string directory = find_profile_directory(profile_directory);
+  const std::vector<DeviceProfile> profiles = load_profiles(directory);
+  return format_device_list_json(list_hid_devices(profiles), profiles, kinds, directory);
 }
 
 std::unique_ptr<Device> make_hid_device(const std::string& args) {

@@ -153,6 +153,26 @@ std::string format_hid_device_list(const std::vector<HidDeviceRow>& rows);
 // Throws ProfileError or std::runtime_error with a message naming the problem.
 std::string list_hid_devices_text(const std::string& profile_directory = "");
 
+// A device kind besides hid that `--list-devices --json` offers (sim, viewport, bridge).
+struct DeviceKindInfo {
+  std::string kind;
+  std::string binding;  // The --device text choosing it with its defaults ("bridge:port=47810").
+  DeviceLimits limits;  // Its limits with those defaults.
+};
+// `--list-devices --json` (docs/devices.md): {"version": 1, "hidapi", "profile_directory",
+// "devices": [{path, vendor_id, product_id, serial, manufacturer, product, usage_page, usage,
+// interface_number, profile (null: none matches), binding ("hid:<profile>" or null)}],
+// "profiles": [{name, model, binding, limits}], "kinds": [{kind, binding, limits}]}; limits:
+// has_force_output, max_force_N, max_torque_N_mm, max_stiffness_N_per_mm (0: none known),
+// workspace_min_mm, workspace_max_mm.
+std::string format_device_list_json(const std::vector<HidDeviceRow>& rows,
+                                    const std::vector<DeviceProfile>& profiles,
+                                    const std::vector<DeviceKindInfo>& kinds,
+                                    const std::string& profile_directory);
+// The same in one call through the real hidapi (throws as list_hid_devices_text).
+std::string list_devices_json(const std::string& profile_directory,
+                              const std::vector<DeviceKindInfo>& kinds);
+
 // `--device NAME=hid:ARGS` (kHidDeviceUsage). ARGS, all optional: a bare
 // first value is the profile (as profile=), then comma-separated options:
 //   profile=NAME|FILE.json  the profile (else the first connected device any profile matches)

@@ -7,13 +7,16 @@ namespace hapticut::servo {
 SimDevice::SimDevice(SimPath path, const SimOptions& options)
     : path_(std::move(path)), options_(options), hand_(options.hand_parameters) {}
 
-DeviceLimits SimDevice::limits() const {
+DeviceLimits sim_device_limits(const SimOptions& options) {
   DeviceLimits limits;
   limits.has_force_output = true;
-  limits.max_force_N = options_.max_force_N;
-  limits.max_torque_N_mm = options_.max_torque_N_mm;
+  limits.max_force_N = options.max_force_N;
+  limits.max_torque_N_mm = options.max_torque_N_mm;
+  limits.max_stiffness_N_per_mm = options.max_stiffness_N_per_mm;
   return limits;
 }
+
+DeviceLimits SimDevice::limits() const { return sim_device_limits(options_); }
 
 void SimDevice::start() {
   started_ = false;
@@ -65,8 +68,9 @@ void SimDevice::write(const Vec3& force_N, const Vec3& /*torque_N_mm*/) {
 
 std::unique_ptr<Device> make_sim_device(const DeviceSpec& spec, const DeviceContext& context) {
   spec.check_options({"stroke", "speed", "hand", "mass_kg", "damping_N_s_per_mm", "spring_N_per_mm",
-                      "max_force_N", "max_torque_N_mm", "hold_s", "fail_at_s", "recover_at_s",
-                      "nan_at_s", "nan_ticks", "far_at_s", "far_ticks"});
+                      "max_force_N", "max_torque_N_mm", "max_stiffness_N_per_mm", "hold_s",
+                      "fail_at_s", "recover_at_s", "nan_at_s", "nan_ticks", "far_at_s",
+                      "far_ticks"});
   SimOptions options;
   options.hand = spec.number("hand", 1.0) != 0.0;
   options.hand_parameters.mass_kg = spec.number("mass_kg", options.hand_parameters.mass_kg);
@@ -79,6 +83,10 @@ std::unique_ptr<Device> make_sim_device(const DeviceSpec& spec, const DeviceCont
   }
   options.max_force_N = spec.number("max_force_N", options.max_force_N);
   options.max_torque_N_mm = spec.number("max_torque_N_mm", options.max_torque_N_mm);
+  options.max_stiffness_N_per_mm = spec.number("max_stiffness_N_per_mm", 0.0);
+  if (!(options.max_stiffness_N_per_mm >= 0.0)) {
+    throw DeviceError(spec.describe() + ": max_stiffness_N_per_mm must be >= 0 (0: no limit)");
+  }
   options.hold_s = spec.number("hold_s", options.hold_s);
   options.fail_at_s = spec.number("fail_at_s", -1.0);
   options.recover_at_s = spec.number("recover_at_s", -1.0);

@@ -24,6 +24,7 @@ inline constexpr const char* kSimDeviceUsage =
     "      hand=0|1 (1: virtual hand feels the force; 0: pose = path)\n"
     "      mass_kg=0.2 damping_N_s_per_mm=0.002 spring_N_per_mm=0.3\n"
     "      max_force_N=10 max_torque_N_mm=1000 hold_s=0.2 (time at the end)\n"
+    "      max_stiffness_N_per_mm=K (a stiffness limit, as a profile's; 0: none)\n"
     "      fail_at_s=T recover_at_s=T nan_at_s=T nan_ticks=1 far_at_s=T far_ticks=1\n"
     "      (fault injection; far: a sample 1e6 mm off, outside the scene's workspace)\n";
 
@@ -32,6 +33,7 @@ struct SimOptions {
   VirtualHandParameters hand_parameters;
   double max_force_N = 10.0;
   double max_torque_N_mm = 1000.0;
+  double max_stiffness_N_per_mm = 0.0;  // 0: no limit (the default sim).
   double hold_s = 0.2;
   double fail_at_s = -1.0;  // < 0: never.
   double recover_at_s = -1.0;
@@ -40,6 +42,10 @@ struct SimOptions {
   double far_at_s = -1.0;
   int far_ticks = 1;
 };
+
+// A sim device's limits with these options (force output; a stiffness limit
+// only when max_stiffness_N_per_mm is given).
+DeviceLimits sim_device_limits(const SimOptions& options);
 
 class SimDevice : public Device {
  public:

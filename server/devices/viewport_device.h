@@ -15,12 +15,15 @@ inline constexpr const char* kViewportDeviceUsage =
     "  viewport[:timeout_ms=MS]            poses from the control channel's \"pose\"\n"
     "      message; lost when the newest is older than MS (default: --watchdog-ms)\n";
 
+// Input only: no force output, no limits.
+inline DeviceLimits viewport_device_limits() { return {}; }
+
 class ViewportDevice : public Device {
  public:
   explicit ViewportDevice(double timeout_s) : timeout_s_(timeout_s) {}
 
   const char* kind() const override { return "viewport"; }
-  DeviceLimits limits() const override { return {}; }
+  DeviceLimits limits() const override { return viewport_device_limits(); }
   DeviceStatus read(double now_s, DeviceSample& sample) override;
   void write(const Vec3& /*force_N*/, const Vec3& /*torque_N_mm*/) override {}
 

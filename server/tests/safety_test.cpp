@@ -202,5 +202,26 @@ TEST(Safety, PassivityControllerAdjustsTheForce) {
   EXPECT_EQ(seen->calls, 1);
 }
 
+// The device's stiffness limit is stated at 1 kHz: a slower loop lowers it in
+// proportion to its rate, a faster one keeps it; 0 means none known.
+TEST(Safety, StiffnessLimitScalesDownBelowOneKilohertz) {
+  DeviceLimits limits = haptic_limits();
+  EXPECT_EQ(stiffness_limit(limits, 1000.0), 0.0);  // None known.
+  limits.max_stiffness_N_per_mm = 0.8;
+  EXPECT_EQ(stiffness_limit(limits, 1000.0), 0.8);
+  EXPECT_EQ(stiffness_limit(limits, 4000.0), 0.8);
+  EXPECT_DOUBLE_EQ(stiffness_limit(limits, 500.0), 0.4);
+  EXPECT_DOUBLE_EQ(stiffness_limit(limits, 250.0), 0.2);
+  limits.max_stiffness_N_per_mm = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(stiffness_limit(limits, 1000.0), 0.0);
+}
+
+TEST(Safety, StiffnessInForceIsTheLowerOfRequestAndLimit) {
+  EXPECT_EQ(stiffness_in_force(0.5, 0.2), 0.2);
+  EXPECT_EQ(stiffness_in_force(0.1, 0.2), 0.1);
+  EXPECT_EQ(stiffness_in_force(0.2, 0.2), 0.2);
+  EXPECT_EQ(stiffness_in_force(50.0, 0.0), 50.0);  // No limit known: the request.
+}
+
 }  // namespace
 }  // namespace hapticut::servo

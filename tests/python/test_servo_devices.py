@@ -11,6 +11,7 @@ import socket
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -220,6 +221,29 @@ def test_list_devices_through_hidapi():
         return
     assert lines[0].split()[:3] == ["path", "vendor:product", "usage"]
     assert len(lines) > 1
+
+
+def test_list_devices_json_lists_what_the_table_lists_and_every_profile(tmp_path):
+    result = run_servo("--list-devices", "--json")
+    assert result.returncode == 0, result.stderr
+    listing = json.loads(result.stdout)
+    assert listing["version"] == 1
+    table = run_servo("--list-devices").stdout.splitlines()
+    found = [] if table == ["no HID devices found"] else table[1:]
+    assert [d["path"] for d in listing["devices"]] == [line.split()[0] for line in found]
+    for device in listing["devices"]:
+        assert device["binding"] == (f"hid:{device['profile']}" if device["profile"] else None)
+    files = {p.stem for p in Path(listing["profile_directory"]).glob("*.json")}
+    assert files and {p["name"] for p in listing["profiles"]} == files
+    assert all(p["binding"] == f"hid:{p['name']}" for p in listing["profiles"])
+    kinds = {k["kind"]: k for k in listing["kinds"]}
+    assert set(kinds) == {"sim", "viewport", "bridge"}
+    assert kinds["bridge"]["binding"].startswith("bridge:port=")
+    assert kinds["sim"]["limits"]["has_force_output"] is True
+    assert kinds["viewport"]["limits"]["has_force_output"] is False
+    assert run_servo("--json").returncode == 2
+    missing = run_servo("--list-devices", "--json", "--profiles", str(tmp_path / "none"))
+    assert missing.returncode == EXIT_DEVICE and missing.stdout == ""
 
 
 def test_list_devices_documented_and_profiles_dir_checked(tmp_path):

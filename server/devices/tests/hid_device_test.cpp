@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <nlohmann/json.hpp>
 #include <thread>
 
 #include "scripted_hid_transport.h"
@@ -281,6 +282,49 @@ TEST(HidDeviceList, MarksTheDevicesAProfileMatches) {
       << table;
   EXPECT_NE(table.find("spacemouse-wireless"), std::string::npos);
   EXPECT_EQ(format_hid_device_list({}), "no HID devices found\n");
+
+  // The same rows as JSON (--list-devices --json), with the profiles and the other kinds.
+  DeviceLimits bridge_limits;
+  bridge_limits.has_force_output = true;
+  bridge_limits.max_force_N = 3.0;
+  bridge_limits.max_stiffness_N_per_mm = 1.0;
+  const auto profiles = load_profiles(HAPTICUT_PROFILE_DIR);
+  const auto listing = nlohmann::json::parse(format_device_list_json(
+      rows, profiles, {{"bridge", "bridge:port=47810", bridge_limits}}, "profiles/"));
+  EXPECT_EQ(listing["version"], 1);
+  EXPECT_EQ(listing["profile_directory"], "profiles/");
+  ASSERT_EQ(listing["devices"].size(), 2U);
+  EXPECT_TRUE(listing["devices"][0]["profile"].is_null());
+  EXPECT_TRUE(listing["devices"][0]["binding"].is_null());
+  EXPECT_EQ(listing["devices"][0]["product"], "USB Keyboard");
+  EXPECT_EQ(listing["devices"][1]["path"], "/dev/hidraw3");
+  EXPECT_EQ(listing["devices"][1]["vendor_id"], 0x256f);
+  EXPECT_EQ(listing["devices"][1]["product_id"], 0xc62e);
+  EXPECT_EQ(listing["devices"][1]["serial"], "A1B2");
+  EXPECT_EQ(listing["devices"][1]["profile"], "spacemouse-wireless");
+  EXPECT_EQ(listing["devices"][1]["binding"], "hid:spacemouse-wireless");
+  ASSERT_EQ(listing["profiles"].size(), profiles.size());
+  for (std::size_t i = 0; i < profiles.size(); ++i) {
+    EXPECT_EQ(listing["profiles"][i]["name"], profiles[i].name);
+    EXPECT_EQ(listing["profiles"][i]["binding"], "hid:" + profiles[i].name);
+    EXPECT_EQ(listing["profiles"][i]["limits"]["max_force_N"], profiles[i].limits.max_force_N);
+    EXPECT_EQ(listing["profiles"][i]["limits"]["has_force_output"],
+              profiles[i].limits.has_force_output);
+  }
+  ASSERT_EQ(listing["kinds"].size(), 1U);
+  EXPECT_EQ(listing["kinds"][0]["binding"], "bridge:port=47810");
+  EXPECT_EQ(listing["kinds"][0]["limits"]["max_force_N"], 3.0);
+  EXPECT_EQ(listing["kinds"][0]["limits"]["max_stiffness_N_per_mm"], 1.0);
+}
+
+// A product name that is not UTF-8 (the device's own bytes) still gives valid JSON.
+TEST(HidDeviceList, JsonSurvivesAProductNameThatIsNotUtf8) {
+  HidDeviceRow row;
+  row.info.path = "/dev/hidraw1";
+  row.info.product = "Pad \xff\xfe";
+  const auto listing = nlohmann::json::parse(format_device_list_json({row}, {}, {}, ""));
+  EXPECT_EQ(listing["devices"][0]["path"], "/dev/hidraw1");
+  EXPECT_EQ(listing["devices"][0]["product"].get<std::string>().rfind("Pad ", 0), 0U);
 }
 
 // Through the real hidapi library: finding nothing here is a valid result.
@@ -297,6 +341,18 @@ TEST(HidDeviceList, RealHidapiEnumerationPrintsWhatItFinds) {
             0U);
   EXPECT_FALSE(hidapi_version_string().empty());
   std::printf("hidapi %s: %s", hidapi_version_string().c_str(), table.c_str());
+
+  // --list-devices --json through the same enumeration: the same devices, every profile.
+  const auto listing = nlohmann::json::parse(list_devices_json(HAPTICUT_PROFILE_DIR, {}));
+  ASSERT_EQ(listing["devices"].size(), rows.size());
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    EXPECT_EQ(listing["devices"][i]["path"], rows[i].info.path);
+    EXPECT_EQ(listing["devices"][i]["profile"].is_null(), rows[i].profile.empty());
+  }
+  EXPECT_EQ(listing["profiles"].size(), load_profiles(HAPTICUT_PROFILE_DIR).size());
+  EXPECT_GT(listing["profiles"].size(), 0U);
+  EXPECT_EQ(listing["hidapi"], hidapi_version_string());
+  EXPECT_TRUE(listing["kinds"].empty());
 }
 
 TEST(HidDeviceFactory, ArgumentsAreCheckedAndNamed) {

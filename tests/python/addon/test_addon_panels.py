@@ -22,6 +22,7 @@ class CheckingLayout:
         module, name = idname.split(".")
         assert hasattr(getattr(bpy.ops, module), name), idname
         getattr(getattr(bpy.ops, module), name).get_rna_type()  # Raises when unregistered.
+        return types.SimpleNamespace()  # Its properties, set by the panel.
 
     def label(self, text="", **options):
         self.texts.append(text)

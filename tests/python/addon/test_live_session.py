@@ -179,21 +179,14 @@ def test_force_shading_asked_for_is_applied_by_the_servo(finger):
 
 
 def test_the_live_panels_draw_in_every_state(finger):
-    import types
-
     from test_addon_panels import CheckingLayout, draw
 
     from addon import live, ui_live
 
-    class Layout(CheckingLayout):
-        def operator(self, idname, **options):
-            super().operator(idname, **options)
-            return types.SimpleNamespace()  # Its properties, set by the panel.
-
     def texts() -> list[str]:
         drawn = []
         for panel_class in (ui_live.HAPTICUT_PT_live, ui_live.HAPTICUT_PT_bake):
-            layout = Layout()
+            layout = CheckingLayout()
             draw(panel_class, layout)
             drawn += layout.texts
         return drawn
@@ -219,3 +212,29 @@ def test_the_live_panels_draw_in_every_state(finger):
     session.process.wait(10)
     live.timer()
     assert "Start to recover" in texts()
+
+
+def test_a_hid_profile_chosen_with_no_such_device_connected_says_so(finger):
+    from addon import device_list, live, ui_live
+
+    assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
+    listing = device_list.cached()
+    absent = next(
+        p["name"]
+        for p in listing["profiles"]
+        if not any(d["profile"] == p["name"] for d in listing["devices"])
+    )
+    finger.hapticut_live.device_mode = f"HID:{absent}"
+    try:
+        with pytest.raises(RuntimeError, match=f"no device matches profile '{absent}'"):
+            bpy.ops.hapticut.go_live()
+        assert f"device 'Knife=hid:{absent}'" in finger.hapticut_live.error
+        # The servo stays up and says nothing is running; another device runs at once.
+        session = live.current()
+        assert session is not None and session.alive
+        assert ui_live.status_lines(session)[0].startswith("connected")
+        finger.hapticut_live.device_mode = "VIEWPORT"
+        assert bpy.ops.hapticut.go_live() == {"FINISHED"}
+        assert [b["kind"] for b in live.current().blades] == ["viewport"]
+    finally:
+        finger.hapticut_live.device_mode = "VIEWPORT"

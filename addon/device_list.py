@@ -1,0 +1,249 @@
+"""The devices the session panel offers, from ``hapticut-servo --list-devices --json`` (run as a
+child process, at most ``LIST_TIMEOUT_S``), and the limits of the device a binding names.
+
+The listing (docs/devices.md) holds the HID devices hidapi finds with the profile each
+matches, the shipped profiles and the other kinds (sim, viewport, bridge), each with its
+limits. It is read on *Refresh devices* (and once when a check needs limits) and kept; the
+panel's items are made from the kept listing only, so drawing never runs a process.
+No bpy here.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+from dataclasses import dataclass, field
+
+from . import toolkit
+
+LIST_TIMEOUT_S = 10.0
+BRIDGE_DEFAULT_PORT = 47810
+
+
+class DeviceListError(RuntimeError):
+    """The listing could not be read; the message is for the panel."""
+
+
+@dataclass(frozen=True)
+class Choice:
+    """One item of the panel's Device menu."""
+
+    identifier: str  # VIEWPORT, SIM, BRIDGE, HID:<profile>, BLADES, CUSTOM
+    label: str
+    description: str
+    limits: dict = field(default_factory=dict)  # The listing's limits; {} unknown.
+
+
+# Offered with or without a listing: the modes that need no device found.
+VIEWPORT = Choice(
+    "VIEWPORT", "Viewport", "Move the blade objects in the viewport (grab, rotate, playback)"
+)
+SIM = Choice("SIM", "Sim", "The servo's built-in simulated stroke (press, then slide)")
+BRIDGE = Choice("BRIDGE", "UDP bridge", "A force device behind a UDP bridge (its port below)")
+BLADES = Choice(
+    "BLADES", "Blade devices", "Each blade's own Device field (any --device text per blade)"
+)
+CUSTOM = Choice("CUSTOM", "Custom", "One --device text for every blade (e.g. sim:path.json)")
+FIXED_KINDS = {"VIEWPORT": "viewport", "SIM": "sim", "BRIDGE": "bridge"}
+
+_listing: dict | None = None
+_generation = 0  # Bumped at every new listing (the panel's items are cached per generation).
+
+
+def run_listing(servo: str, timeout_s: float | None = None) -> dict:
+    """``servo --list-devices --json``, checked; DeviceListError naming what went wrong.
+    The child is killed after timeout_s (LIST_TIMEOUT_S)."""
+    timeout_s = LIST_TIMEOUT_S if timeout_s is None else timeout_s
+    command = [servo, "--list-devices", "--json"]
+    try:
+        done = subprocess.run(
+            command,
+            capture_output=True,
+            text=True,
+            timeout=timeout_s,
+            stdin=subprocess.DEVNULL,
+            env=toolkit.child_environment(),
+        )
+    except subprocess.TimeoutExpired:
+        raise DeviceListError(
+            f"{servo} --list-devices did not answer within {timeout_s:.3g} s"
+        ) from None
+    except OSError as error:
+        raise DeviceListError(f"cannot run {servo}: {error}") from None
+    if done.returncode != 0:
+        line = toolkit.last_error_line(done.stderr)
+        raise DeviceListError(f"{servo} --list-devices failed (code {done.returncode}): {line}")
+    try:
+        listing = json.loads(done.stdout)
+    except json.JSONDecodeError as error:
+        raise DeviceListError(f"{servo} --list-devices --json printed no JSON ({error})") from None
+    if not isinstance(listing, dict) or listing.get("version") != 1:
+        raise DeviceListError(f"{servo} --list-devices --json: not a version 1 device listing")
+    for key in ("devices", "profiles", "kinds"):
+        if not isinstance(listing.get(key), list):
+            raise DeviceListError(f"{servo} --list-devices --json: no {key!r} list")
+    return listing
+
+
+def refresh(servo: str, timeout_s: float | None = None) -> dict:
+    """Read the listing again and keep it (a failure keeps the previous one)."""
+    global _listing, _generation
+    _listing = run_listing(servo, timeout_s)
+    _generation += 1
+    return _listing
+
+
+def cached() -> dict | None:
+    return _listing
+
+
+def generation() -> int:
+    return _generation
+
+
+def forget() -> None:
+    global _listing, _generation
+    _listing = None
+    _generation += 1
+
+
+def limits_text(limits: dict) -> str:
+    if not limits:
+        return "limits not listed"
+    if not limits.get("has_force_output"):
+        return "input only, no force output"
+    parts = [f"max force {limits.get('max_force_N', 0):g} N"]
+    if limits.get("max_stiffness_N_per_mm", 0) > 0:
+        parts.append(f"max stiffness {limits['max_stiffness_N_per_mm']:g} N/mm")
+    return ", ".join(parts)
+
+
+def choices(listing: dict | None) -> list[Choice]:
+    """The Device menu: viewport, sim, bridge, the HID devices found (with their profile),
+    the shipped profiles not found (for a device plugged in later), blade devices, custom."""
+    if listing is None:
+        return [VIEWPORT, SIM, BRIDGE, BLADES, CUSTOM]
+    kinds = {k["kind"]: k.get("limits", {}) for k in listing["kinds"]}
+    fixed = [
+        Choice(c.identifier, c.label, f"{c.description} ({limits_text(limits)})", limits)
+        for c in (VIEWPORT, SIM, BRIDGE)
+        for limits in [kinds.get(FIXED_KINDS[c.identifier], {})]
+    ]
+    profiles = {p["name"]: p for p in listing["profiles"]}
+    found: dict[str, list[dict]] = {}
+    for device in listing["devices"]:
+        if device.get("profile"):
+            found.setdefault(device["profile"], []).append(device)
+    hid = []
+    for name in [*found, *(n for n in profiles if n not in found)]:
+        profile = profiles.get(name, {"name": name, "model": name})
+        limits = profile.get("limits", {})
+        devices = found.get(name, [])
+        if devices:
+            where = ", ".join(d.get("path", "?") for d in devices)
+            label = f"{devices[0].get('product') or profile.get('model', name)} ({name})"
+            text = f"Connected at {where}: hid:{name}"
+        else:
+            label = f"{profile.get('model', name)} ({name}, not connected)"
+            text = f"Shipped profile, for a device plugged in later: hid:{name}"
+        hid.append(Choice(f"HID:{name}", label, f"{text} ({limits_text(limits)})", limits))
+    return [*fixed, *hid, BLADES, CUSTOM]
+
+
+def binding(identifier: str, bridge_port: int = BRIDGE_DEFAULT_PORT, custom: str = "") -> str:
+    """The ``--device`` text of a menu item ("" for BLADES: each blade's own)."""
+    if identifier == "VIEWPORT":
+        return "viewport"
+    if identifier == "SIM":
+        return "sim"
+    if identifier == "BRIDGE":
+        return f"bridge:port={int(bridge_port)}"
+    if identifier.startswith("HID:"):
+        return f"hid:{identifier[4:]}"
+    if identifier == "CUSTOM":
+        return custom
+    return ""
+
+
+def _options(args: str) -> tuple[str, dict[str, str]]:
+    bare, options = "", {}
+    for i, part in enumerate(p for p in args.split(",") if p):
+        key, sep, value = part.partition("=")
+        if not sep and i == 0:
+            bare = part
+        elif sep:
+            options[key.strip()] = value.strip()
+    return bare, options
+
+
+def _number(options: dict, key: str, default: float) -> float:
+    try:
+        return float(options[key]) if key in options else default
+    except ValueError:
+        return default  # The servo refuses the binding and names the option.
+
+
+def limits_for(listing: dict, device_text: str) -> dict:
+    """The limits of the device a ``--device`` text binds, with its limit options applied
+    (sim's max_force_N, max_torque_N_mm, max_stiffness_N_per_mm, the bridge's max_force,
+    max_torque, max_stiffness); {} when the
+    listing does not know them (a profile file, replay, an unknown kind)."""
+    kind, _, args = device_text.strip().partition(":")
+    bare, options = _options(args)
+    if kind == "hid":
+        name = options.get("profile", bare)
+        profile = next((p for p in listing["profiles"] if p["name"] == name), None)
+        if profile is None and not name:  # The first connected device a profile matches.
+            first = next((d for d in listing["devices"] if d.get("profile")), None)
+            name = first["profile"] if first else ""
+            profile = next((p for p in listing["profiles"] if p["name"] == name), None)
+        return dict(profile.get("limits", {})) if profile else {}
+    limits = dict(next((k.get("limits", {}) for k in listing["kinds"] if k["kind"] == kind), {}))
+    if kind == "sim" and limits:
+        limits["max_force_N"] = _number(options, "max_force_N", limits["max_force_N"])
+        limits["max_torque_N_mm"] = _number(options, "max_torque_N_mm", limits["max_torque_N_mm"])
+        limits["max_stiffness_N_per_mm"] = _number(
+            options, "max_stiffness_N_per_mm", limits.get("max_stiffness_N_per_mm", 0.0)
+        )
+    elif kind == "bridge" and limits:
+        for key, name in (
+            ("max_force", "max_force_N"),
+            ("max_torque", "max_torque_N_mm"),
+            ("max_stiffness", "max_stiffness_N_per_mm"),
+        ):
+            limits[name] = _number(options, key, limits[name])
+    return limits
+
+
+# The panel's settings checked against a device's limits: (setting, limit, name, unit).
+CHECKED = (
+    ("max_force_N", "max_force_N", "max force", "N"),
+    ("max_torque_N_mm", "max_torque_N_mm", "max torque", "N mm"),
+    ("stiffness_N_per_mm", "max_stiffness_N_per_mm", "stiffness", "N/mm"),
+)
+
+
+# The rate a device's max_stiffness_N_per_mm is stated for; below it the servo lowers the
+# limit in proportion (docs/servo.md, "Stiffness limit").
+STIFFNESS_LIMIT_RATE_HZ = 1000.0
+
+
+def settings_problems(settings: dict, limits: dict, rate_Hz: float = 1000.0) -> list[str]:
+    """What of the settings (as sent to the servo's ``set``) lies above the device's limits.
+    Only known limits count: a force limit where the device renders force, a stiffness
+    limit where its profile gives one (0: none known), scaled as the servo scales it at a
+    rate below 1 kHz (limit x rate / 1000)."""
+    problems = []
+    for setting, limit, name, unit in CHECKED:
+        value, bound = settings.get(setting, 0.0), limits.get(limit, 0.0)
+        at_rate = ""
+        if setting == "stiffness_N_per_mm" and 0 < rate_Hz < STIFFNESS_LIMIT_RATE_HZ:
+            bound *= rate_Hz / STIFFNESS_LIMIT_RATE_HZ
+            at_rate = f" at {rate_Hz:g} Hz"
+        if setting != "stiffness_N_per_mm" and not limits.get("has_force_output"):
+            continue
+        if value > 0 and bound > 0 and value > bound:
+            problems.append(
+                f"{name} {value:g} {unit} is above the device's {bound:g} {unit}{at_rate}"
+            )
+    return problems

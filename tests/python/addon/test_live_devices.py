@@ -1,0 +1,206 @@
+"""The session panel's Device menu from the real servo's `--list-devices --json` (hidapi finds
+no device here: a valid listing), the binding each item makes, the panel's settings refused
+above the chosen device's limits, and a servo path that fails said plainly in the panel."""
+
+import json
+import stat
+from pathlib import Path
+
+import blender_scene
+import bpy
+import pytest
+
+
+@pytest.fixture()
+def scene(addon, tmp_path):
+    from addon import device_list, live
+
+    device_list.forget()
+    scene = blender_scene.finger_scene(str(tmp_path))
+    yield scene
+    live.stop()
+    device_list.forget()
+
+
+def panel_texts() -> list[str]:
+    from test_addon_panels import CheckingLayout, draw
+
+    from addon import ui_live
+
+    layout = CheckingLayout()
+    draw(ui_live.HAPTICUT_PT_live, layout)
+    return layout.texts
+
+
+def script(tmp_path: Path, name: str, body: str) -> str:
+    path = tmp_path / name
+    path.write_text("#!/bin/sh\n" + body + "\n")
+    path.chmod(path.stat().st_mode | stat.S_IXUSR)
+    return str(path)
+
+
+def test_the_real_listing_fills_the_menu_and_each_item_makes_its_binding(scene):
+    from addon import device_list, live, live_properties, toolkit_link
+
+    settings = scene.hapticut_live
+    assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
+    assert settings.device_error == ""
+    listing = device_list.cached()
+    # The servo's own answer, checked against what it was run on: every shipped profile file.
+    servo = toolkit_link.link(blender_scene.toolkit_executable()).servo
+    files = {p.stem for p in Path(listing["profile_directory"]).glob("*.json")}
+    shipped = [p["name"] for p in listing["profiles"]]
+    assert files and sorted(shipped) == sorted(files)
+    assert {k["kind"] for k in listing["kinds"]} == {"sim", "viewport", "bridge"}
+    print(f"\n{servo} --list-devices --json: {len(listing['devices'])} HID devices")
+
+    identifiers = [item[0] for item in live_properties.device_items(settings)]
+    assert identifiers[:3] == ["VIEWPORT", "SIM", "BRIDGE"]
+    assert [i for i in identifiers if i.startswith("HID:")] == [
+        f"HID:{name}"
+        for name in dict.fromkeys(
+            [d["profile"] for d in listing["devices"] if d["profile"]] + shipped
+        )
+    ]
+    assert identifiers[-2:] == ["BLADES", "CUSTOM"]
+    # Each connected device is offered with the profile it matched (none here, but the code
+    # that labels them runs on whatever hidapi found).
+    choices = {c.identifier: c for c in device_list.choices(listing)}
+    for device in listing["devices"]:
+        if device["profile"]:
+            assert device["path"] in choices[f"HID:{device['profile']}"].description
+
+    knife = bpy.data.objects["Knife"]
+    knife.hapticut.device = "replay:stroke.rec"
+    settings.bridge_port, settings.custom_device = 47999, "sim:press"
+    expected = {
+        "VIEWPORT": "viewport",
+        "SIM": "sim",
+        "BRIDGE": "bridge:port=47999",
+        "BLADES": "replay:stroke.rec",
+        "CUSTOM": "sim:press",
+        **{f"HID:{name}": f"hid:{name}" for name in shipped},
+    }
+    for identifier, binding in expected.items():
+        settings.device_mode = identifier
+        assert settings.device_mode == identifier and settings.device_choice == identifier
+        assert live.devices(scene) == [f"Knife={binding}"]
+    with pytest.raises(TypeError):
+        settings.device_mode = "HID:no-such-profile"
+    # The chosen item's limits are the listing's.
+    settings.device_mode = "BRIDGE"
+    bridge = next(k for k in listing["kinds"] if k["kind"] == "bridge")
+    assert live_properties.choice(settings).limits == bridge["limits"]
+    assert f"device limits: {device_list.limits_text(bridge['limits'])}" in panel_texts()
+    settings.device_mode = f"HID:{shipped[0]}"
+    profile = listing["profiles"][0]
+    assert live_properties.choice(settings).limits == profile["limits"]
+
+
+def test_a_choice_saved_before_its_listing_stays_offered(scene):
+    from addon import live, live_properties
+
+    settings = scene.hapticut_live
+    settings.device_choice = "HID:spacemouse-pro"  # As a reopened .blend holds it.
+    items = live_properties.device_items(settings)
+    assert items[-1][0] == "HID:spacemouse-pro" and "Refresh devices" in items[-1][1]
+    assert settings.device_mode == "HID:spacemouse-pro"
+    assert live.devices(scene) == ["Knife=hid:spacemouse-pro"]
+    assert "device limits: Refresh devices to read them" in panel_texts()
+
+
+def test_settings_above_the_devices_limits_are_refused(scene):
+    from addon import device_list, live
+
+    settings = scene.hapticut_live
+    assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
+    listing = device_list.cached()
+    bridge = next(k for k in listing["kinds"] if k["kind"] == "bridge")["limits"]
+    sim = next(k for k in listing["kinds"] if k["kind"] == "sim")["limits"]
+    assert bridge["max_stiffness_N_per_mm"] > 0 and sim["max_force_N"] > 0
+
+    settings.device_mode = "BRIDGE"
+    settings.stiffness_N_per_mm = 2 * bridge["max_stiffness_N_per_mm"]
+    with pytest.raises(RuntimeError, match="stiffness .* is above the device's"):
+        bpy.ops.hapticut.go_live()
+    assert live.current() is None  # Refused before any servo started.
+    assert f"{bridge['max_stiffness_N_per_mm']:g} N/mm" in settings.error
+    assert any("Go Live refuses it" in text for text in panel_texts())
+    settings.stiffness_N_per_mm = 0.5 * bridge["max_stiffness_N_per_mm"]
+    live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
+    assert not any("Go Live refuses it" in text for text in panel_texts())
+    # Below 1 kHz the servo lowers the stiffness limit by rate / 1000: so does the check.
+    settings.rate_Hz = 500.0
+    settings.stiffness_N_per_mm = 0.75 * bridge["max_stiffness_N_per_mm"]
+    half = 0.5 * bridge["max_stiffness_N_per_mm"]
+    with pytest.raises(RuntimeError, match=f"above the device's {half:g} N/mm at 500 Hz"):
+        bpy.ops.hapticut.go_live()
+    assert any("Go Live refuses it" in text for text in panel_texts())
+    settings.rate_Hz = 1000.0
+    live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
+    # A bridge bound with a lower limit of its own: that one counts.
+    settings.device_mode = "CUSTOM"
+    lower = 0.25 * bridge["max_stiffness_N_per_mm"]
+    settings.custom_device = f"bridge:port=0,max_stiffness={lower}"
+    with pytest.raises(RuntimeError, match="stiffness"):
+        bpy.ops.hapticut.go_live()
+    settings.stiffness_N_per_mm = 0.0
+
+    settings.device_mode = "SIM"
+    settings.max_force_N = sim["max_force_N"] + 1
+    with pytest.raises(RuntimeError, match="max force .* is above the device's"):
+        bpy.ops.hapticut.go_live()
+    settings.max_force_N = sim["max_force_N"]
+    live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
+    # An input-only device renders no force: its force limit does not apply.
+    settings.device_mode = f"HID:{listing['profiles'][0]['name']}"
+    assert not listing["profiles"][0]["limits"]["has_force_output"]
+    live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
+    settings.max_force_N = 0.0
+
+
+def test_a_servo_that_fails_to_list_is_said_so_in_the_panel(scene, tmp_path, monkeypatch):
+    from addon import device_list, live_properties, toolkit_link
+
+    settings = scene.hapticut_live
+    assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
+    listed = device_list.cached()
+    link = toolkit_link.link(blender_scene.toolkit_executable())
+    monkeypatch.setattr(device_list, "LIST_TIMEOUT_S", 0.5)
+    broken = {
+        "/nonexistent/hapticut-servo": "cannot run /nonexistent/hapticut-servo",
+        script(tmp_path, "fails", "echo 'hapticut-servo: --list-devices: no profiles' >&2; exit 4"):
+            "failed (code 4): hapticut-servo: --list-devices: no profiles",
+        script(tmp_path, "prose", "echo 'no HID devices found'"): "printed no JSON",
+        script(tmp_path, "other", "echo '{\"version\": 7}'"): "not a version 1 device listing",
+        script(tmp_path, "hangs", "exec sleep 30"): "did not answer within 0.5 s",
+    }  # fmt: skip
+    for servo, message in broken.items():
+        monkeypatch.setattr(link, "servo", servo)
+        with pytest.raises(RuntimeError, match="devices not listed"):
+            bpy.ops.hapticut.refresh_devices()
+        assert message in settings.device_error, settings.device_error
+        assert settings.device_error in panel_texts()
+        # The listing read before stays, and so does the menu made of it.
+        assert device_list.cached() is listed
+        assert any(i[0].startswith("HID:") for i in live_properties.device_items(settings))
+    # Limits needed but not listable: Go Live says why instead of running unchecked.
+    device_list.forget()
+    settings.stiffness_N_per_mm = 0.5
+    with pytest.raises(RuntimeError, match="devices not listed"):
+        bpy.ops.hapticut.go_live()
+    settings.stiffness_N_per_mm = 0.0
+    # A toolkit that hangs when asked where its servo is: the same bound.
+    monkeypatch.setattr(toolkit_link, "_link", None)
+    prefs = bpy.context.preferences.addons[blender_scene.ADDON_MODULE].preferences
+    saved, prefs.toolkit_path = prefs.toolkit_path, script(tmp_path, "toolkit", "exec sleep 30")
+    try:
+        with pytest.raises(RuntimeError, match="devices not listed: hapticut paths"):
+            bpy.ops.hapticut.refresh_devices()
+        assert "timed out after 0.5 seconds" in settings.device_error, settings.device_error
+    finally:
+        prefs.toolkit_path = saved
+    monkeypatch.undo()
+    assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
+    assert settings.device_error == ""
+    print(json.dumps({"devices": len(device_list.cached()["devices"])}))
