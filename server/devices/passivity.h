@@ -56,7 +56,9 @@ class HannafordRyuPassivity {
   // W: energy taken from the hand so far (mJ = N mm); >= 0 while passive.
   double observed_energy_mJ() const { return observed_energy_mJ_; }
   double last_damping_N_s_per_mm() const { return last_damping_; }
-  std::uint64_t active_ticks() const { return active_ticks_; }  // Ticks that added damping.
+  // Ticks whose force the controller changed (lag compensation or damping).
+  std::uint64_t active_ticks() const { return active_ticks_; }
+  double stiffness_N_per_mm() const { return stiffness_N_per_mm_; }
   const PassivitySettings& settings() const { return settings_; }
 
  private:
@@ -69,6 +71,8 @@ class HannafordRyuPassivity {
   std::uint64_t active_ticks_ = 0;
   Vec3 last_velocity_;
   bool has_velocity_ = false;
+  Vec3 last_asked_N_;                // The force asked for last tick.
+  double stiffness_N_per_mm_ = 0.0;  // The environment's, as last measured.
 };
 
 }  // namespace hapticut::servo
