@@ -136,8 +136,9 @@ Vec3 HannafordRyuPassivity::observe(const Vec3& force_N, const Vec3& velocity_mm
   // the motion (f' . v >= 0 stays): behind a late link a stronger, delayed
   // damper is itself active. A deficit it cannot cover is carried.
   const double push_along_motion = std::max(0.0, dot(force, velocity_next)) / speed_squared;
+  // The cap bounds both stages together.
   const double alpha = std::min({-remaining_mJ / (speed_squared * dt_s), push_along_motion,
-                                 settings_.max_damping_N_s_per_mm});
+                                 settings_.max_damping_N_s_per_mm - last_damping_});
   if (alpha <= 0.0) return render(force);
   last_damping_ += alpha;
   return render(force - velocity_next * alpha);
