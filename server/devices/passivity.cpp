@@ -4,6 +4,20 @@
 #include <cmath>
 
 namespace hapticut::servo {
+namespace {
+
+// The lag compensation acts once the energy left after the forces in flight
+// and the new one falls below the work the force would do at the hand's
+// speed over this many loop latencies (delay + one tick).
+constexpr double kMarginLatencies = 4.0;
+// Its damping: the environment's stiffness times the loop's lag, from the
+// middle of the velocity's interval to the end of the new force's hold,
+// delay + 1.5 ticks, rounded up to delay + 2 for the velocity's own lag.
+constexpr double kLagTicksBeyondDelay = 2.0;
+// Below this squared displacement (mm^2) a tick says nothing about stiffness.
+constexpr double kMinStiffnessDisplacement_mm2 = 1e-12;
+
+}  // namespace
 
 HannafordRyuPassivity::HannafordRyuPassivity(const PassivitySettings& settings)
     : settings_(settings) {
@@ -21,6 +35,8 @@ void HannafordRyuPassivity::reset() {
   active_ticks_ = 0;
   last_velocity_ = Vec3{};
   has_velocity_ = false;
+  last_asked_N_ = Vec3{};
+  stiffness_N_per_mm_ = 0.0;
 }
 
 Vec3 HannafordRyuPassivity::observe(const Vec3& force_N, const Vec3& velocity_mm_per_s,
@@ -37,11 +53,15 @@ Vec3 HannafordRyuPassivity::observe(const Vec3& force_N, const Vec3& velocity_mm
     return output;
   };
   last_damping_ = 0.0;
+  const auto render = [&](const Vec3& output) {
+    if (!(output == force_N)) ++active_ticks_;
+    return push(output);
+  };
   if (!is_finite(force_N) || !is_finite(velocity_mm_per_s) || !(dt_s > 0.0) ||
       !std::isfinite(dt_s)) {
     return push(Vec3{});
   }
-  if (!settings_.enabled) return push(force_N);
+  if (!settings_.enabled) return push(force_N);  // Nothing changed, nothing counted.
 
   // The interval just measured began delay + 1 ticks ago at the hand: it
   // was rendered with the force sent ceil(delay) ticks before the last one,
@@ -75,21 +95,53 @@ Vec3 HannafordRyuPassivity::observe(const Vec3& force_N, const Vec3& velocity_mm
   }
   const Vec3 velocity_next = predicted(delay + 1);
 
+  // The environment's stiffness along the motion, from the asked force's
+  // change over the displacement just seen: the engine computed both forces
+  // from the poses the servo saw, so this ratio has no link delay in it.
+  const Vec3 seen_displacement = velocity_mm_per_s * dt_s;
+  const double seen_squared = squared_norm(seen_displacement);
+  if (filled_ > 0 && seen_squared > kMinStiffnessDisplacement_mm2) {
+    const double stiffness = -dot(force_N - last_asked_N_, seen_displacement) / seen_squared;
+    if (stiffness > 0.0) stiffness_N_per_mm_ = stiffness;
+  }
+  last_asked_N_ = force_N;
+
+  // Lag compensation: a spring rendered from a pose delay + 1 ticks old
+  // pushes a hand on its way out harder than the spring at the hand's true
+  // position would, by stiffness x lag x speed; that surplus is the energy
+  // the late loop gives. When the energy left runs low, take it off as a
+  // damping along the velocity the hand is heading to (one tick on).
+  Vec3 force = force_N;
+  const Vec3 heading = predicted(1.0);
+  const double heading_squared = squared_norm(heading);
+  const double along = dot(force_N, heading);
+  if (along > 0.0 && heading_squared * dt_s > 1e-12 && stiffness_N_per_mm_ > 0.0) {
+    const double left_mJ = observed_energy_mJ_ - in_flight_mJ - work_mJ(force_N, delay + 1);
+    const double margin_mJ =
+        kMarginLatencies * norm(force_N) * std::sqrt(heading_squared) * (delay + 1.0) * dt_s;
+    if (left_mJ < margin_mJ) {
+      const double alpha = std::min({stiffness_N_per_mm_ * (delay + kLagTicksBeyondDelay) * dt_s,
+                                     along / heading_squared, settings_.max_damping_N_s_per_mm});
+      force = force_N - heading * alpha;
+      last_damping_ = alpha;
+    }
+  }
+
   // The controller: what would remain if the new force did its work too.
-  const double remaining_mJ = observed_energy_mJ_ - in_flight_mJ - work_mJ(force_N, delay + 1);
+  const double remaining_mJ = observed_energy_mJ_ - in_flight_mJ - work_mJ(force, delay + 1);
   const double speed_squared = squared_norm(velocity_next);
-  if (remaining_mJ >= 0.0 || speed_squared * dt_s <= 1e-12) return push(force_N);
+  if (remaining_mJ >= 0.0 || speed_squared * dt_s <= 1e-12) return render(force);
 
   // The damping never brakes beyond cancelling the force's own push along
   // the motion (f' . v >= 0 stays): behind a late link a stronger, delayed
   // damper is itself active. A deficit it cannot cover is carried.
-  const double push_along_motion = std::max(0.0, dot(force_N, velocity_next)) / speed_squared;
+  const double push_along_motion = std::max(0.0, dot(force, velocity_next)) / speed_squared;
+  // The cap bounds both stages together.
   const double alpha = std::min({-remaining_mJ / (speed_squared * dt_s), push_along_motion,
-                                 settings_.max_damping_N_s_per_mm});
-  if (alpha <= 0.0) return push(force_N);
-  last_damping_ = alpha;
-  ++active_ticks_;
-  return push(force_N - velocity_next * alpha);
+                                 settings_.max_damping_N_s_per_mm - last_damping_});
+  if (alpha <= 0.0) return render(force);
+  last_damping_ += alpha;
+  return render(force - velocity_next * alpha);
 }
 
 }  // namespace hapticut::servo

@@ -9,14 +9,19 @@
 // the controller adds just enough damping, f' = f - alpha v with
 // alpha = -W / (|v|^2 dt), to bring it back to zero.
 //
-// Two details beyond the paper's single-sample form, both for a sampled,
+// Three details beyond the paper's single-sample form, all for a sampled,
 // late link (docs/stability.md):
 // - the work of an interval is counted with the force actually rendered
 //   during it: the force output link_delay_ticks + 1 ticks ago, not the one
 //   being computed (the device holds a force until the next one arrives);
 // - the force already sent but not yet observed ("in flight") is counted as
 //   doing work at the newest velocity, so the controller acts before the
-//   hand has been given the energy, not a link delay after.
+//   hand has been given the energy, not a link delay after;
+// - lag compensation: once the energy left runs below a margin, a force
+//   pushing along the motion is first damped by the environment's stiffness
+//   (measured from the asked forces) times the loop's lag, which takes off
+//   what a spring seen delay + 1 ticks late adds on the hand's way out. It
+//   acts smoothly, before the reactive damping above has to cut the force.
 //
 // The servo's safety layer runs one per force device through its passivity
 // hook: observe() and reset() have that interface's signatures, so an adapter
@@ -56,7 +61,9 @@ class HannafordRyuPassivity {
   // W: energy taken from the hand so far (mJ = N mm); >= 0 while passive.
   double observed_energy_mJ() const { return observed_energy_mJ_; }
   double last_damping_N_s_per_mm() const { return last_damping_; }
-  std::uint64_t active_ticks() const { return active_ticks_; }  // Ticks that added damping.
+  // Ticks whose force the controller changed (lag compensation or damping).
+  std::uint64_t active_ticks() const { return active_ticks_; }
+  double stiffness_N_per_mm() const { return stiffness_N_per_mm_; }
   const PassivitySettings& settings() const { return settings_; }
 
  private:
@@ -69,6 +76,8 @@ class HannafordRyuPassivity {
   std::uint64_t active_ticks_ = 0;
   Vec3 last_velocity_;
   bool has_velocity_ = false;
+  Vec3 last_asked_N_;                // The force asked for last tick.
+  double stiffness_N_per_mm_ = 0.0;  // The environment's, as last measured.
 };
 
 }  // namespace hapticut::servo
