@@ -5,6 +5,8 @@ the force, through one ``gpu`` draw handler. The batches are built once per new 
 
 from __future__ import annotations
 
+import time
+
 import bpy
 import numpy as np
 
@@ -83,6 +85,8 @@ def draw() -> None:
         _batches = _build(session.frame, bpy.context.scene)
         _drawn_sequence = session.frame.sequence
         session.frames_drawn += 1
+        # The age of the drawn frame: servo time (CLOCK_MONOTONIC, as time.monotonic) to now.
+        session.drawn_ages_s.append(time.monotonic() - float(session.frame.header["servo_time_s"]))
     shader, batches = _batches
     gpu.state.point_size_set(5.0)
     gpu.state.line_width_set(2.0)

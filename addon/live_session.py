@@ -51,7 +51,8 @@ class Session:
     status_pending: bool = False
     frames_drawn: int = 0
     tick_costs_s: list = field(default_factory=list)
-    frame_ages_s: list = field(default_factory=list)
+    frame_ages_s: list = field(default_factory=list)  # Servo time to the timer's take.
+    drawn_ages_s: list = field(default_factory=list)  # Servo time to the first draw (GUI only).
 
     @property
     def alive(self) -> bool:
@@ -245,6 +246,7 @@ def tick(session: Session, poses: dict[str, list[float]] | None = None) -> bool:
         lose(session, f"the servo stopped answering ({error})")
     session.tick_costs_s.append(time.perf_counter() - began)
     del session.tick_costs_s[:-4096], session.frame_ages_s[:-4096]
+    del session.drawn_ages_s[:-4096]
     return new
 
 
@@ -267,3 +269,15 @@ def port_is_free(port: int) -> bool:
         except OSError:
             return False
     return True
+
+
+def age_text(ages_s: list) -> str:
+    """p50 / p99 of frame ages, in ms ("" without samples)."""
+    if not ages_s:
+        return ""
+    ordered = sorted(ages_s)
+
+    def at(fraction: float) -> float:
+        return 1000.0 * ordered[min(len(ordered) - 1, int(fraction * len(ordered)))]
+
+    return f"{at(0.5):.1f} / {at(0.99):.1f} ms"
