@@ -57,11 +57,6 @@ SafetySettings limit_to_device(const SafetySettings& requested, const DeviceLimi
   return s;
 }
 
-double stiffness_limit(const DeviceLimits& device, double rate_Hz) {
-  if (!(device.max_stiffness_N_per_mm > 0.0) || !(rate_Hz > 0.0)) return 0.0;
-  return device.max_stiffness_N_per_mm * std::min(1.0, rate_Hz / kStiffnessLimitRate_Hz);
-}
-
 SafetyChannel::SafetyChannel(const SafetySettings& settings, const DeviceLimits& limits)
     : settings_(limit_to_device(settings, limits)), limits_(limits) {}
 

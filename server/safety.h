@@ -14,6 +14,7 @@
 // Every flag that turns on is an event, counted and reported.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -70,8 +71,13 @@ inline constexpr double kStiffnessLimitRate_Hz = 1000.0;
 // spring k stays passive while the device's damping exceeds k T / 2 (Colgate
 // and Schenkel), so at a slower rate the same margin needs k lowered in
 // proportion to the rate; a faster rate does not raise it (the profile states
-// only 1 kHz). docs/servo.md, "Stiffness limit".
-double stiffness_limit(const DeviceLimits& device, double rate_Hz);
+// only 1 kHz). docs/servo.md, "Stiffness limit". Inline, so that the
+// stability bench (server/devices/stability.cpp), which does not link the
+// servo, runs the same rule.
+inline double stiffness_limit(const DeviceLimits& device, double rate_Hz) {
+  if (!(device.max_stiffness_N_per_mm > 0.0) || !(rate_Hz > 0.0)) return 0.0;
+  return device.max_stiffness_N_per_mm * std::min(1.0, rate_Hz / kStiffnessLimitRate_Hz);
+}
 
 // The coupling stiffness a blade steps with: `requested`, lowered to `limit`
 // when a limit is known (limit > 0). Never raises it.

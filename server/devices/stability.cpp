@@ -3,12 +3,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <sstream>
+#include <stdexcept>
 
 #include "devices/virtual_hand.h"
 #include "hapticut/proxy.h"
 #include "hapticut/reference_meshes.h"
 #include "hapticut/space.h"
+#include "safety.h"
 
 namespace hapticut::servo {
 namespace {
@@ -90,47 +93,115 @@ StabilityResult run_stability_case(const StabilityCase& c) {
   return result;
 }
 
-std::string stability_table(const std::vector<double>& rates_Hz,
-                            const std::vector<double>& delays_s,
-                            const std::vector<double>& stiffnesses_N_per_mm) {
-  std::ostringstream out;
-  out << "Energy the loop gives the hand (mJ, largest running sum; <= 0: passive) and the\n"
-         "contact's swing in the last second (mm), without and with the passivity controller.\n\n";
-  out << "| rate Hz | delay ms | k N/mm | without: energy mJ | swing mm | with: energy mJ | swing "
-         "mm "
-         "| damped ticks |\n";
-  out << "|--------:|---------:|-------:|-------------------:|---------:|----------------:|--------"
-         "-:"
-         "|-------------:|\n";
-  int active_without = 0;
-  int active_with = 0;
+namespace {
+
+StabilityRow make_row(const DeviceLimits& device, double rate_Hz, double delay_s, double k) {
+  StabilityRow row;
+  row.servo_rate_Hz = rate_Hz;
+  row.link_delay_s = delay_s;
+  row.stiffness_N_per_mm = k;
+  row.limit_N_per_mm = stiffness_limit(device, rate_Hz);
+  // Above the limit: the servo would not step with it (stiffness_in_force lowers it).
+  row.above_limit = stiffness_in_force(k, row.limit_N_per_mm) < k;
+  return row;
+}
+
+}  // namespace
+
+std::vector<double> quarter_half_all(double limit_N_per_mm) {
+  return {limit_N_per_mm / 4, limit_N_per_mm / 2, limit_N_per_mm};
+}
+
+std::vector<StabilityRow> servo_limit_grid(const DeviceLimits& device,
+                                           const std::vector<double>& rates_Hz,
+                                           const std::vector<double>& delays_s) {
+  if (!(device.max_stiffness_N_per_mm > 0.0)) {
+    throw std::invalid_argument("the device states no max_stiffness_N_per_mm");
+  }
+  std::vector<StabilityRow> rows;
   for (double rate : rates_Hz) {
+    const double limit = stiffness_limit(device, rate);
     for (double delay : delays_s) {
-      for (double k : stiffnesses_N_per_mm) {
-        StabilityCase c;
-        c.servo_rate_Hz = rate;
-        c.link_delay_s = delay;
-        c.stiffness_N_per_mm = k;
-        c.passivity = false;
-        const StabilityResult without = run_stability_case(c);
-        c.passivity = true;
-        const StabilityResult with = run_stability_case(c);
-        active_without += without.max_energy_to_hand_mJ > 0.0 ? 1 : 0;
-        active_with += with.max_energy_to_hand_mJ > 0.0 ? 1 : 0;
-        char line[256];
-        std::snprintf(line, sizeof line,
-                      "| %7.0f | %8.1f | %6.2f | %18.4f | %8.3f | %15.4f | %8.3f | %12llu |\n",
-                      rate, delay * 1e3, k, without.max_energy_to_hand_mJ, without.late_swing_mm,
-                      with.max_energy_to_hand_mJ, with.late_swing_mm,
-                      static_cast<unsigned long long>(with.passivity_active_ticks));
-        out << line;
-      }
+      for (double k : quarter_half_all(limit)) rows.push_back(make_row(device, rate, delay, k));
     }
   }
-  const int cases =
-      static_cast<int>(rates_Hz.size() * delays_s.size() * stiffnesses_N_per_mm.size());
-  out << "\nGives the hand energy: " << active_without << " of " << cases
-      << " cases without the controller, " << active_with << " of " << cases << " with it.\n";
+  return rows;
+}
+
+std::vector<StabilityRow> absolute_grid(const DeviceLimits& device,
+                                        const std::vector<double>& rates_Hz,
+                                        const std::vector<double>& delays_s,
+                                        const std::vector<double>& stiffnesses_N_per_mm) {
+  std::vector<StabilityRow> rows;
+  for (double rate : rates_Hz) {
+    for (double delay : delays_s) {
+      for (double k : stiffnesses_N_per_mm) rows.push_back(make_row(device, rate, delay, k));
+    }
+  }
+  return rows;
+}
+
+StabilityCase stability_case(const StabilityRow& row, bool passivity) {
+  StabilityCase c;
+  c.servo_rate_Hz = row.servo_rate_Hz;
+  c.link_delay_s = row.link_delay_s;
+  c.stiffness_N_per_mm = row.stiffness_N_per_mm;
+  c.passivity = passivity;
+  return c;
+}
+
+void run_stability_rows(std::vector<StabilityRow>& rows) {
+  for (StabilityRow& row : rows) {
+    row.without = run_stability_case(stability_case(row, false));
+    row.with = run_stability_case(stability_case(row, true));
+  }
+}
+
+int rows_giving_energy(const std::vector<StabilityRow>& rows, bool passivity) {
+  return static_cast<int>(std::count_if(rows.begin(), rows.end(), [&](const StabilityRow& row) {
+    return (passivity ? row.with : row.without).max_energy_to_hand_mJ > 0.0;
+  }));
+}
+
+std::string stability_table(const std::string& title, const std::vector<StabilityRow>& rows,
+                            bool mark_limit) {
+  std::ostringstream out;
+  out << title << "\n\n";
+  out << "| rate Hz | delay ms | k N/mm | without: energy mJ | swing mm | with: energy mJ | swing "
+         "mm | damped ticks |"
+      << (mark_limit ? " above the servo's limit at this rate |" : "") << "\n";
+  out << "|--------:|---------:|-------:|-------------------:|---------:|----------------:|------"
+         "---:|-------------:|"
+      << (mark_limit ? ":-------------------------------------:|" : "") << "\n";
+  for (const StabilityRow& row : rows) {
+    char line[256];
+    std::snprintf(line, sizeof line,
+                  "| %7.0f | %8.1f | %6.3f | %18.4f | %8.3f | %15.4f | %8.3f | %12llu |",
+                  row.servo_rate_Hz, row.link_delay_s * 1e3, row.stiffness_N_per_mm,
+                  row.without.max_energy_to_hand_mJ, row.without.late_swing_mm,
+                  row.with.max_energy_to_hand_mJ, row.with.late_swing_mm,
+                  static_cast<unsigned long long>(row.with.passivity_active_ticks));
+    out << line;
+    if (mark_limit) {
+      std::snprintf(line, sizeof line, " %37s |", row.above_limit ? "yes" : "no");
+      out << line;
+    }
+    out << "\n";
+  }
+  const int cases = static_cast<int>(rows.size());
+  out << "\nGives the hand energy: " << rows_giving_energy(rows, false) << " of " << cases
+      << " cases without the controller, " << rows_giving_energy(rows, true) << " of " << cases
+      << " with it.\n";
+  if (mark_limit) {
+    std::vector<StabilityRow> within;
+    std::copy_if(rows.begin(), rows.end(), std::back_inserter(within),
+                 [](const StabilityRow& row) { return !row.above_limit; });
+    const int inside = static_cast<int>(within.size());
+    out << "Within the servo's limit at their rate (" << inside << " of " << cases
+        << " cases), gives the hand energy: " << rows_giving_energy(within, false) << " of "
+        << inside << " without the controller, " << rows_giving_energy(within, true) << " of "
+        << inside << " with it.\n";
+  }
   return out.str();
 }
 

@@ -6,9 +6,11 @@
 // hand's own motion, integrated at the hand's 10 kHz physics step.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
+#include "devices/device.h"
 #include "devices/passivity.h"
 
 namespace hapticut::servo {
@@ -36,9 +38,59 @@ struct StabilityResult {
 
 StabilityResult run_stability_case(const StabilityCase& c);
 
-// The table for the given rates, delays and stiffnesses, each with and without the controller.
-std::string stability_table(const std::vector<double>& rates_Hz,
-                            const std::vector<double>& delays_s,
-                            const std::vector<double>& stiffnesses_N_per_mm);
+// The device the bench's grids are for unless a profile is given: the test
+// force-device profile (server/devices/tests/data/example-force-device.json,
+// not installed, hence stated here; a test holds the two equal).
+inline constexpr double kTestForceDeviceMaxStiffness_N_per_mm = 2.0;
+
+// The bench's default rates and link delays.
+inline const std::vector<double> kStabilityRates_Hz{250.0, 500.0, 1000.0};
+inline const std::vector<double> kStabilityDelays_s{0.0, 0.001, 0.002, 0.005};
+
+// One row of a table: a rate, a delay and a stiffness, run without and with
+// the controller.
+struct StabilityRow {
+  double servo_rate_Hz = 1000.0;
+  double link_delay_s = 0.0;
+  double stiffness_N_per_mm = 1.0;
+  // The servo's limit at this rate for the grid's device (stiffness_limit,
+  // server/safety.h; 0: none known) and whether the stiffness is above it
+  // (the servo would lower such a scene stiffness and refuse such a set).
+  double limit_N_per_mm = 0.0;
+  bool above_limit = false;
+  StabilityResult without;  // Filled by run_stability_rows.
+  StabilityResult with;
+};
+
+// A quarter, half and all of a stiffness limit: the stiffnesses of a grid.
+std::vector<double> quarter_half_all(double limit_N_per_mm);
+
+// The grid the servo can render: at each rate a quarter, half and all of
+// stiffness_limit(device, rate), each at every delay. The device must state a
+// limit (max_stiffness_N_per_mm > 0), else std::invalid_argument.
+std::vector<StabilityRow> servo_limit_grid(const DeviceLimits& device,
+                                           const std::vector<double>& rates_Hz,
+                                           const std::vector<double>& delays_s);
+
+// Every stiffness (absolute, N/mm) at every rate and delay, each row marked
+// against the device's limit at its rate.
+std::vector<StabilityRow> absolute_grid(const DeviceLimits& device,
+                                        const std::vector<double>& rates_Hz,
+                                        const std::vector<double>& delays_s,
+                                        const std::vector<double>& stiffnesses_N_per_mm);
+
+// The case of a row, without or with the controller.
+StabilityCase stability_case(const StabilityRow& row, bool passivity);
+
+// Runs every row without and with the controller.
+void run_stability_rows(std::vector<StabilityRow>& rows);
+
+// Rows with energy > 0 (the loop gave the hand energy), without or with the controller.
+int rows_giving_energy(const std::vector<StabilityRow>& rows, bool passivity);
+
+// The table of run rows, under `title`; mark_limit adds the column "above
+// the servo's limit at this rate" and a summary of the rows within it.
+std::string stability_table(const std::string& title, const std::vector<StabilityRow>& rows,
+                            bool mark_limit);
 
 }  // namespace hapticut::servo

@@ -1,5 +1,7 @@
-// hapticut-stability: prints the stability table (docs/stability.md).
-// `hapticut bench stability` runs it; options choose the grid.
+// hapticut-stability: prints the stability tables (docs/stability.md): the servo's grid
+// (stiffness up to its limit at each rate) and a stress test beyond it.
+// `hapticut bench stability` runs it; options choose the grids.
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -9,6 +11,7 @@
 
 #include "devices/profile.h"
 #include "devices/stability.h"
+#include "safety.h"
 
 namespace {
 
@@ -18,11 +21,19 @@ std::vector<double> parse_list(const char* text, double unit) {
   std::string item;
   while (std::getline(stream, item, ',')) {
     std::size_t used = 0;
-    const double value = std::stod(item, &used);
-    if (used != item.size() || !(value >= 0.0)) throw std::invalid_argument(item);
+    double value = -1.0;
+    try {
+      value = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (item.empty() || used != item.size() || !(value >= 0.0) || !std::isfinite(value)) {
+      throw std::invalid_argument("'" + item + "' in '" + text +
+                                  "' is not a number >= 0 (a list is comma-separated)");
+    }
     values.push_back(value * unit);
   }
-  if (values.empty()) throw std::invalid_argument(text);
+  if (values.empty()) throw std::invalid_argument("an empty list");
   return values;
 }
 
@@ -31,16 +42,31 @@ constexpr const char* kUsage =
     "                          [--profile FILE.json]\n"
     "  A virtual hand presses on bone through the engine at each servo rate, link delay and\n"
     "  stiffness, without and with the passivity controller; prints the energy the loop gives\n"
-    "  the hand. Defaults: rates 250,500,1000; delays 0,1,2,5 ms; stiffness 0.5,1,2 N/mm, or\n"
-    "  a quarter, half and all of a profile's max_stiffness_N_per_mm with --profile.\n"
+    "  the hand. Defaults: rates 250,500,1000; delays 0,1,2,5 ms; the device is the test\n"
+    "  force-device profile (2 N/mm at 1 kHz), or --profile's limits.\n"
+    "  Two tables by default: (1) within the servo's limit, at each rate a quarter, half and\n"
+    "  all of the stiffness the servo allows the device at that rate (max_stiffness_N_per_mm x\n"
+    "  min(1, rate/1000)); (2) a stress test, a quarter, half and all of the device's 1 kHz\n"
+    "  maximum at every rate, rows above the servo's limit at their rate marked.\n"
+    "  --stiffness: only table (2), with these absolute stiffnesses.\n"
     "Exit codes: 0 printed, 2 bad option.\n";
+
+std::string number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::vector<double> rates{250.0, 500.0, 1000.0};
-  std::vector<double> delays{0.0, 0.001, 0.002, 0.005};
-  std::vector<double> stiffness{0.5, 1.0, 2.0};
+  using namespace hapticut::servo;
+  std::vector<double> rates = kStabilityRates_Hz;
+  std::vector<double> delays = kStabilityDelays_s;
+  std::vector<double> stiffness;  // Empty: both tables.
+  DeviceLimits device;
+  device.max_stiffness_N_per_mm = kTestForceDeviceMaxStiffness_N_per_mm;
+  std::string device_name = "the test force-device profile";
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string option = argv[i];
@@ -57,9 +83,11 @@ int main(int argc, char** argv) {
       } else if (option == "--stiffness") {
         stiffness = parse_list(value, 1.0);
       } else if (option == "--profile") {
-        const double k = hapticut::servo::load_profile(value).limits.max_stiffness_N_per_mm;
-        if (k <= 0.0) throw std::invalid_argument(std::string(value) + " states no max stiffness");
-        stiffness = {k / 4, k / 2, k};
+        device = load_profile(value).limits;
+        if (!(device.max_stiffness_N_per_mm > 0.0)) {
+          throw std::invalid_argument(std::string(value) + " states no max stiffness");
+        }
+        device_name = value;
       } else {
         throw std::invalid_argument("unknown option " + option);
       }
@@ -71,6 +99,32 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "hapticut-stability: %s\n%s", error.what(), kUsage);
     return 2;
   }
-  std::fputs(hapticut::servo::stability_table(rates, delays, stiffness).c_str(), stdout);
+  const std::string k_max = number(device.max_stiffness_N_per_mm) + " N/mm";
+  std::fputs(
+      "Energy the loop gives the hand (mJ, largest running sum; <= 0: passive) and the\n"
+      "contact's swing in the last second (mm), without and with the passivity controller.\n"
+      "Device: ",
+      stdout);
+  std::printf("%s, %s at 1 kHz.\n\n", device_name.c_str(), k_max.c_str());
+  const bool stress = stiffness.empty();
+  if (stress) {
+    std::vector<StabilityRow> rows = servo_limit_grid(device, rates, delays);
+    run_stability_rows(rows);
+    const std::string title =
+        "Within the servo's limit: at each rate a quarter, half and all of the stiffness the\n"
+        "servo allows there (stiffness_limit: " +
+        k_max + " x min(1, rate / 1000 Hz)).";
+    std::printf("%s\n", stability_table(title, rows, false).c_str());
+    stiffness = quarter_half_all(stiffness_limit(device, kStiffnessLimitRate_Hz));
+  }
+  std::vector<StabilityRow> rows = absolute_grid(device, rates, delays, stiffness);
+  run_stability_rows(rows);
+  const std::string title =
+      (stress ? "Stress test, beyond the servo's limit: a quarter, half and all of " + k_max +
+                    " at every rate."
+              : std::string("The stiffnesses asked (--stiffness) at every rate.")) +
+      "\nThe servo lowers a scene stiffness above its limit at the rate and refuses a set\n"
+      "above it; such rows are marked.";
+  std::fputs(stability_table(title, rows, true).c_str(), stdout);
   return 0;
 }
