@@ -73,11 +73,21 @@ void tick_blade(Binding& b, double now_s, double dt_s, std::atomic<bool>& engage
       r.engine_force_N = tick.force_N;
       r.engine_torque_N_mm = tick.torque_N_mm;
     }
-    read_blade_frame(*b.blade, b.frame);
+    b.frame_stale = true;
   }
   r.safety =
       b.safety->render(r.engine_force_N, r.engine_torque_N_mm, engine_ok, dt_s, engaged, stopping);
   b.device->write(r.safety.force_N, r.safety.torque_N_mm);
+}
+
+// The blade's frame, brought up to its last step (a snapshot of every point:
+// taken off the tick's compute, and only on the ticks that record or stream).
+const BladeFrame& current_frame(Binding& b) {
+  if (b.frame_stale) {
+    read_blade_frame(*b.blade, b.frame);
+    b.frame_stale = false;
+  }
+  return b.frame;
 }
 
 void publish_report(const Binding& b, LatestValue<SafetyReport>& out) {
@@ -208,8 +218,8 @@ void run_loop(Session& session, LoopShared& shared) {
         header.blade_count = static_cast<std::uint32_t>(bindings.size());
         std::memcpy(slot, &header, sizeof(header));
         std::size_t offset = sizeof(header);
-        for (const Binding& b : bindings)
-          offset += write_blade_block(b.result, b.frame, slot + offset);
+        for (Binding& b : bindings)
+          offset += write_blade_block(b.result, current_frame(b), slot + offset);
         ring->end_push();
       }
     }
@@ -233,8 +243,8 @@ void run_loop(Session& session, LoopShared& shared) {
       header.dropped_records = dropped;
       header.servo_flags = servo_flags(stopping, fast, recording);
       std::size_t offset = sizeof(header);
-      for (const Binding& b : bindings)
-        offset += write_blade_block(b.result, b.frame, frame.bytes + offset);
+      for (Binding& b : bindings)
+        offset += write_blade_block(b.result, current_frame(b), frame.bytes + offset);
       header.frame_bytes = static_cast<std::uint32_t>(offset);
       std::memcpy(frame.bytes, &header, sizeof(header));
       frame.size = static_cast<std::uint32_t>(offset);

@@ -47,6 +47,9 @@ struct Binding {
   // 0: none known): the blade steps with the settings' stiffness lowered to it.
   double max_stiffness_N_per_mm = 0.0;
   BladeFrame frame;
+  // The blade stepped since `frame` was last filled: the snapshot is taken
+  // only when a record or a stream frame needs it, after the device write.
+  bool frame_stale = false;
   BladeTickResult result;
   bool has_reset = false;
   bool engage_bit = false;  // kEngageRequestBit of the last admitted sample.

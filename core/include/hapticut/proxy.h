@@ -47,11 +47,12 @@ struct Transition {
   std::uint8_t padding2 = 0;
 };
 
+// The scalars first: a tick touches them next to the proxy's place (see the
+// member order of Proxy); the transition table is written only on a transition.
 struct ProxyCounters {
-  // transitions[from][to][to_neighbour]; "stay" transitions are not counted.
-  std::array<std::array<std::array<std::uint64_t, 2>, kProxyStateCount>, kProxyStateCount>
-      transitions{};
   std::uint64_t ticks = 0;
+  std::uint64_t total_transitions = 0;
+  std::uint32_t max_transitions_in_tick = 0;
   // Ticks that ended unfinished: the cap was reached and one more transition
   // would still have changed something (a walk that converges exactly at the
   // cap is not capped).
@@ -61,8 +62,9 @@ struct ProxyCounters {
   std::uint64_t rejected_inputs = 0;
   std::uint64_t out_of_workspace_inputs = 0;  // The part of rejected_inputs far outside.
   std::uint64_t deferred_ticks = 0;           // Blade ticks skipped by the work budget.
-  std::uint32_t max_transitions_in_tick = 0;
-  std::uint64_t total_transitions = 0;
+  // transitions[from][to][to_neighbour]; "stay" transitions are not counted.
+  std::array<std::array<std::array<std::uint64_t, 2>, kProxyStateCount>, kProxyStateCount>
+      transitions{};
 };
 
 struct TickResult {
@@ -81,7 +83,7 @@ enum class StartKind : std::uint8_t {
   PushedOutOfRigid,  // p inside rigid material: q on the nearest face out of it.
 };
 
-class Proxy {
+class alignas(64) Proxy {
  public:
   // The proxy shares ownership of its Space (space.h, "Who owns a Space").
   explicit Proxy(std::shared_ptr<const Space> space);
@@ -167,20 +169,27 @@ class Proxy {
   Outcome settle_at(const Vec3& q);
   StartKind push_out_of_rigid(std::int32_t start_tet, const Vec3& p);
 
-  // The Space through a plain pointer on the hot path; space_owner_ (last,
-  // away from the hot members) keeps it alive.
+  // Member order is for the cache: what every tick reads and writes (the
+  // Space pointer, the place, p, the force, the scalar counters up to
+  // max_transitions_in_tick) fills the first two cache lines exactly; a
+  // 500-point blade's proxies do not fit L1, and each line more per proxy
+  // was a miss more per point and tick (static_assert in proxy.cpp). The Space
+  // goes through a plain pointer on the hot path; space_owner_ (last, away
+  // from the hot members) keeps it alive.
   const Space* space_;
+  ProxyPlace place_;
+  Vec3 last_p_;
+  Vec3 force_N_;
+  int unfinished_in_row_ = 0;  // Capped or deferred ticks since the last finished one.
+  bool has_last_p_ = false;
+  ProxyCounters counters_;
+  // The force of the last finished tick, held on a capped or deferred one:
+  // saved when the first of them begins (hold_force), not on every tick.
+  Vec3 finished_force_N_;
   // The mesh's box grown by its diagonal: OUTSIDE clips its entry search to it.
   Aabb reach_box_;
   // The mesh's box grown by the tolerance: a p outside it is outside the mesh.
   Aabb mesh_box_;
-  ProxyPlace place_;
-  Vec3 last_p_;
-  bool has_last_p_ = false;
-  Vec3 force_N_;
-  Vec3 finished_force_N_;      // The force of the last finished tick, held on a capped one.
-  int unfinished_in_row_ = 0;  // Capped or deferred ticks since the last finished one.
-  ProxyCounters counters_;
   std::shared_ptr<const Space> space_owner_;
 };
 
