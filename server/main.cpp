@@ -40,6 +40,7 @@ int run_bare_loop(const Options& options) {
   std::thread thread([&] {
     realtime = options.realtime ? enter_realtime_priority(options.priority)
                                 : std::string("real-time: not asked for (--no-realtime)");
+    if (options.cpu >= 0) realtime += "; " + pin_to_cpu(options.cpu);
     const double period = 1.0 / rate;
     const double start = monotonic_now_s();
     double deadline = start + period;
@@ -108,6 +109,11 @@ int run(const Options& options) {
   sigaddset(&signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   signal(SIGPIPE, SIG_IGN);
+  // Before any thread starts: every thread but the loop inherits this affinity.
+  if (options.cpu >= 0) {
+    const std::string line = keep_threads_off_cpu(options.cpu);
+    if (!options.quiet) std::printf("hapticut-servo: %s\n", line.c_str());
+  }
 
   Servo servo_state(options);
   if (!options.scene_path.empty()) {

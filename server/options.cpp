@@ -54,6 +54,9 @@ constexpr const char* kUsage =
     "                          the binary in the package, or $HAPTICUT_PROFILE_DIR)\n"
     "  --no-realtime           do not ask for SCHED_FIFO\n"
     "  --priority P            SCHED_FIFO priority, 1 to 99 (80)\n"
+    "  --cpu N                 pin the loop thread to CPU N and keep the servo's\n"
+    "                          other threads off it, where permitted (default: not\n"
+    "                          pinned); also for --bare-loop\n"
     "  --bare-loop             measure a bare clock_nanosleep loop at --rate for\n"
     "                          --duration (2 s) and print its wake latency as JSON\n"
     "  --print-layout          print the frame and record layouts as JSON and exit\n"
@@ -69,6 +72,9 @@ constexpr const char* kExitCodes =
     "error, 2 bad command line, 3 scene file missing or invalid, 4 device binding or\n"
     "device failure, 5 control port unavailable or non-loopback without --token,\n"
     "6 recording file not writable.\n";
+
+// CPU_SETSIZE of glibc: the CPUs a cpu_set_t can name.
+constexpr int kMaxCpu = 1024;
 
 double number(const std::string& option, const char* text) {
   char* end = nullptr;
@@ -163,6 +169,12 @@ Options parse_options(int argc, const char* const* argv) {
       const double p = number(arg, value());
       if (p < 1 || p > 99) throw UsageError("--priority: 1 to 99");
       o.priority = static_cast<int>(p);
+    } else if (arg == "--cpu") {
+      const double cpu = number(arg, value());
+      if (cpu < 0 || cpu >= kMaxCpu || cpu != std::floor(cpu)) {
+        throw UsageError("--cpu: a CPU number 0 to " + std::to_string(kMaxCpu - 1));
+      }
+      o.cpu = static_cast<int>(cpu);
     } else if (arg == "--bare-loop") {
       o.bare_loop = true;
     } else if (arg == "--print-layout") {

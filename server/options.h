@@ -39,6 +39,7 @@ struct Options {
   bool engage = false;
   bool realtime = true;
   int priority = 80;
+  int cpu = -1;  // --cpu: the CPU the loop thread has to itself; -1: not pinned.
   double watchdog_ms = 100.0;
   double max_force_N = 1e300;
   double max_torque_N_mm = 1e300;

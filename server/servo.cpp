@@ -197,10 +197,12 @@ void Servo::start() {
   auto message_future = started_message.get_future();
   s.running.store(true);
   loop_thread_ = std::thread([this, realtime, priority, &started_message] {
-    started_message.set_value(
+    std::string message =
         realtime ? enter_realtime_priority(priority)
                  : std::string("real-time: not asked for (") +
-                       (options_.realtime ? "as fast as possible" : "--no-realtime") + ")");
+                       (options_.realtime ? "as fast as possible" : "--no-realtime") + ")";
+    if (options_.cpu >= 0) message += "; " + pin_to_cpu(options_.cpu);
+    started_message.set_value(message);
     run_loop(*session_, *shared_);
   });
   realtime_message_ = message_future.get();

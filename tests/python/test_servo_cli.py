@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+import os
 import re
 import subprocess
 import sys
@@ -58,3 +60,31 @@ def test_hapticut_serve_runs_the_servo(tmp_path):
         check=False,
     )
     assert help_result.returncode == 0 and "--device" in help_result.stdout
+
+
+def test_cpu_pins_the_loop_and_refuses_what_is_not_a_cpu():
+    cpu = max(os.sched_getaffinity(0))
+    result = run_servo("--bare-loop", "--rate", "1000", "--duration", "0.2", "--cpu", str(cpu))
+    assert result.returncode == 0, result.stderr
+    assert f"loop pinned to CPU {cpu}" in json.loads(result.stdout)["realtime"]
+    # A CPU the machine does not have: one clear line, and the loop runs unpinned.
+    result = run_servo("--bare-loop", "--rate", "1000", "--duration", "0.2", "--cpu", "1000")
+    assert result.returncode == 0, result.stderr
+    out = json.loads(result.stdout)
+    assert "loop not pinned to CPU 1000" in out["realtime"]
+    assert out["ticks"] > 0
+    for value in ("-1", "1.5", "1024", "two"):
+        result = run_servo("--bare-loop", "--cpu", value)
+        assert result.returncode == 2, (value, result.stderr)
+        assert "--cpu" in result.stderr
+
+
+def test_cpu_keeps_the_servos_other_threads_off_the_loops_cpu():
+    cpus = sorted(os.sched_getaffinity(0))
+    result = run_servo(str(SPHERE), "--device", "sim", "--duration", "0.2", "--cpu", str(cpus[-1]))
+    assert result.returncode == 0, result.stderr
+    assert f"loop pinned to CPU {cpus[-1]}" in result.stdout
+    if len(cpus) > 1:
+        assert f"other threads kept off CPU {cpus[-1]}" in result.stdout
+    else:
+        assert "is the only CPU allowed" in result.stdout

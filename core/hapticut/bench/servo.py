@@ -58,9 +58,23 @@ def _scene_with_points(source: Path, points: int, directory: Path) -> tuple[Path
     return path, len(scene.tets), float(stroke_mm)
 
 
-def _bare_loop(rate_Hz: float, duration_s: float) -> dict:
+def _cpu_split() -> tuple[int | None, set[int]]:
+    """The CPU the servo's loop gets to itself (the last one this process may use) and the
+    others, for the client; (None, all) on a machine with one CPU."""
+    cpus = sorted(os.sched_getaffinity(0))
+    if len(cpus) < 2:
+        return None, set(cpus)
+    return cpus[-1], set(cpus[:-1])
+
+
+def _cpu_args(cpu: int | None) -> list[str]:
+    return [] if cpu is None else ["--cpu", str(cpu)]
+
+
+def _bare_loop(rate_Hz: float, duration_s: float, cpu: int | None = None) -> dict:
     out = subprocess.run(
-        [servo_path(), "--bare-loop", "--rate", str(rate_Hz), "--duration", str(duration_s)],
+        [servo_path(), "--bare-loop", "--rate", str(rate_Hz), "--duration", str(duration_s)]
+        + _cpu_args(cpu),
         capture_output=True,
         text=True,
         check=True,
@@ -68,9 +82,18 @@ def _bare_loop(rate_Hz: float, duration_s: float) -> dict:
     return json.loads(out.stdout)
 
 
-def _receive(client: ServoClient, stop: threading.Event, ages: list[float], how: list) -> None:
+def _receive(
+    client: ServoClient,
+    stop: threading.Event,
+    ages: list[float],
+    how: list,
+    cpus: set[int] | None = None,
+) -> None:
     # A client that wants fresh frames on a busy machine: SCHED_FIFO for its
-    # receiving thread where permitted (else the scheduler's delay is in the age).
+    # receiving thread where permitted (else the scheduler's delay is in the age),
+    # off the servo loop's CPU when it has one.
+    if cpus:
+        os.sched_setaffinity(0, cpus)  # 0: this thread only.
     try:
         os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(50))
         how.append("receiving thread SCHED_FIFO 50")
@@ -84,13 +107,20 @@ def _receive(client: ServoClient, stop: threading.Event, ages: list[float], how:
 
 
 def measure(
-    scene: Path, tets: int, stroke_mm: float, points: int, rate_Hz: float, duration_s: float
+    scene: Path,
+    tets: int,
+    stroke_mm: float,
+    points: int,
+    rate_Hz: float,
+    duration_s: float,
+    cpu: int | None = None,
+    client_cpus: set[int] | None = None,
 ) -> Row:
-    bare = _bare_loop(rate_Hz, max(0.5, duration_s * 0.6))
+    bare = _bare_loop(rate_Hz, max(0.5, duration_s * 0.6), cpu)
     speed = stroke_mm / duration_s
     device = f"scalpel=sim:press-slide,speed={speed:.3f},hold_s={duration_s}"
     args = [str(scene), "--wait", "--engage", "--rate", str(rate_Hz), "--quiet"]
-    args += ["--duration", str(duration_s), "--device", device]
+    args += ["--duration", str(duration_s), "--device", device] + _cpu_args(cpu)
     with ServoProcess(args) as servo:
         client = ServoClient(port=servo.port)
         client.hello()
@@ -99,7 +129,7 @@ def measure(
         ages: list[float] = []
         stop = threading.Event()
         how: list[str] = []
-        receiver = threading.Thread(target=_receive, args=(client, stop, ages, how))
+        receiver = threading.Thread(target=_receive, args=(client, stop, ages, how, client_cpus))
         receiver.start()
         client.start()
         started = time.monotonic()
@@ -124,16 +154,20 @@ def run(duration_s: float = 1.5, scenes: list[Path] | None = None) -> str:
     if not scenes:
         raise FileNotFoundError("no examples/*.hapticut.msgpack here: run from the repository")
     rows: list[Row] = []
+    # The servo's loop on a CPU of its own (--cpu), the client's receiving thread on the
+    # others: a loop that wakes on another core each tick starts with cold caches.
+    servo_cpu, client_cpus = cpus = _cpu_split()
     with tempfile.TemporaryDirectory() as tmp:
         for source in scenes:
             for points in (50, 500):
                 path, tets, stroke = _scene_with_points(source, points, Path(tmp))
                 for rate in (1000.0, 10000.0):
-                    rows.append(measure(path, tets, stroke, points, rate, duration_s))
-    return render(rows)
+                    row = measure(path, tets, stroke, points, rate, duration_s, *cpus)
+                    rows.append(row)
+    return render(rows, servo_cpu, client_cpus)
 
 
-def render(rows: list[Row]) -> str:
+def render(rows: list[Row], servo_cpu: int | None = None, client_cpus: set[int] = ()) -> str:
     table = []
     for r in rows:
         c, w, b = r.stats["compute_us"], r.stats["wake_latency_us"], r.bare["wake_latency_us"]
@@ -179,5 +213,11 @@ def render(rows: list[Row]) -> str:
         f"at 120 Hz (age: arrival at the client; at send: the servo's sendto).\n"
         f"servo: {realtime}; bare loop: {rows[0].bare['realtime'] if rows else ''}; "
         f"client: {rows[0].stats.get('client', '') if rows else ''}"
+        + (
+            f"\nCPUs: the servo's loop alone on CPU {servo_cpu} (--cpu), its other threads and "
+            f"the client on {', '.join(map(str, sorted(client_cpus)))}"
+            if servo_cpu is not None
+            else "\nCPUs: one CPU, nothing pinned"
+        )
     )
     return format_table(headers, table) + notes
