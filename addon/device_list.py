@@ -3,7 +3,9 @@ child process, at most ``LIST_TIMEOUT_S``), and the limits of the device a bindi
 
 The listing (docs/devices.md) holds the HID devices hidapi finds with the profile each
 matches, the shipped profiles and the other kinds (sim, viewport, bridge), each with its
-limits. It is read on *Refresh devices* (and once when a check needs limits) and kept; the
+limits, the stiffness limit among them at the loop rate the listing was asked for
+(``--rate``: the servo's own rule, so the add-on has none). It is read on *Refresh devices*
+(and when a check needs limits at a rate the kept one was not read at) and kept; the
 panel's items are made from the kept listing only, so drawing never runs a process.
 No bpy here.
 """
@@ -50,11 +52,11 @@ _listing: dict | None = None
 _generation = 0  # Bumped at every new listing (the panel's items are cached per generation).
 
 
-def run_listing(servo: str, timeout_s: float | None = None) -> dict:
-    """``servo --list-devices --json``, checked; DeviceListError naming what went wrong.
-    The child is killed after timeout_s (LIST_TIMEOUT_S)."""
+def run_listing(servo: str, timeout_s: float | None = None, rate_Hz: float = 1000.0) -> dict:
+    """``servo --list-devices --json --rate rate_Hz``, checked; DeviceListError naming what
+    went wrong. The child is killed after timeout_s (LIST_TIMEOUT_S)."""
     timeout_s = LIST_TIMEOUT_S if timeout_s is None else timeout_s
-    command = [servo, "--list-devices", "--json"]
+    command = [servo, "--list-devices", "--json", "--rate", repr(float(rate_Hz))]
     try:
         done = subprocess.run(
             command,
@@ -82,19 +84,30 @@ def run_listing(servo: str, timeout_s: float | None = None) -> dict:
     for key in ("devices", "profiles", "kinds"):
         if not isinstance(listing.get(key), list):
             raise DeviceListError(f"{servo} --list-devices --json: no {key!r} list")
+    if listing.get("rate_Hz") != float(rate_Hz):
+        raise DeviceListError(
+            f"{servo} --list-devices --json gave no limits at {rate_Hz:g} Hz "
+            "(a servo older than the add-on?)"
+        )
     return listing
 
 
-def refresh(servo: str, timeout_s: float | None = None) -> dict:
-    """Read the listing again and keep it (a failure keeps the previous one)."""
+def refresh(servo: str, timeout_s: float | None = None, rate_Hz: float = 1000.0) -> dict:
+    """Read the listing again at this loop rate and keep it (a failure keeps the previous
+    one)."""
     global _listing, _generation
-    _listing = run_listing(servo, timeout_s)
+    _listing = run_listing(servo, timeout_s, rate_Hz)
     _generation += 1
     return _listing
 
 
 def cached() -> dict | None:
     return _listing
+
+
+def listed_rate() -> float | None:
+    """The loop rate the kept listing's stiffness limits are for (None: no listing)."""
+    return None if _listing is None else _listing["rate_Hz"]
 
 
 def generation() -> int:
@@ -183,11 +196,31 @@ def _number(options: dict, key: str, default: float) -> float:
         return default  # The servo refuses the binding and names the option.
 
 
+# The servo's stiffness limit at the listing's rate_Hz, in each entry's limits (docs/devices.md).
+STIFFNESS_AT_RATE = "max_stiffness_N_per_mm_at_rate"
+
+# The limit options of a binding text per kind: (option, limit).
+LIMIT_OPTIONS = {
+    "sim": (
+        ("max_force_N", "max_force_N"),
+        ("max_torque_N_mm", "max_torque_N_mm"),
+        ("max_stiffness_N_per_mm", "max_stiffness_N_per_mm"),
+    ),
+    "bridge": (
+        ("max_force", "max_force_N"),
+        ("max_torque", "max_torque_N_mm"),
+        ("max_stiffness", "max_stiffness_N_per_mm"),
+    ),
+}
+
+
 def limits_for(listing: dict, device_text: str) -> dict:
     """The limits of the device a ``--device`` text binds, with its limit options applied
     (sim's max_force_N, max_torque_N_mm, max_stiffness_N_per_mm, the bridge's max_force,
-    max_torque, max_stiffness); {} when the
-    listing does not know them (a profile file, replay, an unknown kind)."""
+    max_torque, max_stiffness); {} when the listing does not know them (a profile file,
+    replay, an unknown kind). A stiffness limit given in the text has no limit at the
+    listing's rate here (only the servo knows it): the servo's ``set`` refuses a stiffness
+    above it (docs/protocol.md)."""
     kind, _, args = device_text.strip().partition(":")
     bare, options = _options(args)
     if kind == "hid":
@@ -199,19 +232,12 @@ def limits_for(listing: dict, device_text: str) -> dict:
             profile = next((p for p in listing["profiles"] if p["name"] == name), None)
         return dict(profile.get("limits", {})) if profile else {}
     limits = dict(next((k.get("limits", {}) for k in listing["kinds"] if k["kind"] == kind), {}))
-    if kind == "sim" and limits:
-        limits["max_force_N"] = _number(options, "max_force_N", limits["max_force_N"])
-        limits["max_torque_N_mm"] = _number(options, "max_torque_N_mm", limits["max_torque_N_mm"])
-        limits["max_stiffness_N_per_mm"] = _number(
-            options, "max_stiffness_N_per_mm", limits.get("max_stiffness_N_per_mm", 0.0)
-        )
-    elif kind == "bridge" and limits:
-        for key, name in (
-            ("max_force", "max_force_N"),
-            ("max_torque", "max_torque_N_mm"),
-            ("max_stiffness", "max_stiffness_N_per_mm"),
-        ):
-            limits[name] = _number(options, key, limits[name])
+    keys = LIMIT_OPTIONS.get(kind, ()) if limits else ()
+    for key, name in keys:
+        if key in options:
+            limits[name] = _number(options, key, limits.get(name, 0.0))
+            if name == "max_stiffness_N_per_mm":
+                limits.pop(STIFFNESS_AT_RATE, None)
     return limits
 
 
@@ -219,30 +245,28 @@ def limits_for(listing: dict, device_text: str) -> dict:
 CHECKED = (
     ("max_force_N", "max_force_N", "max force", "N"),
     ("max_torque_N_mm", "max_torque_N_mm", "max torque", "N mm"),
-    ("stiffness_N_per_mm", "max_stiffness_N_per_mm", "stiffness", "N/mm"),
+    ("stiffness_N_per_mm", STIFFNESS_AT_RATE, "stiffness", "N/mm"),
 )
 
 
-# The rate a device's max_stiffness_N_per_mm is stated for; below it the servo lowers the
-# limit in proportion (docs/servo.md, "Stiffness limit").
-STIFFNESS_LIMIT_RATE_HZ = 1000.0
-
-
-def settings_problems(settings: dict, limits: dict, rate_Hz: float = 1000.0) -> list[str]:
-    """What of the settings (as sent to the servo's ``set``) lies above the device's limits.
-    Only known limits count: a force limit where the device renders force, a stiffness
-    limit where its profile gives one (0: none known), scaled as the servo scales it at a
-    rate below 1 kHz (limit x rate / 1000)."""
+def settings_problems(settings: dict, limits: dict, rate_Hz: float) -> list[str]:
+    """What of the settings (as sent to the servo's ``set``) lies above the device's limits,
+    from a listing read at the loop rate rate_Hz. Only known limits count: a force limit
+    where the device renders force, the stiffness limit the servo gives at that rate
+    (STIFFNESS_AT_RATE; 0 or absent: none known here)."""
     problems = []
     for setting, limit, name, unit in CHECKED:
         value, bound = settings.get(setting, 0.0), limits.get(limit, 0.0)
-        at_rate = ""
-        if setting == "stiffness_N_per_mm" and 0 < rate_Hz < STIFFNESS_LIMIT_RATE_HZ:
-            bound *= rate_Hz / STIFFNESS_LIMIT_RATE_HZ
-            at_rate = f" at {rate_Hz:g} Hz"
         if setting != "stiffness_N_per_mm" and not limits.get("has_force_output"):
             continue
         if value > 0 and bound > 0 and value > bound:
+            if setting == "stiffness_N_per_mm":
+                stated = limits.get("max_stiffness_N_per_mm", bound)
+                at_rate = f" at {rate_Hz:g} Hz"
+                if stated != bound:
+                    at_rate += f" ({stated:g} {unit} as stated, for 1 kHz)"
+            else:
+                at_rate = ""
             problems.append(
                 f"{name} {value:g} {unit} is above the device's {bound:g} {unit}{at_rate}"
             )

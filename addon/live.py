@@ -82,15 +82,17 @@ def start(context) -> live_session.Session:
     return _session
 
 
-def refresh_devices(context) -> dict:
-    """*Refresh devices*: run the servo's listing; the panel shows a failure (SessionError).
-    Everything it waits for (asking the toolkit for its servo the first time, then the
-    listing) is bounded by device_list.LIST_TIMEOUT_S together."""
+def refresh_devices(context, rate_Hz: float | None = None) -> dict:
+    """*Refresh devices*: run the servo's listing at rate_Hz (the panel's rate), its
+    stiffness limits at that rate; the panel shows a failure (SessionError). Everything it
+    waits for (asking the toolkit for its servo the first time, then the listing) is
+    bounded by device_list.LIST_TIMEOUT_S together."""
     live = context.scene.hapticut_live
+    rate_Hz = live.rate_Hz if rate_Hz is None else rate_Hz
     deadline = time.monotonic() + device_list.LIST_TIMEOUT_S
     try:
         servo = link(context, timeout_s=device_list.LIST_TIMEOUT_S).servo
-        listing = device_list.refresh(servo, max(0.1, deadline - time.monotonic()))
+        listing = device_list.refresh(servo, max(0.1, deadline - time.monotonic()), rate_Hz)
     except (live_session.SessionError, device_list.DeviceListError) as error:
         live.device_error = f"devices not listed: {error}"
         raise live_session.SessionError(live.device_error) from None
@@ -107,12 +109,13 @@ def devices(scene) -> list[str]:
 
 def check_limits(context, bindings: list[str], settings: dict, rate_Hz: float = 1000.0) -> None:
     """Refuse settings above a bound device's limits at the servo's rate (SessionError naming
-    blade, device and limit); the listing is read first if it was not yet."""
+    blade, device and limit); the listing is read first if it was not yet, or again if the
+    kept one's stiffness limits are for another rate (the servo's rule, not the add-on's)."""
     if not settings:
         return
     listing = device_list.cached()
-    if listing is None:
-        listing = refresh_devices(context)
+    if listing is None or device_list.listed_rate() != float(rate_Hz):
+        listing = refresh_devices(context, rate_Hz)
     problems = []
     for text in bindings:
         name, _, device = text.partition("=")

@@ -94,7 +94,14 @@ def draw_device(layout, settings) -> None:
         return
     layout.label(text=f"device limits: {device_list.limits_text(limits)}")
     requested = live.requested_settings(settings)
-    for problem in device_list.settings_problems(requested, limits, settings.rate_Hz):
+    listed_Hz = device_list.listed_rate()
+    if listed_Hz != settings.rate_Hz and limits.get("max_stiffness_N_per_mm", 0) > 0:
+        layout.label(
+            text=f"stiffness limit read at {listed_Hz:g} Hz: Refresh devices for "
+            f"{settings.rate_Hz:g} Hz (Go Live reads it)",
+            icon="INFO",
+        )
+    for problem in device_list.settings_problems(requested, limits, listed_Hz):
         layout.label(text=f"{problem}: Go Live refuses it", icon="ERROR")
 
 

@@ -81,13 +81,16 @@ std::vector<DeviceKindInfo> other_device_kinds() {
 #endif
 
 // --list-devices: the HID devices hidapi finds, and the profile each matches
-// (--json: with the shipped profiles and the other kinds, and their limits).
+// (--json: with the shipped profiles and the other kinds, and their limits,
+// the stiffness limit at --rate among them).
 int list_devices(const Options& options) {
 #ifdef HAPTICUT_WITH_DEVICES
   try {
-    const std::string text = options.json
-                                 ? list_devices_json(options.profiles_dir, other_device_kinds())
-                                 : list_hid_devices_text(options.profiles_dir);
+    // The stiffness limits at --rate, else at a scene's default rate.
+    const double rate_Hz = options.rate_Hz > 0.0 ? options.rate_Hz : Scene{}.servo_rate_Hz;
+    const std::string text =
+        options.json ? list_devices_json(options.profiles_dir, other_device_kinds(), rate_Hz)
+                     : list_hid_devices_text(options.profiles_dir);
     std::printf("%s", text.c_str());
     return kExitOk;
   } catch (const std::exception& e) {

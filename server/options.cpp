@@ -49,7 +49,10 @@ constexpr const char* kUsage =
     "                          shipped profile matches (\"no HID devices found\" when\n"
     "                          none), and exit\n"
     "  --json                  with --list-devices: print the devices, the shipped\n"
-    "                          profiles and the other kinds with their limits as JSON\n"
+    "                          profiles and the other kinds with their limits as JSON;\n"
+    "                          with --rate HZ each stiffness limit is also given at\n"
+    "                          that loop rate (max_stiffness_N_per_mm_at_rate; rate_Hz:\n"
+    "                          1000 without --rate)\n"
     "  --profiles DIR          device profiles for --list-devices (default: next to\n"
     "                          the binary in the package, or $HAPTICUT_PROFILE_DIR)\n"
     "  --no-realtime           do not ask for SCHED_FIFO\n"
@@ -190,6 +193,9 @@ Options parse_options(int argc, const char* const* argv) {
     }
   }
   if (o.json && !o.list_devices) throw UsageError("--json goes with --list-devices");
+  if (o.list_devices && !o.json && o.rate_Hz > 0.0) {
+    throw UsageError("--rate with --list-devices goes with --json (the limits at that rate)");
+  }
   return o;
 }
 

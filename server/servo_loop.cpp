@@ -10,16 +10,20 @@ namespace hapticut::servo {
 
 namespace {
 
-// Whether the engine would take `pose` for `blade` (what Blade::reset and
-// Blade::step check): a valid rotation and every point inside the Space's
-// workspace. Asked only before a reset, which throws for a refused pose.
+// Whether the engine would take `pose` for `blade` (Blade::check_pose, the
+// check Blade::reset and Blade::step run), as a safety fault flag (0: taken).
+// Asked only before a reset, which throws for a refused pose.
 std::uint32_t engine_refusal(const Blade& blade, const Pose& pose) {
-  if (!is_finite(pose.position_mm) || !pose.rotation.valid()) return kSafetyEngineRejected;
-  const Quaternion r = pose.rotation.normalized();
-  for (const Vec3& t : blade.tool_points()) {
-    if (!blade.space().in_workspace(pose.position_mm + r.rotate(t))) return kSafetyOutsideWorkspace;
+  switch (blade.check_pose(pose)) {
+    case PoseCheck::Fine:
+      return 0;
+    case PoseCheck::OutOfWorkspace:
+      return kSafetyOutsideWorkspace;
+    case PoseCheck::NotFinite:
+    case PoseCheck::ZeroRotation:
+      return kSafetyEngineRejected;
   }
-  return 0;
+  return kSafetyEngineRejected;
 }
 
 // One blade: read, admit, step with this tick's settings (the stiffness

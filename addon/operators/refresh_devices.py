@@ -6,7 +6,7 @@ from .. import live, live_session
 class HAPTICUT_OT_refresh_devices(bpy.types.Operator):
     """List the devices the servo can drive (hapticut-servo --list-devices --json): the HID
     devices connected, with the profile each matches, the shipped profiles, sim, viewport and
-    the UDP bridge, each with its limits"""
+    the UDP bridge, each with its limits (the stiffness limit at the panel's rate)"""
 
     bl_idname = "hapticut.refresh_devices"
     bl_label = "Refresh Devices"

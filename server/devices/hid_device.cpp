@@ -4,11 +4,14 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
+
+#include "safety.h"  // stiffness_limit: the servo's rule, inline.
 
 namespace hapticut::servo {
 namespace {
@@ -345,12 +348,13 @@ std::string list_hid_devices_text(const std::string& profile_directory) {
 
 namespace {
 
-nlohmann::json limits_json(const DeviceLimits& limits) {
+nlohmann::json limits_json(const DeviceLimits& limits, double rate_Hz) {
   const auto xyz = [](const Vec3& v) { return nlohmann::json::array({v.x, v.y, v.z}); };
   return {{"has_force_output", limits.has_force_output},
           {"max_force_N", limits.max_force_N},
           {"max_torque_N_mm", limits.max_torque_N_mm},
           {"max_stiffness_N_per_mm", limits.max_stiffness_N_per_mm},
+          {"max_stiffness_N_per_mm_at_rate", stiffness_limit(limits, rate_Hz)},
           {"workspace_min_mm", xyz(limits.workspace_min_mm)},
           {"workspace_max_mm", xyz(limits.workspace_max_mm)}};
 }
@@ -364,7 +368,10 @@ nlohmann::json name_or_null(const std::string& text, const std::string& prefix =
 std::string format_device_list_json(const std::vector<HidDeviceRow>& rows,
                                     const std::vector<DeviceProfile>& profiles,
                                     const std::vector<DeviceKindInfo>& kinds,
-                                    const std::string& profile_directory) {
+                                    const std::string& profile_directory, double rate_Hz) {
+  if (!(rate_Hz > 0.0) || !std::isfinite(rate_Hz)) {
+    throw std::invalid_argument("--list-devices: the rate must be a positive number of Hz");
+  }
   nlohmann::json devices = nlohmann::json::array();
   for (const HidDeviceRow& row : rows) {
     const HidDeviceInfo& info = row.info;
@@ -385,16 +392,18 @@ std::string format_device_list_json(const std::vector<HidDeviceRow>& rows,
     shipped.push_back({{"name", profile.name},
                        {"model", profile.model},
                        {"binding", "hid:" + profile.name},
-                       {"limits", limits_json(profile.limits)}});
+                       {"limits", limits_json(profile.limits, rate_Hz)}});
   }
   nlohmann::json others = nlohmann::json::array();
   for (const DeviceKindInfo& kind : kinds) {
-    others.push_back(
-        {{"kind", kind.kind}, {"binding", kind.binding}, {"limits", limits_json(kind.limits)}});
+    others.push_back({{"kind", kind.kind},
+                      {"binding", kind.binding},
+                      {"limits", limits_json(kind.limits, rate_Hz)}});
   }
   const nlohmann::json out = {{"version", 1},
                               {"hidapi", hidapi_version_string()},
                               {"profile_directory", profile_directory},
+                              {"rate_Hz", rate_Hz},
                               {"devices", devices},
                               {"profiles", shipped},
                               {"kinds", others}};
@@ -403,10 +412,10 @@ std::string format_device_list_json(const std::vector<HidDeviceRow>& rows,
 }
 
 std::string list_devices_json(const std::string& profile_directory,
-                              const std::vector<DeviceKindInfo>& kinds) {
+                              const std::vector<DeviceKindInfo>& kinds, double rate_Hz) {
   const std::string directory = find_profile_directory(profile_directory);
   const std::vector<DeviceProfile> profiles = load_profiles(directory);
-  return format_device_list_json(list_hid_devices(profiles), profiles, kinds, directory);
+  return format_device_list_json(list_hid_devices(profiles), profiles, kinds, directory, rate_Hz);
 }
 
 std::unique_ptr<Device> make_hid_device(const std::string& args) {

@@ -159,19 +159,22 @@ struct DeviceKindInfo {
   std::string binding;  // The --device text choosing it with its defaults ("bridge:port=47810").
   DeviceLimits limits;  // Its limits with those defaults.
 };
-// `--list-devices --json` (docs/devices.md): {"version": 1, "hidapi", "profile_directory",
-// "devices": [{path, vendor_id, product_id, serial, manufacturer, product, usage_page, usage,
-// interface_number, profile (null: none matches), binding ("hid:<profile>" or null)}],
-// "profiles": [{name, model, binding, limits}], "kinds": [{kind, binding, limits}]}; limits:
-// has_force_output, max_force_N, max_torque_N_mm, max_stiffness_N_per_mm (0: none known),
-// workspace_min_mm, workspace_max_mm.
+// `--list-devices --json [--rate HZ]` (docs/devices.md): {"version": 1, "hidapi",
+// "profile_directory", "rate_Hz", "devices": [{path, vendor_id, product_id, serial,
+// manufacturer, product, usage_page, usage, interface_number, profile (null: none matches),
+// binding ("hid:<profile>" or null)}], "profiles": [{name, model, binding, limits}], "kinds":
+// [{kind, binding, limits}]}; limits: has_force_output, max_force_N, max_torque_N_mm,
+// max_stiffness_N_per_mm (as stated, for 1 kHz; 0: none known),
+// max_stiffness_N_per_mm_at_rate (the servo's limit at rate_Hz: stiffness_limit, safety.h;
+// 0: none known), workspace_min_mm, workspace_max_mm. rate_Hz must be positive (the
+// command line checks its range).
 std::string format_device_list_json(const std::vector<HidDeviceRow>& rows,
                                     const std::vector<DeviceProfile>& profiles,
                                     const std::vector<DeviceKindInfo>& kinds,
-                                    const std::string& profile_directory);
+                                    const std::string& profile_directory, double rate_Hz);
 // The same in one call through the real hidapi (throws as list_hid_devices_text).
 std::string list_devices_json(const std::string& profile_directory,
-                              const std::vector<DeviceKindInfo>& kinds);
+                              const std::vector<DeviceKindInfo>& kinds, double rate_Hz);
 
 // `--device NAME=hid:ARGS` (kHidDeviceUsage). ARGS, all optional: a bare
 // first value is the profile (as profile=), then comma-separated options:

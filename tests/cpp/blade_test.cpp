@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <vector>
 
 #include "test_support.h"
 
@@ -55,6 +57,57 @@ TEST(Blade, NonFinitePoseIsRejected) {
       blade.step({{std::numeric_limits<double>::quiet_NaN(), 50, 50}, {}}, 0.001);
   EXPECT_TRUE(tick.rejected);
   EXPECT_EQ(tick.force_N, Vec3(0, 0, 0));
+}
+
+// check_pose: the check step and reset run, answered without placing anything.
+TEST(Blade, CheckPoseSaysWhyAPoseIsRefusedWithoutPlacingIt) {
+  const auto space_owner = testing::make_space(cube_mesh(100.0), 0);
+  const Space& space = *space_owner;
+  Blade blade(space, {"b", {0, 0, 0}, {10, 0, 0}, 3});
+  const Vec3 centre = (space.workspace().lo + space.workspace().hi) * 0.5;
+  blade.reset({centre, {}});
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  // The origin 5 mm inside the workspace's +x face: the tip (10 mm along x) is outside,
+  // and back inside once a half turn about z points the blade along -x.
+  const Vec3 near_face{space.workspace().hi.x - 5.0, centre.y, centre.z};
+  struct Case {
+    Pose pose;
+    PoseCheck expected;
+  };
+  const Case cases[] = {
+      {{centre, {}}, PoseCheck::Fine},
+      {{centre, {0.0, 0.0, 0.0, 2.0}}, PoseCheck::Fine},  // Normalised on use.
+      {{near_face, {0.0, 0.0, 0.0, 1.0}}, PoseCheck::Fine},
+      {{{nan, centre.y, centre.z}, {}}, PoseCheck::NotFinite},
+      {{{centre.x, inf, centre.z}, {}}, PoseCheck::NotFinite},
+      {{centre, {1.0, nan, 0.0, 0.0}}, PoseCheck::NotFinite},
+      {{centre, {0.0, 0.0, 0.0, 0.0}}, PoseCheck::ZeroRotation},
+      {{centre, {1e-7, 0.0, 0.0, 0.0}}, PoseCheck::ZeroRotation},
+      {{centre, {1e200, 0.0, 0.0, 0.0}}, PoseCheck::ZeroRotation},  // Norm overflows.
+      {{near_face, {}}, PoseCheck::OutOfWorkspace},
+      {{space.workspace().hi + Vec3{1, 1, 1}, {}}, PoseCheck::OutOfWorkspace},
+  };
+  for (const Case& c : cases) {
+    const std::vector<Vec3> world_before = blade.world_points();
+    const BladeCounters counters_before = blade.counters();
+    EXPECT_EQ(blade.check_pose(c.pose), c.expected);
+    // Nothing placed, nothing counted.
+    EXPECT_EQ(blade.world_points(), world_before);
+    EXPECT_EQ(blade.counters().ticks, counters_before.ticks);
+    // And step takes exactly the poses check_pose passes, counting a refusal outside the
+    // workspace as such.
+    const BladeTick tick = blade.step(c.pose, 0.001);
+    EXPECT_EQ(tick.rejected, c.expected != PoseCheck::Fine);
+    EXPECT_EQ(blade.counters().out_of_workspace_ticks - counters_before.out_of_workspace_ticks,
+              c.expected == PoseCheck::OutOfWorkspace ? 1U : 0U);
+    if (c.expected == PoseCheck::Fine) {
+      blade.reset(c.pose);
+    } else {
+      EXPECT_THROW(blade.reset(c.pose), std::invalid_argument);
+    }
+    blade.reset({centre, {}});
+  }
 }
 
 }  // namespace

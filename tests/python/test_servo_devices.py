@@ -27,6 +27,8 @@ from servo_test_support import (
 )
 
 BRIDGE = EXAMPLES / "bridge_example.py"
+# The test profiles (example-force-device.json: a stiffness limit of its own).
+TEST_PROFILE_DIR = Path(__file__).resolve().parents[2] / "server" / "devices" / "tests" / "data"
 EXIT_DEVICE = 4  # docs/servo.md
 
 
@@ -244,6 +246,67 @@ def test_list_devices_json_lists_what_the_table_lists_and_every_profile(tmp_path
     assert run_servo("--json").returncode == 2
     missing = run_servo("--list-devices", "--json", "--profiles", str(tmp_path / "none"))
     assert missing.returncode == EXIT_DEVICE and missing.stdout == ""
+
+
+def test_list_devices_json_gives_each_stiffness_limit_at_the_rate():
+    """The servo's own stiffness limit at a loop rate (stiffness_limit, server/safety.h), for
+    the add-on to compare against: a quarter of the 1 kHz limit at 250 Hz, the stated one at
+    or above 1 kHz. The shipped profiles state none: the test profile with force output does."""
+    profiles = str(TEST_PROFILE_DIR)
+    stated = json.loads(run_servo("--list-devices", "--json", "--profiles", profiles).stdout)
+    assert stated["rate_Hz"] == 1000.0
+    slow = run_servo("--list-devices", "--json", "--rate", "250", "--profiles", profiles)
+    assert slow.returncode == 0, slow.stderr
+    slow = json.loads(slow.stdout)
+    assert slow["rate_Hz"] == 250.0
+    fast = json.loads(run_servo("--list-devices", "--json", "--rate", "4000").stdout)
+    entries = {
+        "profile": (stated["profiles"][0], slow["profiles"][0], None),
+        "bridge": (*(next(k for k in x["kinds"] if k["kind"] == "bridge") for x in (stated, slow)),
+                   next(k for k in fast["kinds"] if k["kind"] == "bridge")),
+    }  # fmt: skip
+    for name, (at_1k, at_250, at_4k) in entries.items():
+        limit = at_1k["limits"]["max_stiffness_N_per_mm"]
+        assert limit > 0, name
+        assert at_1k["limits"]["max_stiffness_N_per_mm_at_rate"] == limit, name
+        assert at_250["limits"]["max_stiffness_N_per_mm"] == limit, name
+        assert at_250["limits"]["max_stiffness_N_per_mm_at_rate"] == pytest.approx(limit / 4)
+        if at_4k is not None:
+            assert at_4k["limits"]["max_stiffness_N_per_mm_at_rate"] == limit, name
+    # None known stays none at any rate.
+    sim = next(k for k in slow["kinds"] if k["kind"] == "sim")["limits"]
+    assert sim["max_stiffness_N_per_mm"] == 0 and sim["max_stiffness_N_per_mm_at_rate"] == 0
+    profile = slow["profiles"][0]
+    limits = profile["limits"]
+    print(
+        f"\n{profile['name']}: {limits['max_stiffness_N_per_mm']:g} N/mm at 1 kHz, "
+        f"{limits['max_stiffness_N_per_mm_at_rate']:g} N/mm at 250 Hz"
+    )
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--rate", "0"], "--rate: 1 to 10000 Hz"),
+        (["--rate", "-250"], "--rate: 1 to 10000 Hz"),
+        (["--rate", "20000"], "--rate: 1 to 10000 Hz"),
+        (["--rate", "nan"], "--rate: 'nan' is not a number"),
+        (["--rate", "inf"], "--rate: 'inf' is not a number"),
+        (["--rate", "fast"], "--rate: 'fast' is not a number"),
+        (["--rate", ""], "--rate: '' is not a number"),
+        (["--rate"], "--rate: needs a value"),
+    ],
+)
+def test_list_devices_json_bad_rate_is_a_usage_error(args, message):
+    result = run_servo("--list-devices", "--json", *args)
+    assert result.returncode == 2 and result.stdout == ""
+    assert message in result.stderr, result.stderr
+
+
+def test_list_devices_rate_goes_with_json():
+    result = run_servo("--list-devices", "--rate", "250")
+    assert result.returncode == 2 and "goes with --json" in result.stderr, result.stderr
+    assert "max_stiffness_N_per_mm_at_rate" in run_servo("--help").stdout
 
 
 def test_list_devices_documented_and_profiles_dir_checked(tmp_path):

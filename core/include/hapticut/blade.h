@@ -110,6 +110,10 @@ class Blade {
   // One tick with the Space's settings, or with the given ones. Never allocates.
   BladeTick step(const Pose& pose, double dt_s);
   BladeTick step(const Pose& pose, double dt_s, const RuntimeSettings& settings);
+  // Whether step and reset would take this pose, and why not: the same check
+  // they run (not finite, a rotation of (near) zero norm, a point outside the
+  // Space's workspace), without placing anything. Never allocates.
+  PoseCheck check_pose(const Pose& pose) const;
 
   // Copies the last tick into caller storage, up to points.size() points;
   // never allocates. Returns the points written.

@@ -5,9 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "safety.h"
 #include "scripted_hid_transport.h"
 #include "test_profiles.h"
 
@@ -288,11 +290,15 @@ TEST(HidDeviceList, MarksTheDevicesAProfileMatches) {
   bridge_limits.has_force_output = true;
   bridge_limits.max_force_N = 3.0;
   bridge_limits.max_stiffness_N_per_mm = 1.0;
-  const auto profiles = load_profiles(HAPTICUT_PROFILE_DIR);
+  // The shipped profiles state no stiffness limit: the test profile with force output does.
+  auto profiles = load_profiles(HAPTICUT_PROFILE_DIR);
+  profiles.push_back(testing::force_device_profile());
+  ASSERT_GT(profiles.back().limits.max_stiffness_N_per_mm, 0.0);
   const auto listing = nlohmann::json::parse(format_device_list_json(
-      rows, profiles, {{"bridge", "bridge:port=47810", bridge_limits}}, "profiles/"));
+      rows, profiles, {{"bridge", "bridge:port=47810", bridge_limits}}, "profiles/", 250.0));
   EXPECT_EQ(listing["version"], 1);
   EXPECT_EQ(listing["profile_directory"], "profiles/");
+  EXPECT_EQ(listing["rate_Hz"], 250.0);
   ASSERT_EQ(listing["devices"].size(), 2U);
   EXPECT_TRUE(listing["devices"][0]["profile"].is_null());
   EXPECT_TRUE(listing["devices"][0]["binding"].is_null());
@@ -310,11 +316,26 @@ TEST(HidDeviceList, MarksTheDevicesAProfileMatches) {
     EXPECT_EQ(listing["profiles"][i]["limits"]["max_force_N"], profiles[i].limits.max_force_N);
     EXPECT_EQ(listing["profiles"][i]["limits"]["has_force_output"],
               profiles[i].limits.has_force_output);
+    // The stiffness limit at the listing's rate is the servo's own (stiffness_limit).
+    EXPECT_EQ(listing["profiles"][i]["limits"]["max_stiffness_N_per_mm"],
+              profiles[i].limits.max_stiffness_N_per_mm);
+    EXPECT_EQ(listing["profiles"][i]["limits"]["max_stiffness_N_per_mm_at_rate"],
+              stiffness_limit(profiles[i].limits, 250.0));
   }
+  EXPECT_DOUBLE_EQ(listing["profiles"].back()["limits"]["max_stiffness_N_per_mm_at_rate"],
+                   profiles.back().limits.max_stiffness_N_per_mm / 4);
   ASSERT_EQ(listing["kinds"].size(), 1U);
   EXPECT_EQ(listing["kinds"][0]["binding"], "bridge:port=47810");
   EXPECT_EQ(listing["kinds"][0]["limits"]["max_force_N"], 3.0);
   EXPECT_EQ(listing["kinds"][0]["limits"]["max_stiffness_N_per_mm"], 1.0);
+  EXPECT_DOUBLE_EQ(listing["kinds"][0]["limits"]["max_stiffness_N_per_mm_at_rate"], 0.25);
+  // At or above 1 kHz the limit is the stated one; a rate that is not positive is refused.
+  const auto fast = nlohmann::json::parse(format_device_list_json(
+      {}, {}, {{"bridge", "bridge:port=47810", bridge_limits}}, "", 4000.0));
+  EXPECT_EQ(fast["kinds"][0]["limits"]["max_stiffness_N_per_mm_at_rate"], 1.0);
+  for (const double bad : {0.0, -250.0, std::nan("")}) {
+    EXPECT_THROW(format_device_list_json({}, {}, {}, "", bad), std::invalid_argument) << bad;
+  }
 }
 
 // A product name that is not UTF-8 (the device's own bytes) still gives valid JSON.
@@ -322,7 +343,7 @@ TEST(HidDeviceList, JsonSurvivesAProductNameThatIsNotUtf8) {
   HidDeviceRow row;
   row.info.path = "/dev/hidraw1";
   row.info.product = "Pad \xff\xfe";
-  const auto listing = nlohmann::json::parse(format_device_list_json({row}, {}, {}, ""));
+  const auto listing = nlohmann::json::parse(format_device_list_json({row}, {}, {}, "", 1000.0));
   EXPECT_EQ(listing["devices"][0]["path"], "/dev/hidraw1");
   EXPECT_EQ(listing["devices"][0]["product"].get<std::string>().rfind("Pad ", 0), 0U);
 }
@@ -343,7 +364,7 @@ TEST(HidDeviceList, RealHidapiEnumerationPrintsWhatItFinds) {
   std::printf("hidapi %s: %s", hidapi_version_string().c_str(), table.c_str());
 
   // --list-devices --json through the same enumeration: the same devices, every profile.
-  const auto listing = nlohmann::json::parse(list_devices_json(HAPTICUT_PROFILE_DIR, {}));
+  const auto listing = nlohmann::json::parse(list_devices_json(HAPTICUT_PROFILE_DIR, {}, 1000.0));
   ASSERT_EQ(listing["devices"].size(), rows.size());
   for (std::size_t i = 0; i < rows.size(); ++i) {
     EXPECT_EQ(listing["devices"][i]["path"], rows[i].info.path);

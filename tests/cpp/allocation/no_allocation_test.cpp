@@ -176,9 +176,11 @@ void run_blade(const std::shared_ptr<const Space>& space, const Pose& start, dou
   poses[500].rotation = {0, 0, 0, 0};  // Rejected: zero quaternion.
   auto snapshot = std::make_unique<BladeSnapshot<64>>();
   int capped = 0;
+  int refused = 0;
   const std::uint64_t count = allocations_of([&] {
     for (std::size_t k = 0; k < poses.size(); ++k) {
       const RuntimeSettings& settings = k < 3000 ? plain : k < 7000 ? shaded : starved;
+      refused += blade.check_pose(poses[k]) != PoseCheck::Fine ? 1 : 0;
       capped += blade.step(poses[k], kDt, settings).capped_points;
       blade.snapshot(*snapshot);
     }
@@ -187,6 +189,7 @@ void run_blade(const std::shared_ptr<const Space>& space, const Pose& start, dou
   EXPECT_EQ(count, 0u);
   EXPECT_GT(capped, 0);
   EXPECT_EQ(blade.counters().rejected_ticks, 1u);
+  EXPECT_EQ(refused, 1);  // check_pose (no allocation either) refused the same pose.
   for (const Proxy& proxy : blade.proxies()) EXPECT_EQ(proxy.check_invariants(), "");
 }
 

@@ -129,21 +129,47 @@ def test_settings_above_the_devices_limits_are_refused(scene):
     settings.stiffness_N_per_mm = 0.5 * bridge["max_stiffness_N_per_mm"]
     live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
     assert not any("Go Live refuses it" in text for text in panel_texts())
-    # Below 1 kHz the servo lowers the stiffness limit by rate / 1000: so does the check.
+    # The limit at another rate is the servo's (--list-devices --json --rate): Go Live reads
+    # the listing again at the panel's rate and compares with its limit there. 0.75 x the
+    # 1 kHz limit passes at 1 kHz; at 500 Hz the servo's limit is half of it.
+    assert device_list.listed_rate() == 1000.0
+    assert bridge["max_stiffness_N_per_mm_at_rate"] == bridge["max_stiffness_N_per_mm"]
     settings.rate_Hz = 500.0
     settings.stiffness_N_per_mm = 0.75 * bridge["max_stiffness_N_per_mm"]
-    half = 0.5 * bridge["max_stiffness_N_per_mm"]
-    with pytest.raises(RuntimeError, match=f"above the device's {half:g} N/mm at 500 Hz"):
+    # Drawn before it is read at 500 Hz: the panel says its limit is for another rate.
+    assert any("read at 1000 Hz: Refresh devices for 500 Hz" in t for t in panel_texts())
+    with pytest.raises(RuntimeError, match="stiffness .* is above the device's") as refused:
         bpy.ops.hapticut.go_live()
+    assert live.current() is None
+    assert device_list.listed_rate() == 500.0
+    slow = next(k for k in device_list.cached()["kinds"] if k["kind"] == "bridge")["limits"]
+    at_500 = slow["max_stiffness_N_per_mm_at_rate"]
+    assert at_500 == pytest.approx(0.5 * bridge["max_stiffness_N_per_mm"])
+    stated = bridge["max_stiffness_N_per_mm"]
+    assert (
+        f"above the device's {at_500:g} N/mm at 500 Hz ({stated:g} N/mm as stated, for 1 kHz)"
+        in str(refused.value)
+    )
     assert any("Go Live refuses it" in text for text in panel_texts())
+    assert not any("Refresh devices for" in text for text in panel_texts())
     settings.rate_Hz = 1000.0
     live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
-    # A bridge bound with a lower limit of its own: that one counts.
+    assert device_list.listed_rate() == 1000.0
+    # A bridge bound with a lower force limit of its own: that one counts.
     settings.device_mode = "CUSTOM"
+    settings.custom_device = f"bridge:port=0,max_force={bridge['max_force_N'] / 2}"
+    settings.max_force_N = 0.75 * bridge["max_force_N"]
+    with pytest.raises(RuntimeError, match="max force .* is above the device's"):
+        bpy.ops.hapticut.go_live()
+    settings.max_force_N = 0.0
+    # A stiffness limit of its own: known at a rate only to the servo, whose "set" refuses a
+    # stiffness above it (test_servo_stiffness_limit.py); the add-on claims no limit there.
     lower = 0.25 * bridge["max_stiffness_N_per_mm"]
     settings.custom_device = f"bridge:port=0,max_stiffness={lower}"
-    with pytest.raises(RuntimeError, match="stiffness"):
-        bpy.ops.hapticut.go_live()
+    own = device_list.limits_for(device_list.cached(), settings.custom_device)
+    assert own["max_stiffness_N_per_mm"] == lower
+    assert device_list.STIFFNESS_AT_RATE not in own
+    live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
     settings.stiffness_N_per_mm = 0.0
 
     settings.device_mode = "SIM"
@@ -173,6 +199,9 @@ def test_a_servo_that_fails_to_list_is_said_so_in_the_panel(scene, tmp_path, mon
             "failed (code 4): hapticut-servo: --list-devices: no profiles",
         script(tmp_path, "prose", "echo 'no HID devices found'"): "printed no JSON",
         script(tmp_path, "other", "echo '{\"version\": 7}'"): "not a version 1 device listing",
+        # A servo older than the add-on: its listing has no limits at a rate.
+        script(tmp_path, "old", "echo '{\"version\": 1, \"devices\": [], \"profiles\": [], "
+               "\"kinds\": []}'"): "gave no limits at 1000 Hz",
         script(tmp_path, "hangs", "exec sleep 30"): "did not answer within 0.5 s",
     }  # fmt: skip
     for servo, message in broken.items():
