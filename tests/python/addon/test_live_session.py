@@ -45,8 +45,8 @@ def test_start_go_live_status_and_stop(finger):
     assert lines[0] == "connected (running), servo running"
     assert any(line.startswith("Knife (viewport, fresh)") for line in lines)
     assert any(line.startswith("Knife: TET") for line in lines)
-    # The frames' age where the timer took them (headless: no draw handler runs, so no age at
-    # draw; a GUI session adds it to the same line).
+    # The frames' age where the timer took them (headless, no viewport draws: the age at draw
+    # joins this line in a GUI, and test_live_draw.py drives the draw handler itself).
     age_line = next(line for line in lines if line.startswith("frame age p50 / p99: "))
     p50_ms, p99_ms = (float(x) for x in age_line.split(": ")[1].split(" ms")[0].split(" / "))
     assert 0 <= p50_ms <= p99_ms and "drawn" not in age_line
