@@ -1,5 +1,7 @@
 #include "options.h"
 
+#include <sched.h>
+
 #include <cmath>
 #include <cstdlib>
 
@@ -75,9 +77,6 @@ constexpr const char* kExitCodes =
     "error, 2 bad command line, 3 scene file missing or invalid, 4 device binding or\n"
     "device failure, 5 control port unavailable or non-loopback without --token,\n"
     "6 recording file not writable.\n";
-
-// CPU_SETSIZE of glibc: the CPUs a cpu_set_t can name.
-constexpr int kMaxCpu = 1024;
 
 double number(const std::string& option, const char* text) {
   char* end = nullptr;
@@ -174,8 +173,9 @@ Options parse_options(int argc, const char* const* argv) {
       o.priority = static_cast<int>(p);
     } else if (arg == "--cpu") {
       const double cpu = number(arg, value());
-      if (cpu < 0 || cpu >= kMaxCpu || cpu != std::floor(cpu)) {
-        throw UsageError("--cpu: a CPU number 0 to " + std::to_string(kMaxCpu - 1));
+      // CPU_SETSIZE: the CPUs a cpu_set_t can name (realtime.cpp pins with one).
+      if (cpu < 0 || cpu >= CPU_SETSIZE || cpu != std::floor(cpu)) {
+        throw UsageError("--cpu: a CPU number 0 to " + std::to_string(CPU_SETSIZE - 1));
       }
       o.cpu = static_cast<int>(cpu);
     } else if (arg == "--bare-loop") {

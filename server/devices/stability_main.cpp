@@ -106,8 +106,8 @@ int main(int argc, char** argv) {
       "Device: ",
       stdout);
   std::printf("%s, %s at 1 kHz.\n\n", device_name.c_str(), k_max.c_str());
-  const bool stress = stiffness.empty();
-  if (stress) {
+  const bool both_tables = stiffness.empty();  // No --stiffness: the servo's grid first.
+  if (both_tables) {
     std::vector<StabilityRow> rows = servo_limit_grid(device, rates, delays);
     run_stability_rows(rows);
     const std::string title =
@@ -120,9 +120,9 @@ int main(int argc, char** argv) {
   std::vector<StabilityRow> rows = absolute_grid(device, rates, delays, stiffness);
   run_stability_rows(rows);
   const std::string title =
-      (stress ? "Stress test, beyond the servo's limit: a quarter, half and all of " + k_max +
-                    " at every rate."
-              : std::string("The stiffnesses asked (--stiffness) at every rate.")) +
+      (both_tables ? "Stress test, beyond the servo's limit: a quarter, half and all of " + k_max +
+                         " at every rate."
+                   : std::string("The stiffnesses asked (--stiffness) at every rate.")) +
       "\nThe servo lowers a scene stiffness above its limit at the rate and refuses a set\n"
       "above it; such rows are marked.";
   std::fputs(stability_table(title, rows, true).c_str(), stdout);
