@@ -210,7 +210,12 @@ BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& sett
       account(i);
       continue;
     }
-    proxy.tick_within(world_points_[i], dt_s, settings, std::min(cap, remaining), shading, true, r);
+    const Vec3& p = world_points_[i];
+    const int limit = std::min(cap, remaining);
+    // The settle in a tet inline here, in the blade's own loop: no call for most points.
+    if (!proxy.tick_in_tet(p, settings, limit, r)) {
+      proxy.tick_walk(p, dt_s, settings, limit, shading, true, r);
+    }
     remaining -= r.transitions;
     if (r.capped) {
       ++capped_in_first_pass;

@@ -33,7 +33,7 @@ Space::Space(Key /*key*/, TetMesh mesh, std::vector<Material> materials, EngineS
                  "capped_tick_force_N");
   for (const Material& material : materials_) validate_material(material);
   const auto material_count = static_cast<std::int32_t>(materials_.size());
-  rigid_.resize(mesh_.tet_count());
+  models_.resize(mesh_.tet_count());
   for (std::int32_t t = 0; t < mesh_.tet_count(); ++t) {
     if (mesh_.material(t) >= material_count) {
       throw MeshError("tet " + std::to_string(t) + " refers to material " +
@@ -41,7 +41,7 @@ Space::Space(Key /*key*/, TetMesh mesh, std::vector<Material> materials, EngineS
                           std::to_string(material_count) + " materials)",
                       t);
     }
-    rigid_[t] = is_rigid(materials_[mesh_.material(t)]) ? 1 : 0;
+    models_[t] = materials_[mesh_.material(t)].model;
   }
   for (const Material& m : materials_)
     uses_speed_ = uses_speed_ || m.model == MaterialModel::Viscous;

@@ -135,14 +135,29 @@ class alignas(64) Proxy {
   // check is not part of the transition timed, and subtracting it is noisier
   // than not making it (it was a plain assignment when Table 2 was first measured).
   friend struct TransitionTimingAccess;
+  // The test that the inline settle in a tet gives what the walk gives
+  // (tests/cpp/tet_settle_test.cpp) runs tick_walk and tick_in_tet apart.
+  friend struct TetSettleTestAccess;
   // The pieces of step: refuse an input; the tick's move context; walk
   // toward p until converged or `limit` transitions in all this tick (exact,
   // see step); end the tick at p (counters, force). tick_within walks and
   // ends the tick unless the walk is capped and `keep_capped_open` (the Blade
   // then walks on with what its budget has left, then ends it).
   void reject_input(bool out_of_workspace, TickResult& result);
+  // The tick most points make, inline (defined below): a TET proxy whose
+  // material moves it (free, drag, membrane) to a q' still inside its tet
+  // settles there, with the same place, counters and force as the walk
+  // (step_tet, then finish_tick) would give, bit for bit, without the walk's
+  // machinery: about a third of a point's instructions (docs/decisions.md,
+  // "The settle in a tet"). Returns false, touching nothing, for any other
+  // tick (another state, a viscous material, q' leaving the tet, a tick
+  // already under way); tick_walk then does it.
+  bool tick_in_tet(const Vec3& p, const RuntimeSettings& settings, int limit, TickResult& result);
+  // tick_in_tet, else tick_walk.
   void tick_within(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
                    const ForceShading* shading, bool keep_capped_open, TickResult& result);
+  void tick_walk(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
+                 const ForceShading* shading, bool keep_capped_open, TickResult& result);
   MoveContext context_for(const Vec3& p, double dt_s, const RuntimeSettings& settings) const;
   void walk(const Vec3& p, const MoveContext& context, int limit, TickResult& result);
   void finish_tick(const Vec3& p, TickResult& result, const RuntimeSettings& settings,
@@ -197,5 +212,51 @@ class alignas(64) Proxy {
   Aabb mesh_box_;
   std::shared_ptr<const Space> space_owner_;
 };
+
+// The settle of step_tet ((b-2): no exit plane strictly crossed) and the
+// bookkeeping of walk_inline and finish_tick_inline for it, in proxy.cpp.
+// Shading leaves a TET force as it is (ForceShading::shade), so none is asked.
+[[gnu::always_inline]] inline bool Proxy::tick_in_tet(const Vec3& p,
+                                                      const RuntimeSettings& settings, int limit,
+                                                      TickResult& result) {
+  if (place_.state != ProxyState::Tet || result.transitions != 0 || limit < 1) return false;
+  const std::int32_t t = place_.tet;
+  const MaterialModel model = space_->tet_model(t);
+  if (model == MaterialModel::Viscous) return false;  // Its move needs the tick's speed.
+  const double eps = space_->tolerance();
+  const Vec3 q = place_.q;
+  MoveResult moved{true, p};
+  if (model != MaterialModel::Free) {
+    MoveContext context;
+    context.stiffness_N_per_mm = settings.stiffness_N_per_mm;
+    context.tolerance_mm = eps;
+    moved = move(space_->material_of_tet(t), p, q, context);
+  }
+  int transitions = 0;
+  if (moved.moved) {
+    const Plane* planes = &space_->mesh().face_plane(t, 0);
+    bool leaves = false;
+    for (int k = 0; k < 4; ++k) {
+      leaves = leaves || strictly_beyond(planes[k].signed_distance(moved.q), eps);
+    }
+    if (leaves) return false;
+    if (!within_tolerance(moved.q - q, eps)) {
+      transitions = 1;
+      ++counters_.transitions[0][0][0];  // TET -> TET, same tet.
+    }
+    place_.q = moved.q;
+  }
+  result.transitions = transitions;
+  counters_.total_transitions += static_cast<std::uint32_t>(transitions);
+  if (static_cast<std::uint32_t>(transitions) > counters_.max_transitions_in_tick) {
+    counters_.max_transitions_in_tick = static_cast<std::uint32_t>(transitions);
+  }
+  last_p_ = p;
+  has_last_p_ = true;
+  const Vec3 force = (place_.q - p) * settings.stiffness_N_per_mm;  // Eq. (15).
+  force_N_ = is_finite(force) ? force : Vec3{};
+  unfinished_in_row_ = 0;
+  return true;
+}
 
 }  // namespace hapticut

@@ -15,6 +15,7 @@
 
 #include "hapticut/aabb_tree.h"
 #include "hapticut/geometry.h"
+#include "hapticut/material.h"
 #include "hapticut/parameter_range.h"
 #include "hapticut/scene.h"
 #include "hapticut/tet_mesh.h"
@@ -82,7 +83,9 @@ class Space : public std::enable_shared_from_this<Space> {
   const TetMesh& mesh() const { return mesh_; }
   const std::vector<Material>& materials() const { return materials_; }
   const Material& material_of_tet(std::int32_t t) const { return materials_[mesh_.material(t)]; }
-  bool tet_is_rigid(std::int32_t t) const { return rigid_[t] != 0; }
+  // The model of tet t's material, one byte a tet: the walk asks it per step.
+  MaterialModel tet_model(std::int32_t t) const { return models_[t]; }
+  bool tet_is_rigid(std::int32_t t) const { return models_[t] == MaterialModel::Rigid; }
   // Whether any material needs the device point's speed (viscous).
   bool uses_speed() const { return uses_speed_; }
   const EngineSettings& settings() const { return settings_; }
@@ -101,7 +104,7 @@ class Space : public std::enable_shared_from_this<Space> {
  private:
   TetMesh mesh_;
   std::vector<Material> materials_;
-  std::vector<std::uint8_t> rigid_;
+  std::vector<MaterialModel> models_;
   bool uses_speed_ = false;
   EngineSettings settings_;
   RuntimeSettings runtime_settings_;

@@ -1,0 +1,125 @@
+// The inline settle in a tet (Proxy::tick_in_tet) is a shortcut of the walk:
+// every tick it takes must leave the proxy exactly as the walk would (place,
+// force and counters, bit for bit), and it must decline every other tick.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <random>
+
+#include "hapticut/proxy.h"
+#include "test_support.h"
+
+namespace hapticut {
+
+struct TetSettleTestAccess {
+  // Proxy::step's tick with the walk alone (the inputs here are always valid).
+  static TickResult step_walking(Proxy& proxy, const Vec3& p, double dt_s,
+                                 const RuntimeSettings& settings) {
+    TickResult result;
+    ++proxy.counters_.ticks;
+    proxy.tick_walk(p, dt_s, settings, settings.max_transitions_per_tick, nullptr, false, result);
+    return result;
+  }
+  static bool settles_in_tet(Proxy proxy, const Vec3& p, const RuntimeSettings& settings) {
+    TickResult result;
+    return proxy.tick_in_tet(p, settings, settings.max_transitions_per_tick, result);
+  }
+};
+
+namespace {
+
+using testing::make_space;
+
+bool same_bits(const Vec3& a, const Vec3& b) { return std::memcmp(&a, &b, sizeof(Vec3)) == 0; }
+
+void expect_same(const Proxy& a, const Proxy& b, const TickResult& ra, const TickResult& rb,
+                 int step) {
+  SCOPED_TRACE("step " + std::to_string(step));
+  ASSERT_EQ(a.place().state, b.place().state);
+  ASSERT_EQ(a.place().tet, b.place().tet);
+  ASSERT_EQ(a.place().local, b.place().local);
+  ASSERT_TRUE(same_bits(a.place().q, b.place().q));
+  ASSERT_TRUE(same_bits(a.force_N(), b.force_N()));
+  ASSERT_TRUE(same_bits(a.last_p(), b.last_p()));
+  ASSERT_EQ(ra.transitions, rb.transitions);
+  ASSERT_EQ(ra.capped, rb.capped);
+  ASSERT_EQ(ra.rejected, rb.rejected);
+  const ProxyCounters& ca = a.counters();
+  const ProxyCounters& cb = b.counters();
+  ASSERT_EQ(ca.ticks, cb.ticks);
+  ASSERT_EQ(ca.total_transitions, cb.total_transitions);
+  ASSERT_EQ(ca.max_transitions_in_tick, cb.max_transitions_in_tick);
+  ASSERT_EQ(ca.capped_ticks, cb.capped_ticks);
+  ASSERT_EQ(ca.transitions, cb.transitions);
+}
+
+// Every material the settle handles or declines: free, drag, membrane,
+// viscous (declined: it needs the tick's speed) and rigid (never a TET owner).
+std::vector<Material> all_models() {
+  Material membrane{"skin", MaterialModel::Membrane};
+  membrane.break_force_N = 0.3;
+  Material viscous{"fat", MaterialModel::Viscous};
+  viscous.viscosity_N_s_per_mm = 0.002;
+  return {testing::free_material(), testing::drag_material(1.0), membrane, viscous,
+          testing::rigid_material()};
+}
+
+TEST(TetSettle, GivesWhatTheWalkGivesOnRandomStrokes) {
+  const MeshData mesh =
+      grid_mesh({0, 4, 9, 15, 20}, {0, 5, 10, 16, 20}, {0, 6, 10, 14, 20}, 0.3, 7);
+  std::mt19937_64 random(11);
+  std::vector<std::int32_t> materials(mesh.tets.size());
+  std::uniform_int_distribution<int> model(0, 9);
+  for (auto& m : materials) {
+    const int r = model(random);  // Mostly free and drag, some of each other model.
+    m = r < 4 ? 0 : r < 7 ? 1 : r - 6;
+  }
+  const auto space = make_space(mesh, materials, all_models());
+  RuntimeSettings settings = space->runtime_settings();
+  std::uniform_real_distribution<double> inside(-2.0, 22.0);
+  std::normal_distribution<double> small(0.0, 0.05);
+  std::normal_distribution<double> large(0.0, 3.0);
+  int settled = 0;
+  int declined_in_tet = 0;
+  int steps = 0;
+  for (int stroke = 0; stroke < 200; ++stroke) {
+    Vec3 p{inside(random), inside(random), inside(random)};
+    Proxy walking(space);
+    walking.reset(p);
+    Proxy settling = walking;
+    for (int k = 0; k < 200; ++k, ++steps) {
+      const bool jump = k % 17 == 0;
+      p += jump ? Vec3{large(random), large(random), large(random)}
+                : Vec3{small(random), small(random), small(random)};
+      const bool takes = TetSettleTestAccess::settles_in_tet(settling, p, settings);
+      settled += takes ? 1 : 0;
+      declined_in_tet += !takes && settling.place().state == ProxyState::Tet ? 1 : 0;
+      const TickResult rw = TetSettleTestAccess::step_walking(walking, p, 1e-3, settings);
+      const TickResult rs = settling.step(p, 1e-3, settings);
+      expect_same(settling, walking, rs, rw, steps);
+      if (::testing::Test::HasFatalFailure()) return;
+    }
+  }
+  // Both branches were exercised: most ticks settle, and the declined TET
+  // ticks (an exit, a viscous tet) went through the walk with the same result.
+  EXPECT_GT(settled, steps / 10);
+  EXPECT_GT(declined_in_tet, steps / 100);
+}
+
+TEST(TetSettle, DeclinesAnythingButAFreshTetTick) {
+  const MeshData mesh = cube_mesh(10.0);
+  const auto space = make_space(mesh, 0);
+  const RuntimeSettings settings = space->runtime_settings();
+  Proxy proxy(space);
+  proxy.reset({2.0, 4.0, 6.0});  // x < y < z: inside one Kuhn tet.
+  ASSERT_EQ(proxy.place().state, ProxyState::Tet);
+  EXPECT_TRUE(TetSettleTestAccess::settles_in_tet(proxy, {2.0, 4.0, 6.01}, settings));
+  // Out of the cube: the walk leaves through a face.
+  EXPECT_FALSE(TetSettleTestAccess::settles_in_tet(proxy, {2.0, 4.0, 15.0}, settings));
+  proxy.reset({15.0, 5.0, 5.0});
+  ASSERT_EQ(proxy.place().state, ProxyState::Outside);
+  EXPECT_FALSE(TetSettleTestAccess::settles_in_tet(proxy, {15.0, 5.0, 5.01}, settings));
+}
+
+}  // namespace
+}  // namespace hapticut
