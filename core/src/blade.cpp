@@ -212,8 +212,10 @@ BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& sett
     }
     const Vec3& p = world_points_[i];
     const int limit = std::min(cap, remaining);
-    // The settle in a tet inline here, in the blade's own loop: no call for most points.
-    if (!proxy.tick_in_tet(p, settings, limit, r)) {
+    // The settles in a tet and on a face inline here, in the blade's own
+    // loop: no call for most points.
+    if (!proxy.tick_in_tet(p, settings, limit, r) &&
+        !proxy.tick_on_face(p, settings, limit, shading, r)) {
       proxy.tick_walk(p, dt_s, settings, limit, shading, true, r);
     }
     remaining -= r.transitions;

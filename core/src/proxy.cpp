@@ -338,7 +338,10 @@ void Proxy::finish_tick(const Vec3& p, TickResult& result, const RuntimeSettings
 // ~40 instructions of a ~450-instruction point tick).
 void Proxy::tick_within(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
                         const ForceShading* shading, bool keep_capped_open, TickResult& result) {
-  if (tick_in_tet(p, settings, limit, result)) return;
+  if (tick_in_tet(p, settings, limit, result) ||
+      tick_on_face(p, settings, limit, shading, result)) {
+    return;
+  }
   tick_walk(p, dt_s, settings, limit, shading, keep_capped_open, result);
 }
 

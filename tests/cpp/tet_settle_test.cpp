@@ -1,8 +1,11 @@
-// The inline settle in a tet (Proxy::tick_in_tet) is a shortcut of the walk:
-// every tick it takes must leave the proxy exactly as the walk would (place,
-// force and counters, bit for bit), and it must decline every other tick.
+// The inline settles in a tet and on a face (Proxy::tick_in_tet and
+// tick_on_face) are shortcuts of the walk: every tick they take must leave
+// the proxy exactly as the walk would (place, force and counters, bit for
+// bit), and they must decline every other tick.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cstdio>
 #include <cstring>
 #include <random>
 
@@ -23,6 +26,10 @@ struct TetSettleTestAccess {
   static bool settles_in_tet(Proxy proxy, const Vec3& p, const RuntimeSettings& settings) {
     TickResult result;
     return proxy.tick_in_tet(p, settings, settings.max_transitions_per_tick, result);
+  }
+  static bool settles_on_face(Proxy proxy, const Vec3& p, const RuntimeSettings& settings) {
+    TickResult result;
+    return proxy.tick_on_face(p, settings, settings.max_transitions_per_tick, nullptr, result);
   }
 };
 
@@ -71,8 +78,9 @@ TEST(TetSettle, GivesWhatTheWalkGivesOnRandomStrokes) {
   std::vector<std::int32_t> materials(mesh.tets.size());
   std::uniform_int_distribution<int> model(0, 9);
   for (auto& m : materials) {
-    const int r = model(random);  // Mostly free and drag, some of each other model.
-    m = r < 4 ? 0 : r < 7 ? 1 : r - 6;
+    // Of ten tets: 4 free, 2 drag, 1 membrane, 1 viscous, 2 rigid.
+    static constexpr std::array<std::int32_t, 10> kModel{0, 0, 0, 0, 1, 1, 2, 3, 4, 4};
+    m = kModel[model(random)];
   }
   const auto space = make_space(mesh, materials, all_models());
   RuntimeSettings settings = space->runtime_settings();
@@ -80,7 +88,9 @@ TEST(TetSettle, GivesWhatTheWalkGivesOnRandomStrokes) {
   std::normal_distribution<double> small(0.0, 0.05);
   std::normal_distribution<double> large(0.0, 3.0);
   int settled = 0;
+  int slid = 0;
   int declined_in_tet = 0;
+  int declined_on_face = 0;
   int steps = 0;
   for (int stroke = 0; stroke < 200; ++stroke) {
     Vec3 p{inside(random), inside(random), inside(random)};
@@ -94,16 +104,24 @@ TEST(TetSettle, GivesWhatTheWalkGivesOnRandomStrokes) {
       const bool takes = TetSettleTestAccess::settles_in_tet(settling, p, settings);
       settled += takes ? 1 : 0;
       declined_in_tet += !takes && settling.place().state == ProxyState::Tet ? 1 : 0;
+      const bool slides = TetSettleTestAccess::settles_on_face(settling, p, settings);
+      slid += slides ? 1 : 0;
+      declined_on_face += !slides && settling.place().state == ProxyState::Face ? 1 : 0;
       const TickResult rw = TetSettleTestAccess::step_walking(walking, p, 1e-3, settings);
       const TickResult rs = settling.step(p, 1e-3, settings);
       expect_same(settling, walking, rs, rw, steps);
       if (::testing::Test::HasFatalFailure()) return;
     }
   }
-  // Both branches were exercised: most ticks settle, and the declined TET
-  // ticks (an exit, a viscous tet) went through the walk with the same result.
+  // Both branches of both were exercised: many ticks settle or slide, and the
+  // declined TET and FACE ticks (an exit, an edge reached, a free neighbour, a
+  // viscous tet) went through the walk with the same result.
   EXPECT_GT(settled, steps / 10);
   EXPECT_GT(declined_in_tet, steps / 100);
+  EXPECT_GT(slid, steps / 100);
+  EXPECT_GT(declined_on_face, steps / 100);
+  std::printf("settled %d, declined in a tet %d, slid %d, declined on a face %d of %d\n", settled,
+              declined_in_tet, slid, declined_on_face, steps);
 }
 
 TEST(TetSettle, DeclinesAnythingButAFreshTetTick) {

@@ -153,7 +153,16 @@ class alignas(64) Proxy {
   // tick (another state, a viscous material, q' leaving the tet, a tick
   // already under way); tick_walk then does it.
   bool tick_in_tet(const Vec3& p, const RuntimeSettings& settings, int limit, TickResult& result);
-  // tick_in_tet, else tick_walk.
+  // The same for the commonest FACE tick, a slide on bone: p strictly beyond
+  // the face, the neighbour rigid, the slide's end inside the face and off
+  // its edges (step_face's settle). Declines also when the force is shaded.
+  bool tick_on_face(const Vec3& p, const RuntimeSettings& settings, int limit,
+                    const ForceShading* shading, TickResult& result);
+  // The end of a tick that tick_in_tet or tick_on_face settled: q moved to
+  // q1, a transition of `state` to itself when it changed q (settle_at).
+  void end_settled_tick(const Vec3& p, const Vec3& q1, ProxyState state,
+                        const RuntimeSettings& settings, TickResult& result);
+  // tick_in_tet, else tick_on_face, else tick_walk.
   void tick_within(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
                    const ForceShading* shading, bool keep_capped_open, TickResult& result);
   void tick_walk(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
@@ -213,8 +222,32 @@ class alignas(64) Proxy {
   std::shared_ptr<const Space> space_owner_;
 };
 
-// The settle of step_tet ((b-2): no exit plane strictly crossed) and the
-// bookkeeping of walk_inline and finish_tick_inline for it, in proxy.cpp.
+// The bookkeeping of walk_inline and finish_tick_inline (proxy.cpp) for a
+// tick of one settle, in the same order.
+[[gnu::always_inline]] inline void Proxy::end_settled_tick(const Vec3& p, const Vec3& q1,
+                                                           ProxyState state,
+                                                           const RuntimeSettings& settings,
+                                                           TickResult& result) {
+  std::uint32_t transitions = 0;
+  if (!within_tolerance(q1 - place_.q, space_->tolerance())) {
+    transitions = 1;
+    const auto s = static_cast<int>(state);
+    ++counters_.transitions[s][s][0];  // To itself, same owner: not a neighbour.
+  }
+  place_.q = q1;
+  result.transitions = static_cast<int>(transitions);
+  counters_.total_transitions += transitions;
+  if (transitions > counters_.max_transitions_in_tick) {
+    counters_.max_transitions_in_tick = transitions;
+  }
+  last_p_ = p;
+  has_last_p_ = true;
+  const Vec3 force = (place_.q - p) * settings.stiffness_N_per_mm;  // Eq. (15).
+  force_N_ = is_finite(force) ? force : Vec3{};
+  unfinished_in_row_ = 0;
+}
+
+// step_tet's (b-2): the material's move, no exit plane strictly crossed.
 // Shading leaves a TET force as it is (ForceShading::shade), so none is asked.
 [[gnu::always_inline]] inline bool Proxy::tick_in_tet(const Vec3& p,
                                                       const RuntimeSettings& settings, int limit,
@@ -224,15 +257,13 @@ class alignas(64) Proxy {
   const MaterialModel model = space_->tet_model(t);
   if (model == MaterialModel::Viscous) return false;  // Its move needs the tick's speed.
   const double eps = space_->tolerance();
-  const Vec3 q = place_.q;
   MoveResult moved{true, p};
   if (model != MaterialModel::Free) {
     MoveContext context;
     context.stiffness_N_per_mm = settings.stiffness_N_per_mm;
     context.tolerance_mm = eps;
-    moved = move(space_->material_of_tet(t), p, q, context);
+    moved = move(space_->material_of_tet(t), p, place_.q, context);
   }
-  int transitions = 0;
   if (moved.moved) {
     const Plane* planes = &space_->mesh().face_plane(t, 0);
     bool leaves = false;
@@ -240,22 +271,47 @@ class alignas(64) Proxy {
       leaves = leaves || strictly_beyond(planes[k].signed_distance(moved.q), eps);
     }
     if (leaves) return false;
-    if (!within_tolerance(moved.q - q, eps)) {
-      transitions = 1;
-      ++counters_.transitions[0][0][0];  // TET -> TET, same tet.
+  }
+  end_settled_tick(p, moved.q, ProxyState::Tet, settings, result);
+  return true;
+}
+
+// step_face's (a-1) refused by a rigid neighbour, then (b): the slide to p
+// projected on the plane (eq. 6), no other face plane strictly crossed nor
+// touched (touching it, the edge's fan may decide: the walk does it).
+[[gnu::always_inline]] inline bool Proxy::tick_on_face(const Vec3& p,
+                                                       const RuntimeSettings& settings, int limit,
+                                                       const ForceShading* shading,
+                                                       TickResult& result) {
+  if (place_.state != ProxyState::Face || result.transitions != 0 || limit < 1) return false;
+  if (shading != nullptr && settings.force_shading) return false;
+  const TetMesh& mesh = space_->mesh();
+  const std::int32_t t = place_.tet;
+  const int face = place_.local;
+  const Vec3 q = place_.q;
+  const double eps = space_->tolerance();
+  const Plane* planes = &mesh.face_plane(t, 0);
+  if (!strictly_beyond(dot(planes[face].normal, p - q), eps)) return false;
+  const std::int32_t u = mesh.neighbour(t, face);
+  if (u == kNoTet || !space_->tet_is_rigid(u)) return false;
+  const MaterialModel model = space_->tet_model(t);
+  if (model == MaterialModel::Viscous) return false;  // Its move needs the tick's speed.
+  const Vec3 target = project_to_plane(p, planes[face]);
+  MoveResult moved{true, target};
+  if (model != MaterialModel::Free) {
+    MoveContext context;
+    context.stiffness_N_per_mm = settings.stiffness_N_per_mm;
+    context.tolerance_mm = eps;
+    moved = move(space_->material_of_tet(t), target, q, context);
+  }
+  if (moved.moved) {
+    bool reaches = false;
+    for (int k = 0; k < 4; ++k) {
+      reaches = reaches || (k != face && on_or_beyond(planes[k].signed_distance(moved.q), eps));
     }
-    place_.q = moved.q;
+    if (reaches) return false;
   }
-  result.transitions = transitions;
-  counters_.total_transitions += static_cast<std::uint32_t>(transitions);
-  if (static_cast<std::uint32_t>(transitions) > counters_.max_transitions_in_tick) {
-    counters_.max_transitions_in_tick = static_cast<std::uint32_t>(transitions);
-  }
-  last_p_ = p;
-  has_last_p_ = true;
-  const Vec3 force = (place_.q - p) * settings.stiffness_N_per_mm;  // Eq. (15).
-  force_N_ = is_finite(force) ? force : Vec3{};
-  unfinished_in_row_ = 0;
+  end_settled_tick(p, moved.q, ProxyState::Face, settings, result);
   return true;
 }
 
