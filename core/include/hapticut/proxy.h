@@ -149,9 +149,9 @@ class alignas(64) Proxy {
   // settles there, with the same place, counters and force as the walk
   // (step_tet, then finish_tick) would give, bit for bit, without the walk's
   // machinery: about a third of a point's instructions (docs/decisions.md,
-  // "The settle in a tet"). Returns false, touching nothing, for any other
-  // tick (another state, a viscous material, q' leaving the tet, a tick
-  // already under way); tick_walk then does it.
+  // "The settle in a tet and the slide on bone, inline"). Returns false,
+  // touching nothing, for any other tick (another state, a viscous material,
+  // q' leaving the tet, a tick already under way); tick_walk then does it.
   bool tick_in_tet(const Vec3& p, const RuntimeSettings& settings, int limit, TickResult& result);
   // The same for the commonest FACE tick, a slide on bone: p strictly beyond
   // the face, the neighbour rigid, the slide's end inside the face and off
