@@ -6,6 +6,7 @@
 #include <cstdlib>
 
 #include "devices/device_factory.h"
+#include "session.h"
 
 namespace hapticut::servo {
 
@@ -111,7 +112,9 @@ Options parse_options(int argc, const char* const* argv) {
       o.devices.emplace_back(value());
     } else if (arg == "--rate") {
       o.rate_Hz = number(arg, value());
-      if (!(o.rate_Hz >= 1.0 && o.rate_Hz <= 10000.0)) throw UsageError("--rate: 1 to 10000 Hz");
+      if (!(o.rate_Hz >= 1.0 && o.rate_Hz <= kMaxRate_Hz)) {
+        throw UsageError("--rate: 1 to " + std::to_string(static_cast<int>(kMaxRate_Hz)) + " Hz");
+      }
     } else if (arg == "--as-fast-as-possible") {
       o.as_fast_as_possible = true;
     } else if (arg == "--duration") {
