@@ -518,7 +518,12 @@ Proxy::Outcome Proxy::step_edge(const Vec3& p, const MoveContext& context) {
   if (beyond_edge_end(moved.q, o1, direction)) {
     return go(ProxyState::Vertex, t, local_index_of(mesh.tet(t), ends[1]), o1);
   }
-  return go(ProxyState::Edge, t, local_edge, moved.q);
+  // (b) ended on the line, short of its ends: the tick ends here, as after a
+  // move within a tet or face (docs/decisions.md, "Ending a tick"). Called
+  // again, every fan test reads the same d . n (q moved along the edge, every
+  // fan normal is normal to it), and q' is nearer than q to p and to each
+  // projected target, so every move that refused still refuses.
+  return settle_at(moved.q);
 }
 
 // VERTEX: (a-1) into a tet whose corner cone holds p (eq. 11); (a-2) out of
