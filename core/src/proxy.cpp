@@ -149,10 +149,11 @@ void Proxy::set_place(const ProxyPlace& place) {
   place_ = place;
 }
 
-// (b-2) of TET and FACE: q moved within its tet or face and stopped where
-// the material put it. Called again, the material (same target, q now at
-// its answer) holds q, and FACE's (a) tests see the same n . (p - q), since
-// q moved in the plane: nothing would change, so the tick ends here. State,
+// (b-2) of TET and FACE, and EDGE's (b) short of the edge's ends: q moved
+// within its tet, face or edge and stopped where the material put it. Called
+// again, the material (same target, q now at its answer) holds q, and FACE's
+// and EDGE's (a) tests see the same n . (p - q), since q moved in the plane
+// or along the edge: nothing would change, so the tick ends here. State,
 // owner and local index stay; only q moves.
 Proxy::Outcome Proxy::settle_at(const Vec3& q) {
   const double tolerance = space_->tolerance();

@@ -37,7 +37,7 @@ struct Transition {
   ProxyState to = ProxyState::Outside;
   bool to_neighbour = false;
   bool changed = false;
-  // The move stayed inside its tet or face: the next call in this tick would
+  // The move stayed inside its tet or face, or along its edge: the next call would
   // change nothing (see docs/decisions.md, "Ending a tick"), so the tick ends.
   bool settled = false;
   // Pads the struct to 8 bytes, returned in one register: at 5 bytes GCC
@@ -181,7 +181,7 @@ class alignas(64) Proxy {
   void hold_force(const RuntimeSettings& settings);
 
   // What one step of a state did: nothing, moved (the tick goes on), or
-  // moved within its tet or face and settled (the tick ends; see settle_at).
+  // moved within its tet, face or edge and settled (the tick ends; see settle_at).
   enum class Outcome : std::uint8_t { Unchanged, Changed, Settled };
   Outcome advance(const Vec3& p, const MoveContext& context);
   Outcome step_tet(const Vec3& p, const MoveContext& context);
