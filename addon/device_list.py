@@ -262,9 +262,11 @@ def settings_problems(settings: dict, limits: dict, rate_Hz: float) -> list[str]
         if value > 0 and bound > 0 and value > bound:
             if setting == "stiffness_N_per_mm":
                 stated = limits.get("max_stiffness_N_per_mm", bound)
+                stated_rate = limits.get("max_stiffness_stated_rate_Hz", 0.0)
                 at_rate = f" at {rate_Hz:g} Hz"
                 if stated != bound:
-                    at_rate += f" ({stated:g} {unit} as stated, for 1 kHz)"
+                    for_rate = f", for {stated_rate:g} Hz" if stated_rate > 0 else ""
+                    at_rate += f" ({stated:g} {unit} as stated{for_rate})"
             else:
                 at_rate = ""
             problems.append(

@@ -354,6 +354,7 @@ nlohmann::json limits_json(const DeviceLimits& limits, double rate_Hz) {
           {"max_force_N", limits.max_force_N},
           {"max_torque_N_mm", limits.max_torque_N_mm},
           {"max_stiffness_N_per_mm", limits.max_stiffness_N_per_mm},
+          {"max_stiffness_stated_rate_Hz", kStiffnessLimitRate_Hz},
           {"max_stiffness_N_per_mm_at_rate", stiffness_limit(limits, rate_Hz)},
           {"workspace_min_mm", xyz(limits.workspace_min_mm)},
           {"workspace_max_mm", xyz(limits.workspace_max_mm)}};

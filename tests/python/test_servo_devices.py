@@ -269,6 +269,10 @@ def test_list_devices_json_gives_each_stiffness_limit_at_the_rate():
         limit = at_1k["limits"]["max_stiffness_N_per_mm"]
         assert limit > 0, name
         assert at_1k["limits"]["max_stiffness_N_per_mm_at_rate"] == limit, name
+        # The rate the stated limit holds for, in every listing whatever its rate.
+        for listing in (at_1k, at_250, at_4k):
+            if listing is not None:
+                assert listing["limits"]["max_stiffness_stated_rate_Hz"] == 1000.0, name
         assert at_250["limits"]["max_stiffness_N_per_mm"] == limit, name
         assert at_250["limits"]["max_stiffness_N_per_mm_at_rate"] == pytest.approx(limit / 4)
         if at_4k is not None:

@@ -146,8 +146,10 @@ def test_settings_above_the_devices_limits_are_refused(scene):
     at_500 = slow["max_stiffness_N_per_mm_at_rate"]
     assert at_500 == pytest.approx(0.5 * bridge["max_stiffness_N_per_mm"])
     stated = bridge["max_stiffness_N_per_mm"]
+    stated_rate = slow["max_stiffness_stated_rate_Hz"]
+    assert stated_rate == 1000.0
     assert (
-        f"above the device's {at_500:g} N/mm at 500 Hz ({stated:g} N/mm as stated, for 1 kHz)"
+        f"above the device's {at_500:g} N/mm at 500 Hz ({stated:g} N/mm as stated, for 1000 Hz)"
         in str(refused.value)
     )
     assert any("Go Live refuses it" in text for text in panel_texts())
