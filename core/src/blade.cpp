@@ -210,14 +210,8 @@ BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& sett
       account(i);
       continue;
     }
-    const Vec3& p = world_points_[i];
-    const int limit = std::min(cap, remaining);
-    // The settles in a tet and on a face inline here, in the blade's own
-    // loop: no call for most points.
-    if (!proxy.tick_in_tet(p, settings, limit, r) &&
-        !proxy.tick_on_face(p, settings, limit, shading, r)) {
-      proxy.tick_walk(p, dt_s, settings, limit, shading, true, r);
-    }
+    // Inline (proxy.h): most points settle in the blade's own loop, without a call.
+    proxy.tick_within(world_points_[i], dt_s, settings, std::min(cap, remaining), shading, true, r);
     remaining -= r.transitions;
     if (r.capped) {
       ++capped_in_first_pass;

@@ -334,18 +334,9 @@ void Proxy::finish_tick(const Vec3& p, TickResult& result, const RuntimeSettings
   finish_tick_inline(p, result, settings, shading);
 }
 
-// A point's tick: the settle in a tet or the slide on bone inline (proxy.h),
-// else tick_walk, one call with the walk and the tick's end inline (two calls
-// more per point cost ~40 instructions of a ~450-instruction point tick).
-void Proxy::tick_within(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
-                        const ForceShading* shading, bool keep_capped_open, TickResult& result) {
-  if (tick_in_tet(p, settings, limit, result) ||
-      tick_on_face(p, settings, limit, shading, result)) {
-    return;
-  }
-  tick_walk(p, dt_s, settings, limit, shading, keep_capped_open, result);
-}
-
+// A point's tick that the settles (proxy.h) declined: one call, with the
+// walk and the tick's end inline (two calls more per point cost ~40
+// instructions of a ~450-instruction point tick).
 void Proxy::tick_walk(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
                       const ForceShading* shading, bool keep_capped_open, TickResult& result) {
   walk_inline(p, context_for(p, dt_s, settings), limit, result);

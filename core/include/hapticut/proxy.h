@@ -135,12 +135,12 @@ class alignas(64) Proxy {
   // check is not part of the transition timed, and subtracting it is noisier
   // than not making it (it was a plain assignment when Table 2 was first measured).
   friend struct TransitionTimingAccess;
-  // The test that the inline settle in a tet gives what the walk gives
-  // (tests/cpp/tet_settle_test.cpp) runs tick_walk and tick_in_tet apart.
+  // The test that the inline settles give what the walk gives
+  // (tests/cpp/tet_settle_test.cpp) runs tick_walk, tick_in_tet and tick_on_face apart.
   friend struct TetSettleTestAccess;
   // The pieces of step: refuse an input; the tick's move context; walk
   // toward p until converged or `limit` transitions in all this tick (exact,
-  // see step); end the tick at p (counters, force). tick_within walks and
+  // see step); end the tick at p (counters, force). tick_walk walks and
   // ends the tick unless the walk is capped and `keep_capped_open` (the Blade
   // then walks on with what its budget has left, then ends it).
   void reject_input(bool out_of_workspace, TickResult& result);
@@ -162,6 +162,7 @@ class alignas(64) Proxy {
   // q1, a transition of `state` to itself when it changed q (settle_at).
   void end_settled_tick(const Vec3& p, const Vec3& q1, ProxyState state,
                         const RuntimeSettings& settings, TickResult& result);
+  // A point's tick (inline, defined below; the blade's loop calls it too):
   // tick_in_tet, else tick_on_face, else tick_walk.
   void tick_within(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
                    const ForceShading* shading, bool keep_capped_open, TickResult& result);
@@ -171,8 +172,8 @@ class alignas(64) Proxy {
   void walk(const Vec3& p, const MoveContext& context, int limit, TickResult& result);
   void finish_tick(const Vec3& p, TickResult& result, const RuntimeSettings& settings,
                    const ForceShading* shading);
-  // The bodies of walk and finish_tick, inlined into tick_within (proxy.cpp
-  // only): the blade's hot path makes one call per point, not three.
+  // The bodies of walk and finish_tick, inlined into tick_walk (proxy.cpp
+  // only): a point the settles decline makes one call, not three.
   void walk_inline(const Vec3& p, const MoveContext& context, int limit, TickResult& result);
   void finish_tick_inline(const Vec3& p, TickResult& result, const RuntimeSettings& settings,
                           const ForceShading* shading);
@@ -313,6 +314,17 @@ class alignas(64) Proxy {
   }
   end_settled_tick(p, moved.q, ProxyState::Face, settings, result);
   return true;
+}
+
+[[gnu::always_inline]] inline void Proxy::tick_within(const Vec3& p, double dt_s,
+                                                      const RuntimeSettings& settings, int limit,
+                                                      const ForceShading* shading,
+                                                      bool keep_capped_open, TickResult& result) {
+  if (tick_in_tet(p, settings, limit, result) ||
+      tick_on_face(p, settings, limit, shading, result)) {
+    return;
+  }
+  tick_walk(p, dt_s, settings, limit, shading, keep_capped_open, result);
 }
 
 }  // namespace hapticut
