@@ -162,6 +162,9 @@ BladeTick Blade::step(const Pose& pose, double dt_s) {
   return step(pose, dt_s, space_->runtime_settings());
 }
 
+// How many points ahead the first pass asks the cache for a point's tet.
+constexpr std::size_t kPrefetchAhead = 4;
+
 // The work budget (docs/decisions.md, "Work budget per tick"): a first pass
 // gives each point up to max_transitions_per_tick of what is left, in a round
 // robin that starts where the last tick left points unfinished; a second pass
@@ -200,7 +203,17 @@ BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& sett
     tick.transitions += transitions;
   };
   int capped_in_first_pass = 0;
+  // The point kPrefetchAhead places on has its tet asked for while this one
+  // ticks: after a sleep the mesh is cold, and one point's misses then
+  // overlap another's work instead of adding up (the first few are asked for here).
+  std::size_t ahead = first_;
+  for (std::size_t k = 0; k < std::min(kPrefetchAhead, n); ++k) {
+    proxies_[ahead].prefetch_place();
+    ahead = ahead + 1 == n ? 0 : ahead + 1;
+  }
   for (std::size_t k = 0, i = first_; k < n; ++k, i = i + 1 == n ? 0 : i + 1) {
+    proxies_[ahead].prefetch_place();
+    ahead = ahead + 1 == n ? 0 : ahead + 1;
     TickResult& r = point_ticks_[i];
     r = {};
     Proxy& proxy = proxies_[i];

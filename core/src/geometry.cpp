@@ -83,6 +83,11 @@ Aabb reach_box(const TetMesh& mesh) {
   return mesh_box(mesh, norm(tight.hi - tight.lo));
 }
 
+Aabb entry_box(const TetMesh& mesh, double tolerance_mm) {
+  const Aabb tight = mesh_box(mesh, 0.0);
+  return mesh_box(mesh, 1e-3 * norm(tight.hi - tight.lo) + 1e3 * tolerance_mm);
+}
+
 namespace {
 
 // Where the segment o + h u, u in [0, 2], enters and leaves a box: the

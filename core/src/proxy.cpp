@@ -123,6 +123,7 @@ Proxy::Proxy(std::shared_ptr<const Space> space)
   if (space_ == nullptr) throw std::invalid_argument("a Proxy needs a Space");
   reach_box_ = reach_box(space_->mesh());
   mesh_box_ = mesh_box(space_->mesh(), space_->tolerance());
+  entry_box_ = entry_box(space_->mesh(), space_->tolerance());
 }
 
 void Proxy::set_place(const ProxyPlace& place) {
@@ -399,6 +400,9 @@ Proxy::Outcome Proxy::step_tet(const Vec3& p, const MoveContext& context) {
   if (!moved.moved) return Outcome::Unchanged;
   const Exit exit = find_tet_exit(mesh, t, q, moved.q, context.tolerance_mm);
   if (exit.face < 0) return settle_at(moved.q);
+  // The FACE step next looks into the neighbour behind the exit face.
+  const std::int32_t behind = mesh.neighbour(t, exit.face);
+  if (behind != kNoTet) space_->prefetch_tet(behind);
   return go(ProxyState::Face, t, exit.face, q + (moved.q - q) * exit.parameter);
 }
 
@@ -601,6 +605,9 @@ Proxy::Outcome Proxy::step_vertex(const Vec3& p, const MoveContext& context) {
 // see enter_beyond.
 Proxy::Outcome Proxy::step_outside(const Vec3& p) {
   const Vec3& q = place_.q;
+  // In free air beside the mesh (most OUTSIDE steps): no entry, and p is
+  // outside the mesh, so q follows it; what the search below would find.
+  if (segment_beyond_box_face(entry_box_, q, p)) return go(ProxyState::Outside, kNoTet, 0, p);
   if (box_holds(reach_box_, q) && box_holds(reach_box_, p)) return enter_beyond(q, p, p, 0.0, 0);
   const ClippedSegment segment = clip_far_segment_to_box(q, p, reach_box_);
   if (!segment.hits) return leave_outside(p);

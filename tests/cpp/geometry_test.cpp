@@ -222,6 +222,26 @@ TEST(Geometry, MeshBoxAndReachBox) {
   EXPECT_FALSE(box_holds(mesh_box(mesh, 0.0), {10.001, 0, 5}));
 }
 
+TEST(Geometry, EntryBoxIsTheMeshBoxGrownByAThousandthOfItsDiagonalAndAThousandTolerances) {
+  const MeshData data = cube_mesh(10.0);
+  const TetMesh mesh(data.vertices_mm, data.tets, std::vector<std::int32_t>(data.tets.size(), 0));
+  const double pad = 1e-3 * std::sqrt(300.0) + 1e3 * 1e-6;
+  const Aabb box = entry_box(mesh, 1e-6);
+  EXPECT_NEAR(box.lo.y, -pad, 1e-15);
+  EXPECT_NEAR(box.hi.x, 10.0 + pad, 1e-15);
+}
+
+TEST(Geometry, SegmentBeyondABoxFaceNeedsBothEndsStrictlyBeyondTheSameFace) {
+  const Aabb box{{0, 0, 0}, {1, 1, 1}};
+  EXPECT_TRUE(segment_beyond_box_face(box, {-1, 0.5, 0.5}, {-2, 5, -3}));
+  EXPECT_TRUE(segment_beyond_box_face(box, {0.5, 0.5, 1.5}, {9, -9, 1.01}));
+  // Beside the box at a corner, but beyond different faces: not decided here.
+  EXPECT_FALSE(segment_beyond_box_face(box, {-1, 0.5, 0.5}, {0.5, -1, 0.5}));
+  // The box is closed: an end on a face is not beyond it.
+  EXPECT_FALSE(segment_beyond_box_face(box, {-1, 0.5, 0.5}, {0, 0.5, 0.5}));
+  EXPECT_FALSE(segment_beyond_box_face(box, {-1, 0.5, 0.5}, {2, 0.5, 0.5}));
+}
+
 TEST(Geometry, ClipSegmentToBoxKeepsInsideEndsAndPutsClippedOnesOnItsSurface) {
   const Aabb box{{-10, -10, -10}, {10, 10, 10}};
   const ClippedSegment inside = clip_segment_to_box({1, 2, 3}, {-4, 5, 6}, box);

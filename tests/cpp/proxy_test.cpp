@@ -143,6 +143,31 @@ TEST(Proxy, EntersTheCubeFromOutside) {
   EXPECT_EQ(proxy.q(), Vec3(15, 3, 4));
 }
 
+// OUTSIDE skips its entry search for a move beyond one face of a box around
+// the mesh (free air beside it): q follows p.
+TEST(Proxy, AMoveInFreeAirBesideTheMeshFollowsP) {
+  const auto space_owner = make_space(cube_mesh(10.0), 0);
+  Proxy proxy(*space_owner);
+  EXPECT_EQ(proxy.reset({-5, 3, 4}), StartKind::Outside);
+  proxy.step({-8, 30, -4}, kDt);
+  EXPECT_EQ(proxy.place().state, ProxyState::Outside);
+  EXPECT_EQ(proxy.q(), Vec3(-8, 30, -4));
+  EXPECT_EQ(count(proxy, ProxyState::Outside, ProxyState::Outside, false), 1u);
+}
+
+// A move just above the cube's top face, within the tolerance of it, is
+// beyond the mesh's own box but still enters through the side face's rim:
+// the box that skips the search is grown well past every entry it could miss.
+TEST(Proxy, AMoveGrazingTheMeshWithinTheToleranceStillEnters) {
+  const auto space_owner = make_space(cube_mesh(10.0), 0);
+  const double z = 10.0 + 0.5 * space_owner->tolerance();
+  Proxy proxy(*space_owner);
+  EXPECT_EQ(proxy.reset({-5, 3, z}), StartKind::Outside);
+  proxy.step({5, 3, z}, kDt);
+  EXPECT_NE(proxy.place().state, ProxyState::Outside);
+  EXPECT_EQ(count(proxy, ProxyState::Outside, ProxyState::Outside, false), 0u);
+}
+
 TEST(Proxy, RigidCubeStopsAnOutsideProxyOnItsSurface) {
   const auto space_owner = make_space(cube_mesh(10.0), 2);
   const Space& space = *space_owner;

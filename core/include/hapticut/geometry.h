@@ -149,6 +149,12 @@ Aabb mesh_box(const TetMesh& mesh, double pad);
 // mesh is farther than one diagonal from the outside of this box.
 Aabb reach_box(const TetMesh& mesh);
 
+// The mesh's box grown by a thousandth of its diagonal and a thousand
+// tolerances: every point an OUTSIDE entry search can accept (a crossing of a
+// boundary face within the tolerance of its triangle, however sharp its
+// corners) lies inside it, so a segment beyond one of its faces enters nowhere.
+Aabb entry_box(const TetMesh& mesh, double tolerance_mm);
+
 // The part of segment a->b inside box: an OUTSIDE entry
 // search on a->b computes the same entry on start->end, but with both ends
 // near the mesh, so q + d s keeps its precision for any finite a and b (a
@@ -167,6 +173,16 @@ ClippedSegment clip_far_segment_to_box(const Vec3& a, const Vec3& b, const Aabb&
 inline bool box_holds(const Aabb& box, const Vec3& x) {
   return static_cast<bool>((x.x >= box.lo.x) & (x.x <= box.hi.x) & (x.y >= box.lo.y) &
                            (x.y <= box.hi.y) & (x.z >= box.lo.z) & (x.z <= box.hi.z));
+}
+
+// Whether segment a->b lies wholly beyond one face of the closed box (both
+// ends below its lo or both above its hi on one axis): then it meets nothing
+// inside the box. Exact, no division; bitwise like box_holds.
+inline bool segment_beyond_box_face(const Aabb& box, const Vec3& a, const Vec3& b) {
+  return static_cast<bool>(
+      ((a.x < box.lo.x) & (b.x < box.lo.x)) | ((a.x > box.hi.x) & (b.x > box.hi.x)) |
+      ((a.y < box.lo.y) & (b.y < box.lo.y)) | ((a.y > box.hi.y) & (b.y > box.hi.y)) |
+      ((a.z < box.lo.z) & (b.z < box.lo.z)) | ((a.z > box.hi.z) & (b.z > box.hi.z)));
 }
 
 // clip_far_segment_to_box, with the common case (both ends inside) inline.

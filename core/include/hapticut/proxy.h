@@ -111,6 +111,10 @@ class alignas(64) Proxy {
   Transition transition(const Vec3& p, const MoveContext& context);
 
   const ProxyPlace& place() const { return place_; }
+  // Asks the cache for the tet this proxy's next tick starts in (Space::prefetch_tet).
+  void prefetch_place() const {
+    if (place_.tet != kNoTet) space_->prefetch_tet(place_.tet);
+  }
   // Puts the proxy at a given place (tests and benchmarks). Throws
   // std::invalid_argument naming the value when the state, tet, local index or
   // q is out of range (tet must be kNoTet exactly when OUTSIDE).
@@ -220,6 +224,8 @@ class alignas(64) Proxy {
   Aabb reach_box_;
   // The mesh's box grown by the tolerance: a p outside it is outside the mesh.
   Aabb mesh_box_;
+  // OUTSIDE's first test: a move beyond one face of this box enters nowhere.
+  Aabb entry_box_;
   std::shared_ptr<const Space> space_owner_;
 };
 

@@ -86,6 +86,11 @@ class Space : public std::enable_shared_from_this<Space> {
   // The model of tet t's material, one byte a tet: the walk asks it per step.
   MaterialModel tet_model(std::int32_t t) const { return models_[t]; }
   bool tet_is_rigid(std::int32_t t) const { return models_[t] == MaterialModel::Rigid; }
+  // TetMesh::prefetch_tet and the tet's model byte.
+  void prefetch_tet(std::int32_t t) const {
+    mesh_.prefetch_tet(t);
+    __builtin_prefetch(&models_[t]);
+  }
   // Whether any material needs the device point's speed (viscous).
   bool uses_speed() const { return uses_speed_; }
   const EngineSettings& settings() const { return settings_; }

@@ -122,6 +122,15 @@ class TetMesh {
   double tolerance() const { return tolerance_; }
 
   const Plane& face_plane(std::int32_t t, int face) const { return planes_[4 * t + face]; }
+  // Asks the cache for what a walk reads on entering tet t (its planes, its
+  // neighbours, its material), so a walk that knows its next tet one step
+  // ahead waits for one memory access, not for four in a row.
+  void prefetch_tet(std::int32_t t) const {
+    __builtin_prefetch(&planes_[4 * static_cast<std::size_t>(t)]);
+    __builtin_prefetch(&planes_[4 * static_cast<std::size_t>(t) + 2]);
+    __builtin_prefetch(&neighbours_[4 * static_cast<std::size_t>(t)]);
+    __builtin_prefetch(&materials_[t]);
+  }
   std::int32_t neighbour(std::int32_t t, int face) const { return neighbours_[4 * t + face]; }
   int neighbour_face(std::int32_t t, int face) const { return neighbour_faces_[4 * t + face]; }
   std::int32_t edge_of(std::int32_t t, int local_edge) const {
