@@ -22,10 +22,6 @@ struct Exit {
   int touching = -1;
 };
 
-// The faces of a tet other than the one indexed: FACE's candidate exits.
-constexpr std::array<std::array<int, 3>, 4> kOtherFaces{
-    {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}}};
-
 // The exit among `count` faces of tet t. Most moves end inside, so q1's
 // distances come first, all at once; q's are computed only for a plane q1 is out of.
 template <bool report_touching, std::size_t count>
@@ -640,13 +636,13 @@ Proxy::Outcome Proxy::enter_beyond(const Vec3& q, const Vec3& end, const Vec3& p
     const Vec3 c = q + d * s;
     std::array<int, 2> on_rim{-1, -1};
     bool heading_away = false;
-    for (int f = 0; f < 4; ++f) {
-      if (f == face.face) continue;
-      const Plane& side = mesh.face_plane(face.tet, f);
+    const Plane* sides = mesh.boundary_side_planes(static_cast<std::size_t>(k));
+    for (int j = 0; j < 3; ++j) {
+      const Plane& side = sides[j];
       const RimSide where = side_of_rim(side.signed_distance(c), eps);
       if (where == RimSide::Outside) return;  // Outside the triangle (eq. 14, "<= eps").
       if (where == RimSide::OnRim) {
-        on_rim[on_rim[0] < 0 ? 0 : 1] = f;
+        on_rim[on_rim[0] < 0 ? 0 : 1] = kOtherFaces[face.face][j];
         heading_away = heading_away || strictly_beyond(dot(d, side.normal), eps);
       }
     }

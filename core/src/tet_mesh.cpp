@@ -289,9 +289,11 @@ void TetMesh::build_vertex_fans() {
 
 void TetMesh::build_trees() {
   boundary_planes_.clear();
+  boundary_side_planes_.clear();
   for (const FaceRef& f : boundary_faces_) {
     const Plane& plane = face_plane(f.tet, f.face);
     boundary_planes_.push_back(plane);
+    for (const int side : kOtherFaces[f.face]) boundary_side_planes_.push_back(face_plane(f.tet, side));
     boundary_plane_columns_[0].push_back(plane.normal.x);
     boundary_plane_columns_[1].push_back(plane.normal.y);
     boundary_plane_columns_[2].push_back(plane.normal.z);
@@ -367,7 +369,8 @@ std::size_t TetMesh::memory_bytes() const {
          vertex_fan_start_.capacity() * 4 + vertex_fan_.capacity() * sizeof(VertexFanEntry) +
          boundary_edge_.capacity() + boundary_vertex_.capacity() +
          boundary_faces_.capacity() * sizeof(FaceRef) +
-         boundary_planes_.capacity() * sizeof(Plane) + boundary_tree_.memory_bytes() +
+         boundary_planes_.capacity() * sizeof(Plane) +
+         boundary_side_planes_.capacity() * sizeof(Plane) + boundary_tree_.memory_bytes() +
          tet_tree_.memory_bytes();
 }
 

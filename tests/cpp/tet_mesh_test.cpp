@@ -101,6 +101,21 @@ TEST(TetMesh, FansMatchThePapersSetups) {
   EXPECT_EQ(cube.boundary_faces().size(), 12u);
 }
 
+TEST(TetMesh, BoundarySidePlanesAreTheOtherFacesOfEachBoundaryFacesTet) {
+  for (const MeshData& data : {cube_mesh(), icosahedron_mesh(), edge_fan_mesh(12)}) {
+    const TetMesh mesh = build(data);
+    for (std::size_t k = 0; k < mesh.boundary_faces().size(); ++k) {
+      const FaceRef& face = mesh.boundary_faces()[k];
+      for (int j = 0; j < 3; ++j) {
+        const Plane& expected = mesh.face_plane(face.tet, kOtherFaces[face.face][j]);
+        const Plane& side = mesh.boundary_side_planes(k)[j];
+        EXPECT_EQ(side.normal, expected.normal) << "boundary face " << k << ", side " << j;
+        EXPECT_EQ(side.offset, expected.offset) << "boundary face " << k << ", side " << j;
+      }
+    }
+  }
+}
+
 TEST(TetMesh, EdgeDirectionsAndFanFacesContainTheEdge) {
   const TetMesh mesh = build(grid_mesh({0, 1, 2}, {0, 1, 2}, {0, 1, 2}, 0.2, 3));
   for (std::int32_t e = 0; e < mesh.edge_count(); ++e) {

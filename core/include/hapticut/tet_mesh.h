@@ -48,6 +48,9 @@ inline bool tet_has_no_volume(const std::array<Vec3, 4>& corners, double volume6
 // The two faces that contain local edge e (the faces opposite the other two vertices).
 inline constexpr std::array<std::array<int, 2>, 6> kEdgeFaces{
     {{2, 3}, {1, 3}, {1, 2}, {0, 3}, {0, 2}, {0, 1}}};
+// The faces of a tet other than the one indexed: a face's three sides.
+inline constexpr std::array<std::array<int, 3>, 4> kOtherFaces{
+    {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}}};
 // The local edge shared by faces i and j (i != j); -1 on the diagonal.
 inline constexpr std::array<std::array<int, 4>, 4> kEdgeOfFaces{
     {{-1, 5, 4, 3}, {5, -1, 2, 1}, {4, 2, -1, 0}, {3, 1, 0, -1}}};
@@ -156,6 +159,9 @@ class TetMesh {
   const std::vector<FaceRef>& boundary_faces() const { return boundary_faces_; }
   // The outward plane of boundary_faces()[k], stored contiguously for OUTSIDE's scan.
   const Plane& boundary_plane(std::size_t k) const { return boundary_planes_[k]; }
+  // The three side planes of boundary_faces()[k] (its tet's other faces, in
+  // kOtherFaces order), side by side: OUTSIDE's triangle test reads them in a row.
+  const Plane* boundary_side_planes(std::size_t k) const { return &boundary_side_planes_[3 * k]; }
   // The same planes as separate coordinate arrays (normal x, y, z, offset), so
   // a scan over all of them vectorizes.
   const std::array<std::vector<double>, 4>& boundary_plane_columns() const {
@@ -202,6 +208,7 @@ class TetMesh {
   std::vector<std::uint8_t> boundary_vertex_;
   std::vector<FaceRef> boundary_faces_;
   std::vector<Plane> boundary_planes_;
+  std::vector<Plane> boundary_side_planes_;  // 3 per boundary face.
   std::array<std::vector<double>, 4> boundary_plane_columns_;
   AabbTree boundary_tree_;
   AabbTree tet_tree_;
