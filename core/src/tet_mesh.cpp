@@ -293,7 +293,8 @@ void TetMesh::build_trees() {
   for (const FaceRef& f : boundary_faces_) {
     const Plane& plane = face_plane(f.tet, f.face);
     boundary_planes_.push_back(plane);
-    for (const int side : kOtherFaces[f.face]) boundary_side_planes_.push_back(face_plane(f.tet, side));
+    for (const int side : kOtherFaces[f.face])
+      boundary_side_planes_.push_back(face_plane(f.tet, side));
     boundary_plane_columns_[0].push_back(plane.normal.x);
     boundary_plane_columns_[1].push_back(plane.normal.y);
     boundary_plane_columns_[2].push_back(plane.normal.z);
