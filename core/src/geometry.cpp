@@ -70,22 +70,25 @@ bool lies_in_mesh_interior(const TetMesh& mesh, const Vec3& x, double margin) {
   return near_tet && !near_boundary;
 }
 
+Aabb grown(const Aabb& box, double pad) {
+  Aabb out = box;
+  out.lo -= Vec3{pad, pad, pad};
+  out.hi += Vec3{pad, pad, pad};
+  return out;
+}
+
 Aabb mesh_box(const TetMesh& mesh, double pad) {
   Aabb box;
   for (const Vec3& v : mesh.vertices()) box.grow(v);
-  box.lo -= Vec3{pad, pad, pad};
-  box.hi += Vec3{pad, pad, pad};
-  return box;
+  return grown(box, pad);
 }
 
-Aabb reach_box(const TetMesh& mesh) {
-  const Aabb tight = mesh_box(mesh, 0.0);
-  return mesh_box(mesh, norm(tight.hi - tight.lo));
+Aabb reach_box(const Aabb& tight_box) {
+  return grown(tight_box, norm(tight_box.hi - tight_box.lo));
 }
 
-Aabb entry_box(const TetMesh& mesh, double tolerance_mm) {
-  const Aabb tight = mesh_box(mesh, 0.0);
-  return mesh_box(mesh, 1e-3 * norm(tight.hi - tight.lo) + 1e3 * tolerance_mm);
+Aabb entry_box(const Aabb& tight_box, double tolerance_mm) {
+  return grown(tight_box, 1e-3 * norm(tight_box.hi - tight_box.lo) + 1e3 * tolerance_mm);
 }
 
 namespace {

@@ -117,9 +117,11 @@ Proxy::Proxy(std::shared_ptr<const Space> space)
                     sizeof(ProxyCounters::max_transitions_in_tick) <=
                 128);
   if (space_ == nullptr) throw std::invalid_argument("a Proxy needs a Space");
-  reach_box_ = reach_box(space_->mesh());
-  mesh_box_ = mesh_box(space_->mesh(), space_->tolerance());
-  entry_box_ = entry_box(space_->mesh(), space_->tolerance());
+  // One pass over the vertices for the three boxes.
+  const Aabb tight = mesh_box(space_->mesh(), 0.0);
+  reach_box_ = reach_box(tight);
+  mesh_box_ = grown(tight, space_->tolerance());
+  entry_box_ = entry_box(tight, space_->tolerance());
 }
 
 void Proxy::set_place(const ProxyPlace& place) {

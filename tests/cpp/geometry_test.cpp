@@ -212,7 +212,7 @@ TEST(Geometry, MeshInteriorExcludesTheBoundaryAndIncludesInnerFacesAndVertices) 
 TEST(Geometry, MeshBoxAndReachBox) {
   const MeshData data = cube_mesh(10.0);
   const TetMesh mesh(data.vertices_mm, data.tets, std::vector<std::int32_t>(data.tets.size(), 0));
-  const Aabb box = reach_box(mesh);
+  const Aabb box = reach_box(mesh_box(mesh, 0.0));
   const double diagonal = std::sqrt(300.0);
   EXPECT_NEAR(box.lo.x, -diagonal, 1e-12);
   EXPECT_NEAR(box.hi.z, 10.0 + diagonal, 1e-12);
@@ -226,7 +226,7 @@ TEST(Geometry, EntryBoxIsTheMeshBoxGrownByAThousandthOfItsDiagonalAndAThousandTo
   const MeshData data = cube_mesh(10.0);
   const TetMesh mesh(data.vertices_mm, data.tets, std::vector<std::int32_t>(data.tets.size(), 0));
   const double pad = 1e-3 * std::sqrt(300.0) + 1e3 * 1e-6;
-  const Aabb box = entry_box(mesh, 1e-6);
+  const Aabb box = entry_box(mesh_box(mesh, 0.0), 1e-6);
   EXPECT_NEAR(box.lo.y, -pad, 1e-15);
   EXPECT_NEAR(box.hi.x, 10.0 + pad, 1e-15);
 }

@@ -142,18 +142,23 @@ double distance_to_tet(const TetMesh& mesh, std::int32_t t, const Vec3& x);
 // point near a sharp outer corner does not.
 bool lies_in_mesh_interior(const TetMesh& mesh, const Vec3& x, double margin);
 
+// The box grown by pad on every side.
+Aabb grown(const Aabb& box, double pad);
+
 // The box of the mesh's vertices grown by pad on every side.
 Aabb mesh_box(const TetMesh& mesh, double pad);
 
-// The mesh's box grown by its own diagonal on every side: every point of the
-// mesh is farther than one diagonal from the outside of this box.
-Aabb reach_box(const TetMesh& mesh);
+// The mesh's box (mesh_box with no pad) grown by its own diagonal on every
+// side: every point of the mesh is farther than one diagonal from the outside
+// of this box. From the mesh's box, so a caller that needs several of these
+// boxes passes over the vertices once.
+Aabb reach_box(const Aabb& tight_box);
 
 // The mesh's box grown by a thousandth of its diagonal and a thousand
 // tolerances: every point an OUTSIDE entry search can accept (a crossing of a
 // boundary face within the tolerance of its triangle, however sharp its
 // corners) lies inside it, so a segment beyond one of its faces enters nowhere.
-Aabb entry_box(const TetMesh& mesh, double tolerance_mm);
+Aabb entry_box(const Aabb& tight_box, double tolerance_mm);
 
 // The part of segment a->b inside box: an OUTSIDE entry
 // search on a->b computes the same entry on start->end, but with both ends
