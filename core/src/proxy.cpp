@@ -468,8 +468,13 @@ Proxy::Outcome Proxy::step_edge(const Vec3& p, const MoveContext& context) {
   const double d_squared = squared_norm(d);
   bool any_toward = false;
   bool outside_every_wedge = true;
+  // (a-2) is asked only on a boundary edge: round an inner edge a rigid tet
+  // has nothing to give, and its planes are not even read (a slide round a
+  // bone inside flesh then misses on half the fan's tets fewer).
+  const bool boundary = mesh.is_boundary_edge(e);
   Candidate best;
   for (const EdgeFanEntry& entry : fan) {
+    if (!boundary && space_->tet_is_rigid(entry.tet)) continue;
     const std::array<const Plane*, 2> planes{&mesh.face_plane(entry.tet, entry.faces[0]),
                                              &mesh.face_plane(entry.tet, entry.faces[1])};
     const std::array<double, 2> along{dot(d, planes[0]->normal), dot(d, planes[1]->normal)};
@@ -494,7 +499,7 @@ Proxy::Outcome Proxy::step_edge(const Vec3& p, const MoveContext& context) {
       }
     }
   }
-  if (!any_toward && outside_every_wedge && mesh.is_boundary_edge(e)) {
+  if (!any_toward && outside_every_wedge && boundary) {
     return go(ProxyState::Outside, kNoTet, 0, q);
   }
   if (best.tet != kNoTet) return go(best.state, best.tet, best.local, q);
@@ -538,8 +543,12 @@ Proxy::Outcome Proxy::step_vertex(const Vec3& p, const MoveContext& context) {
   // takes the proxy (move functions are pure, so an unused call is harmless).
   bool any_toward = false;
   bool outside_every_cone = true;
+  // (a-2) is asked only at a boundary vertex: elsewhere a rigid tet is skipped
+  // before its planes are read, as in step_edge.
+  const bool boundary = mesh.is_boundary_vertex(vertex);
   Candidate best;
   for (const VertexFanEntry& entry : mesh.vertex_fan(vertex)) {
+    if (!boundary && space_->tet_is_rigid(entry.tet)) continue;
     const int corner = entry.local_vertex;
     std::array<int, 3> faces{};
     std::array<const Plane*, 3> planes{};
@@ -589,7 +598,7 @@ Proxy::Outcome Proxy::step_vertex(const Vec3& p, const MoveContext& context) {
       }
     }
   }
-  if (!any_toward && outside_every_cone && mesh.is_boundary_vertex(vertex)) {
+  if (!any_toward && outside_every_cone && boundary) {
     return go(ProxyState::Outside, kNoTet, 0, q);
   }
   if (best.tet != kNoTet) return go(best.state, best.tet, best.local, q);

@@ -154,7 +154,7 @@ void TetMesh::reject_overlapping_tets() const {
 
 void TetMesh::build_faces() {
   const std::size_t n = tets_.size();
-  planes_.resize(4 * n);
+  planes_.resize(n);
   neighbours_.assign(4 * n, kNoTet);
   neighbour_faces_.assign(4 * n, 0);
   std::vector<KeyedItem> faces;
@@ -191,7 +191,7 @@ void TetMesh::build_faces() {
       const Vec3& opposite = vertices_[tets_[item.tet][item.local]];
       const bool flip = dot(normal, opposite) - offset > 0.0;
       flipped[j - k] = flip;
-      planes_[4 * item.tet + item.local] = flip ? Plane{-normal, -offset} : Plane{normal, offset};
+      planes_[item.tet].face[item.local] = flip ? Plane{-normal, -offset} : Plane{normal, offset};
     }
     // Two tets on the same side of their shared face overlap and would get
     // the same plane: the walk could not leave one for the other.
@@ -334,7 +334,7 @@ void TetMesh::compute_stats() {
     for (int i = 0; i < 4; ++i) {
       for (int j = i + 1; j < 4; ++j) {
         const double c =
-            std::clamp(dot(planes_[4 * t + i].normal, planes_[4 * t + j].normal), -1.0, 1.0);
+            std::clamp(dot(planes_[t].face[i].normal, planes_[t].face[j].normal), -1.0, 1.0);
         min_angle = std::min(min_angle, std::numbers::pi - std::acos(c));
       }
     }
@@ -363,7 +363,7 @@ std::int32_t TetMesh::locate(const Vec3& p) const {
 
 std::size_t TetMesh::memory_bytes() const {
   return vertices_.capacity() * sizeof(Vec3) + tets_.capacity() * sizeof(tets_[0]) +
-         materials_.capacity() * 4 + planes_.capacity() * sizeof(Plane) +
+         materials_.capacity() * 4 + planes_.capacity() * sizeof(TetPlanes) +
          neighbours_.capacity() * 4 + neighbour_faces_.capacity() + tet_edges_.capacity() * 4 +
          edge_vertices_.capacity() * 8 + edge_directions_.capacity() * sizeof(Vec3) +
          edge_fan_start_.capacity() * 4 + edge_fan_.capacity() * sizeof(EdgeFanEntry) +

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "hapticut/reference_meshes.h"
@@ -113,6 +114,17 @@ TEST(TetMesh, BoundarySidePlanesAreTheOtherFacesOfEachBoundaryFacesTet) {
         EXPECT_EQ(side.offset, expected.offset) << "boundary face " << k << ", side " << j;
       }
     }
+  }
+}
+
+TEST(TetMesh, EachTetsPlanesStartOnACacheLine) {
+  // Two lines a tet, never three: a walk into a new tet misses at most twice on its planes.
+  const TetMesh mesh = build(grid_mesh({0, 1, 2, 3}, {0, 1, 2}, {0, 1, 2}, 0.2, 7));
+  for (std::int32_t t = 0; t < mesh.tet_count(); ++t) {
+    const auto address = reinterpret_cast<std::uintptr_t>(&mesh.face_plane(t, 0));
+    EXPECT_EQ(address % 64, 0U) << "tet " << t;
+    EXPECT_EQ(reinterpret_cast<std::uintptr_t>(&mesh.face_plane(t, 3)) - address,
+              3 * sizeof(Plane));
   }
 }
 

@@ -21,6 +21,7 @@ from hapticut.scenebuild.geometry import (
     enclosure_surface,
     winding_numbers,
 )
+from hapticut.scenebuild.locality import hilbert_keys
 from hapticut.scenebuild.repair import read_surface
 from hapticut.scenefile import BladeSpec, Material, load_scene, save_scene
 
@@ -75,6 +76,13 @@ def test_built_scene_survives_a_save_and_load(nested_scene, tmp_path):
     assert len(loaded.tets) == len(nested_scene.tets)
     np.testing.assert_array_equal(loaded.tet_materials, nested_scene.tet_materials)
     assert loaded.metadata["build_report"]["tets"] == len(nested_scene.tets)
+
+
+def test_a_built_scene_stores_its_tets_along_a_hilbert_curve(nested_scene):
+    vertices, tets = np.asarray(nested_scene.vertices), np.asarray(nested_scene.tets)
+    assert np.all(np.diff(hilbert_keys(vertices[tets].mean(axis=1))) >= 0)
+    first_use = np.unique(tets.ravel(), return_index=True)[1]
+    assert np.all(np.diff(first_use) > 0) and len(first_use) == len(vertices)
 
 
 @pytest.mark.parametrize("kind", ["box", "cube", "tetrahedron"])
