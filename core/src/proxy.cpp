@@ -614,8 +614,10 @@ Proxy::Outcome Proxy::step_outside(const Vec3& p) {
   const Vec3& q = place_.q;
   // In free air beside the mesh (most OUTSIDE steps): no entry, and p is
   // outside the mesh, so q follows it; what the search below would find.
-  if (segment_beyond_box_face(entry_box_, q, p)) return go(ProxyState::Outside, kNoTet, 0, p);
-  if (box_holds(reach_box_, q) && box_holds(reach_box_, p)) return enter_beyond(q, p, p, 0.0, 0);
+  // Both box tests on the segment's own box: six min/max, then twelve compares.
+  const Aabb segment_bounds = segment_box(q, p);
+  if (box_beyond_face(segment_bounds, entry_box_)) return go(ProxyState::Outside, kNoTet, 0, p);
+  if (box_holds_box(reach_box_, segment_bounds)) return enter_beyond(q, p, p, 0.0, 0);
   const ClippedSegment segment = clip_far_segment_to_box(q, p, reach_box_);
   if (!segment.hits) return leave_outside(p);
   return enter_beyond(segment.start, segment.end, p, 0.0, 0);
@@ -687,25 +689,14 @@ Proxy::Outcome Proxy::enter_beyond(const Vec3& q, const Vec3& end, const Vec3& p
       before[k] = column[0][k] * q.x + column[1][k] * q.y + column[2][k] * q.z - offset;
       behind[k] = column[0][k] * end.x + column[1][k] * end.y + column[2][k] * end.z - offset;
     }
-    // Candidates nearest first: the first clean hit is the entry, and the
-    // others (up to 6 on a box) need no triangle test.
-    std::array<double, kLinearEntryScanMax> order_s;        // NOLINT: first `count` used.
-    std::array<std::int32_t, kLinearEntryScanMax> order_k;  // NOLINT: first `count` used.
-    std::size_t count = 0;
+    // Every plane q->end enters through gets the triangle test, in scan
+    // order: try_face_at keeps the nearest clean hit and the nearest rim hit
+    // short of it, and skips a plane beyond both, as the tree's order does.
+    // (Sorting the candidates nearest first cost more than the tests it saved:
+    // on a convex box the entry is the farthest of up to three planes.)
     for (std::size_t k = 0; k < n; ++k) {
       const double s = segment_entry_parameter(before[k], behind[k], eps);
-      if (s >= 0.0) {
-        std::size_t slot = count++;
-        for (; slot > 0 && order_s[slot - 1] > s; --slot) {
-          order_s[slot] = order_s[slot - 1];
-          order_k[slot] = order_k[slot - 1];
-        }
-        order_s[slot] = s;
-        order_k[slot] = static_cast<std::int32_t>(k);
-      }
-    }
-    for (std::size_t c = 0; c < count && best_face.tet == kNoTet; ++c) {
-      try_face_at(order_k[c], order_s[c]);
+      if (s >= 0.0) try_face_at(static_cast<std::int32_t>(k), s);
     }
   } else {
     mesh.boundary_tree().for_each_on_segment(q, end, eps, try_face);

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <random>
 #include <string>
 
 #include "hapticut/geometry.h"
@@ -141,6 +142,67 @@ TEST(Proxy, EntersTheCubeFromOutside) {
   proxy.step({15, 3, 4}, kDt);  // And out through the far side.
   EXPECT_EQ(proxy.place().state, ProxyState::Outside);
   EXPECT_EQ(proxy.q(), Vec3(15, 3, 4));
+}
+
+// OUTSIDE tests every plane q->p enters through, in any order, and keeps the
+// nearest clean hit: on random moves into small meshes (the linear scan's,
+// up to 32 boundary faces) no boundary triangle is crossed clearly inside it
+// before the entry point the proxy lands on, and a move through a triangle's
+// inside always enters.
+TEST(Proxy, OutsideEntersThroughTheNearestBoundaryTriangle) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  // Two cubes side by side (24 faces): a move can cross several triangles on its way in.
+  MeshData two_cubes = cube_mesh(10.0);
+  const MeshData second = cube_mesh(10.0);
+  const auto offset = static_cast<std::int32_t>(two_cubes.vertices_mm.size());
+  for (const Vec3& v : second.vertices_mm) two_cubes.vertices_mm.push_back(v + Vec3{14, 3, -2});
+  for (auto tet : second.tets) {
+    for (auto& v : tet) v += offset;
+    two_cubes.tets.push_back(tet);
+  }
+  for (const MeshData& data :
+       {two_cubes, cube_mesh(10.0), icosahedron_mesh(10.0), edge_fan_mesh(12)}) {
+    const auto space = make_space(data, 0);
+    const TetMesh& mesh = space->mesh();
+    ASSERT_LE(mesh.boundary_faces().size(), 32U);
+    Aabb box;
+    for (const Vec3& v : data.vertices_mm) box.grow(v);
+    const Vec3 centre = (box.lo + box.hi) * 0.5;
+    const double size = norm(box.hi - box.lo);
+    int entered = 0;
+    for (int trial = 0; trial < 3000; ++trial) {
+      Vec3 from{unit(rng), unit(rng), unit(rng)};
+      from = centre + from * (1.5 * size / norm(from));
+      const Vec3 to = centre + Vec3{unit(rng), unit(rng), unit(rng)} * (0.3 * size);
+      Proxy proxy(space);
+      ASSERT_EQ(proxy.reset(from), StartKind::Outside);
+      MoveContext context;
+      context.tolerance_mm = space->tolerance();
+      proxy.transition(to, context);
+      const double found = proxy.place().state == ProxyState::Outside
+                               ? 2.0
+                               : norm(proxy.q() - from) / norm(to - from);
+      // Brute force: the nearest parameter at which from->to crosses a triangle clearly inside.
+      double nearest = 2.0;
+      for (std::size_t k = 0; k < mesh.boundary_faces().size(); ++k) {
+        const Plane& plane = mesh.boundary_plane(k);
+        const double d0 = plane.signed_distance(from);
+        const double d1 = plane.signed_distance(to);
+        if (!(d0 > 0.0 && d1 < 0.0)) continue;
+        const double t = d0 / (d0 - d1);
+        const Vec3 c = from + (to - from) * t;
+        bool inside = true;
+        for (int j = 0; j < 3; ++j)
+          inside = inside && mesh.boundary_side_planes(k)[j].signed_distance(c) < -1e-6;
+        if (inside) nearest = std::min(nearest, t);
+      }
+      EXPECT_LE(found, nearest + 1e-9) << "trial " << trial << ": entered at " << found
+                                       << ", a triangle is crossed at " << nearest;
+      entered += found <= 1.0 ? 1 : 0;
+    }
+    EXPECT_GT(entered, 600);  // Most of the moves enter: the test looks at entries.
+  }
 }
 
 // OUTSIDE skips its entry search for a move beyond one face of a box around

@@ -47,9 +47,9 @@ inline double segment_exit_parameter(double d0, double d1, double eps) {
 
 // Repair 3, the mirror of repair 1 for OUTSIDE: where q->p enters through a
 // boundary plane from its front side (q in front within eps, p behind by more
-// than eps). Negative when it does not enter.
+// than eps). Negative when it does not enter. (d1 < -eps <= d0 makes d1 < d0.)
 inline double segment_entry_parameter(double d0, double d1, double eps) {
-  if (!(d1 < -eps && d1 < d0 && d0 >= -eps)) return -1.0;
+  if (!(d1 < -eps && d0 >= -eps)) return -1.0;
   return d0 <= 0.0 ? 0.0 : d0 / (d0 - d1);
 }
 
@@ -180,14 +180,33 @@ inline bool box_holds(const Aabb& box, const Vec3& x) {
                            (x.y <= box.hi.y) & (x.z >= box.lo.z) & (x.z <= box.hi.z));
 }
 
+// The box of segment a->b: its ends' componentwise min and max (finite ends).
+inline Aabb segment_box(const Vec3& a, const Vec3& b) {
+  return {{std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)},
+          {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)}};
+}
+
+// Whether box `inner` (a segment's, segment_box) lies wholly beyond one face
+// of the closed `box`: below its lo or above its hi on one axis. Then the
+// segment meets nothing inside the box. Exact, no division; bitwise like box_holds.
+inline bool box_beyond_face(const Aabb& inner, const Aabb& box) {
+  return static_cast<bool>((inner.hi.x < box.lo.x) | (inner.lo.x > box.hi.x) |
+                           (inner.hi.y < box.lo.y) | (inner.lo.y > box.hi.y) |
+                           (inner.hi.z < box.lo.z) | (inner.lo.z > box.hi.z));
+}
+
+// Whether the closed `box` holds box `inner` (both ends of a segment, when
+// inner is its segment_box).
+inline bool box_holds_box(const Aabb& box, const Aabb& inner) {
+  return static_cast<bool>((inner.lo.x >= box.lo.x) & (inner.hi.x <= box.hi.x) &
+                           (inner.lo.y >= box.lo.y) & (inner.hi.y <= box.hi.y) &
+                           (inner.lo.z >= box.lo.z) & (inner.hi.z <= box.hi.z));
+}
+
 // Whether segment a->b lies wholly beyond one face of the closed box (both
-// ends below its lo or both above its hi on one axis): then it meets nothing
-// inside the box. Exact, no division; bitwise like box_holds.
+// ends below its lo or both above its hi on one axis).
 inline bool segment_beyond_box_face(const Aabb& box, const Vec3& a, const Vec3& b) {
-  return static_cast<bool>(
-      ((a.x < box.lo.x) & (b.x < box.lo.x)) | ((a.x > box.hi.x) & (b.x > box.hi.x)) |
-      ((a.y < box.lo.y) & (b.y < box.lo.y)) | ((a.y > box.hi.y) & (b.y > box.hi.y)) |
-      ((a.z < box.lo.z) & (b.z < box.lo.z)) | ((a.z > box.hi.z) & (b.z > box.hi.z)));
+  return box_beyond_face(segment_box(a, b), box);
 }
 
 // clip_far_segment_to_box, with the common case (both ends inside) inline.
