@@ -470,7 +470,7 @@ Proxy::Outcome Proxy::step_edge(const Vec3& p, const MoveContext& context) {
   bool outside_every_wedge = true;
   // (a-2) is asked only on a boundary edge: round an inner edge a rigid tet
   // has nothing to give, and its planes are not even read (a slide round a
-  // bone inside flesh then misses on half the fan's tets fewer).
+  // bone inside flesh reads only the fan's soft tets).
   const bool boundary = mesh.is_boundary_edge(e);
   Candidate best;
   for (const EdgeFanEntry& entry : fan) {

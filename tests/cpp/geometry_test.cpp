@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <limits>
+#include <utility>
+#include <vector>
 
 #include "hapticut/aabb_tree.h"
 #include "hapticut/reference_meshes.h"
@@ -233,13 +235,27 @@ TEST(Geometry, EntryBoxIsTheMeshBoxGrownByAThousandthOfItsDiagonalAndAThousandTo
 
 TEST(Geometry, SegmentBeyondABoxFaceNeedsBothEndsStrictlyBeyondTheSameFace) {
   const Aabb box{{0, 0, 0}, {1, 1, 1}};
-  EXPECT_TRUE(segment_beyond_box_face(box, {-1, 0.5, 0.5}, {-2, 5, -3}));
-  EXPECT_TRUE(segment_beyond_box_face(box, {0.5, 0.5, 1.5}, {9, -9, 1.01}));
+  auto beyond = [&](const Vec3& a, const Vec3& b) {
+    return box_beyond_face(segment_box(a, b), box);
+  };
+  EXPECT_TRUE(beyond({-1, 0.5, 0.5}, {-2, 5, -3}));
+  EXPECT_TRUE(beyond({0.5, 0.5, 1.5}, {9, -9, 1.01}));
   // Beside the box at a corner, but beyond different faces: not decided here.
-  EXPECT_FALSE(segment_beyond_box_face(box, {-1, 0.5, 0.5}, {0.5, -1, 0.5}));
+  EXPECT_FALSE(beyond({-1, 0.5, 0.5}, {0.5, -1, 0.5}));
   // The box is closed: an end on a face is not beyond it.
-  EXPECT_FALSE(segment_beyond_box_face(box, {-1, 0.5, 0.5}, {0, 0.5, 0.5}));
-  EXPECT_FALSE(segment_beyond_box_face(box, {-1, 0.5, 0.5}, {2, 0.5, 0.5}));
+  EXPECT_FALSE(beyond({-1, 0.5, 0.5}, {0, 0.5, 0.5}));
+  EXPECT_FALSE(beyond({-1, 0.5, 0.5}, {2, 0.5, 0.5}));
+}
+
+TEST(Geometry, ABoxHoldsASegmentExactlyWhenItHoldsBothEnds) {
+  const Aabb box{{0, 0, 0}, {1, 1, 1}};
+  for (const auto& [a, b] :
+       std::vector<std::pair<Vec3, Vec3>>{{{0, 0, 0}, {1, 1, 1}},
+                                          {{0.5, 0.2, 0.9}, {1.01, 0.5, 0.5}},
+                                          {{-0.1, 0.5, 0.5}, {0.5, 0.5, 0.5}},
+                                          {{0.3, 0.3, 0.3}, {0.6, 0.2, 1.0}}}) {
+    EXPECT_EQ(box_holds_box(box, segment_box(a, b)), box_holds(box, a) && box_holds(box, b));
+  }
 }
 
 TEST(Geometry, ClipSegmentToBoxKeepsInsideEndsAndPutsClippedOnesOnItsSurface) {

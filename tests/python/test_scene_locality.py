@@ -13,7 +13,12 @@ import pytest
 from hapticut import _core, engine
 from hapticut.bench.blade import stroke_poses
 from hapticut.scenebuild.geometry import face_pairs, tet_signed_volumes
-from hapticut.scenebuild.locality import hilbert_keys, in_locality_order, scene_in_locality_order
+from hapticut.scenebuild.locality import (
+    hilbert_keys,
+    in_locality_order,
+    renumbered,
+    scene_in_locality_order,
+)
 from hapticut.scenefile import load_scene
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
@@ -40,27 +45,20 @@ def _shuffled_grid(seed: int):
         0.25, seed,
     )  # fmt: skip
     rng = np.random.default_rng(seed)
-    tets = tets[rng.permutation(len(tets))]
-    vertex_order = rng.permutation(len(vertices))
-    new_index = np.empty(len(vertices), np.int64)
-    new_index[vertex_order] = np.arange(len(vertices))
-    materials = rng.integers(0, 3, len(tets)).astype(np.int32)
-    return vertices[vertex_order], new_index[tets].astype(np.int32), materials
+    tet_order, vertex_order = rng.permutation(len(tets)), rng.permutation(len(vertices))
+    materials = rng.integers(0, 3, len(tets))
+    return renumbered(vertices, tets, materials, tet_order, vertex_order)
 
 
 def _shuffled_scene(scene, seed: int):
     """The scene with its tets and vertices in a random order."""
     rng = np.random.default_rng(seed)
-    vertices, tets = np.asarray(scene.vertices), np.asarray(scene.tets)
-    tet_order, vertex_order = rng.permutation(len(tets)), rng.permutation(len(vertices))
-    new_index = np.empty(len(vertices), np.int64)
-    new_index[vertex_order] = np.arange(len(vertices))
-    return replace(
-        scene,
-        vertices=vertices[vertex_order],
-        tets=new_index[tets[tet_order]].astype(np.int32),
-        tet_materials=np.asarray(scene.tet_materials)[tet_order].astype(np.int32),
+    tet_order = rng.permutation(len(scene.tets))
+    vertex_order = rng.permutation(len(scene.vertices))
+    vertices, tets, tet_materials = renumbered(
+        scene.vertices, scene.tets, scene.tet_materials, tet_order, vertex_order
     )
+    return replace(scene, vertices=vertices, tets=tets, tet_materials=tet_materials)
 
 
 def _median_neighbour_gap(tets: np.ndarray) -> float:

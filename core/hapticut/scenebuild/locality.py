@@ -1,7 +1,7 @@
 """The order a built scene stores its tets and vertices in: near in space, near in memory.
 
 A proxy's walk visits tets that touch each other. fTetWild numbers tets in an
-order where two neighbours are on average about 1500 places apart, so each new
+order where two neighbours are on median about 1500 places apart, so each new
 tet of a walk is a cache miss in every array the engine keeps per tet (planes,
 neighbours, material). Sorted along a Hilbert curve through their centroids,
 neighbours are mostly a few places apart and share cache lines and pages; the
@@ -77,20 +77,30 @@ def locality_order(vertices: np.ndarray, tets: np.ndarray) -> tuple[np.ndarray, 
     return tet_order, vertex_order
 
 
-def in_locality_order(
-    vertices: np.ndarray, tets: np.ndarray, tet_materials: np.ndarray
+def renumbered(
+    vertices: np.ndarray,
+    tets: np.ndarray,
+    tet_materials: np.ndarray,
+    tet_order: np.ndarray,
+    vertex_order: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The same mesh renumbered by locality_order: (vertices, tets int32, tet_materials int32)."""
+    """The mesh with tet tet_order[i] stored as tet i and vertex vertex_order[j] as vertex j:
+    (vertices, tets int32, tet_materials int32)."""
     vertices = np.asarray(vertices, dtype=np.float64)
-    tets = np.asarray(tets, dtype=np.int64)
-    tet_order, vertex_order = locality_order(vertices, tets)
     new_index = np.empty(len(vertices), np.int64)
     new_index[vertex_order] = np.arange(len(vertices))
     return (
         vertices[vertex_order],
-        new_index[tets[tet_order]].astype(np.int32),
+        new_index[np.asarray(tets)[tet_order]].astype(np.int32),
         np.asarray(tet_materials)[tet_order].astype(np.int32),
     )
+
+
+def in_locality_order(
+    vertices: np.ndarray, tets: np.ndarray, tet_materials: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The same mesh renumbered by locality_order: (vertices, tets int32, tet_materials int32)."""
+    return renumbered(vertices, tets, tet_materials, *locality_order(vertices, tets))
 
 
 def scene_in_locality_order(scene: Scene) -> Scene:

@@ -203,12 +203,6 @@ inline bool box_holds_box(const Aabb& box, const Aabb& inner) {
                            (inner.lo.z >= box.lo.z) & (inner.hi.z <= box.hi.z));
 }
 
-// Whether segment a->b lies wholly beyond one face of the closed box (both
-// ends below its lo or both above its hi on one axis).
-inline bool segment_beyond_box_face(const Aabb& box, const Vec3& a, const Vec3& b) {
-  return box_beyond_face(segment_box(a, b), box);
-}
-
 // clip_far_segment_to_box, with the common case (both ends inside) inline.
 inline ClippedSegment clip_segment_to_box(const Vec3& a, const Vec3& b, const Aabb& box) {
   if (box_holds(box, a) && box_holds(box, b)) return {true, a, b};
