@@ -50,22 +50,13 @@ PoseCheck check_rotation(const Pose& pose) {
   return r.valid() ? PoseCheck::Fine : PoseCheck::ZeroRotation;
 }
 
-// Tool point t in the world for a pose of origin `origin` and unit rotation `r`.
-inline Vec3 placed(const Vec3& origin, const Quaternion& r, const Vec3& t) {
-  return origin + r.rotate(t);
-}
-
-// The box [lo, hi] grown to hold p.
-inline void grow_box(Vec3& lo, Vec3& hi, const Vec3& p) {
-  lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-  hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
-}
-
-// Points all lie in the Space's workspace exactly when it holds their bounding
-// box [lo, hi] (Space::in_workspace for each point, without a branch each).
-inline PoseCheck box_check(const Space& space, const Vec3& lo, const Vec3& hi) {
-  return space.in_workspace(lo) && space.in_workspace(hi) ? PoseCheck::Fine
-                                                          : PoseCheck::OutOfWorkspace;
+// Points all lie in the Space's workspace exactly when it holds both ends of
+// their segment: the workspace is a box, and every a + s b with s in [0, 1]
+// rounds to within the ends' box (rounding is monotonic, and 1.0 * b is b).
+inline PoseCheck ends_check(const Space& space, const Vec3& a, const Vec3& b) {
+  const Aabb box = segment_box(a, a + b);
+  return space.in_workspace(box.lo) && space.in_workspace(box.hi) ? PoseCheck::Fine
+                                                                  : PoseCheck::OutOfWorkspace;
 }
 
 }  // namespace
@@ -82,51 +73,47 @@ Blade::Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
     throw std::invalid_argument("blade '" + spec.name + "': start_mm and end_mm must be finite");
   }
   if (!shading_) shading_ = std::make_shared<const ForceShading>(*space_);
+  tool_start_ = spec.start_mm;
+  tool_span_ = spec.end_mm - spec.start_mm;
+  if (!is_finite(tool_span_)) {
+    throw std::invalid_argument("blade '" + spec.name + "': end_mm - start_mm is not finite");
+  }
+  fractions_.reserve(spec.points);
   tool_points_.reserve(spec.points);
   for (int i = 0; i < spec.points; ++i) {
     const double s = spec.points == 1 ? 0.0 : double(i) / double(spec.points - 1);
-    tool_points_.push_back(spec.start_mm + (spec.end_mm - spec.start_mm) * s);
+    fractions_.push_back(s);
+    tool_points_.push_back(tool_start_ + tool_span_ * s);
   }
   world_points_ = tool_points_;
   proxies_.assign(tool_points_.size(), Proxy(space_));
   point_ticks_.assign(tool_points_.size(), TickResult{});
 }
 
-// Checks the pose and places the points in one pass; on a refused pose the
-// proxies are untouched (world_points() then shows the refused sample).
-// check_pose is the same check without placing: the same check_rotation,
-// placed, grow_box and box_check, over points computed instead of stored (one
-// fused loop). place_checked keeps its two loops: it is the hot path
-// (callgrind: the same instructions per point as before check_pose existed).
+// Checks the pose and places the points; on a refused pose the proxies are
+// untouched (world_points() then shows the refused sample). The check needs
+// only the segment's two ends (ends_check); placing is one multiply-add per
+// coordinate and point, a loop the compiler vectorises.
 PoseCheck Blade::place_checked(const Pose& pose) {
   const PoseCheck check = check_rotation(pose);
   if (check != PoseCheck::Fine) return check;
-  // Two plain loops, each vectorised by the compiler: placing the points,
-  // then their bounding box.
   const Quaternion r = pose.rotation.normalized();
-  const Vec3 origin = pose.position_mm;
-  const Vec3* tool = tool_points_.data();
+  world_lever_ = r.rotate(tool_start_);
+  world_span_ = r.rotate(tool_span_);
+  const Vec3 a = pose.position_mm + world_lever_;
+  const Vec3 b = world_span_;
+  const double* s = fractions_.data();
   Vec3* world = world_points_.data();
-  const std::size_t n = tool_points_.size();
-  for (std::size_t i = 0; i < n; ++i) world[i] = placed(origin, r, tool[i]);
-  Vec3 lo = world[0];
-  Vec3 hi = world[0];
-  for (std::size_t i = 1; i < n; ++i) grow_box(lo, hi, world[i]);
-  return box_check(*space_, lo, hi);
+  const std::size_t n = fractions_.size();
+  for (std::size_t i = 0; i < n; ++i) world[i] = a + b * s[i];
+  return ends_check(*space_, a, b);
 }
 
 PoseCheck Blade::check_pose(const Pose& pose) const {
   const PoseCheck check = check_rotation(pose);
   if (check != PoseCheck::Fine) return check;
   const Quaternion r = pose.rotation.normalized();
-  const Vec3 origin = pose.position_mm;
-  const Vec3* tool = tool_points_.data();
-  Vec3 lo = placed(origin, r, tool[0]);
-  Vec3 hi = lo;
-  for (std::size_t i = 1; i < tool_points_.size(); ++i) {
-    grow_box(lo, hi, placed(origin, r, tool[i]));
-  }
-  return box_check(*space_, lo, hi);
+  return ends_check(*space_, pose.position_mm + r.rotate(tool_start_), r.rotate(tool_span_));
 }
 
 void Blade::reset(const Pose& pose) {
@@ -181,13 +168,14 @@ BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& sett
   const int cap = settings.max_transitions_per_tick;
   const ForceShading* shading = settings.force_shading ? shading_.get() : nullptr;
   BladeTick tick;
+  Vec3 weighted_force;  // Sum of s_i f_i, for the torque.
   auto index = [&](std::size_t k) { return first_ + k < n ? first_ + k : first_ + k - n; };
   // A point's tick is over (finished, capped for good, or deferred): add its force.
   auto account = [&](std::size_t i) {
     const TickResult& r = point_ticks_[i];
     const Vec3 f = proxies_[i].force_N();
     tick.force_N += f;
-    tick.torque_N_mm += cross(world_points_[i] - pose.position_mm, f);
+    weighted_force += f * fractions_[i];
     tick.capped_points += r.capped || r.deferred ? 1 : 0;
     tick.deferred_points += r.deferred ? 1 : 0;
     tick.max_transitions = std::max(tick.max_transitions, r.transitions);
@@ -197,7 +185,7 @@ BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& sett
   auto account_finished = [&](std::size_t i) {
     const Vec3 f = proxies_[i].force_N();
     tick.force_N += f;
-    tick.torque_N_mm += cross(world_points_[i] - pose.position_mm, f);
+    weighted_force += f * fractions_[i];
     const int transitions = point_ticks_[i].transitions;
     tick.max_transitions = std::max(tick.max_transitions, transitions);
     tick.transitions += transitions;
@@ -247,6 +235,8 @@ BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& sett
     proxy.finish_tick(p, r, settings, shading);
     account(i);
   }
+  // Sum of (p_i - origin) x f_i with p_i - origin = lever + s_i span.
+  tick.torque_N_mm = cross(world_lever_, tick.force_N) + cross(world_span_, weighted_force);
   if (tick.capped_points > 0) {
     // The next tick starts at the first point left unfinished.
     for (std::size_t k = 0; k < n; ++k) {

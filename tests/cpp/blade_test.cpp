@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -27,14 +28,7 @@ TEST(Blade, PointsFollowThePose) {
 TEST(Blade, ForceIsTheSumAndTorqueIsAboutTheToolOrigin) {
   // Bone below z = 0 inside a free box: the blade pressed 2 mm down feels
   // k * 2 mm per point, pushing up; tilted, the torque follows the lever arms.
-  const MeshData mesh = grid_mesh({-20, 0, 20}, {-20, 0, 20}, {-20, 0, 20});
-  std::vector<std::int32_t> m(mesh.tets.size(), 0);
-  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
-    double z = 0;
-    for (std::int32_t v : mesh.tets[t]) z += mesh.vertices_mm[v].z * 0.25;
-    if (z < 0) m[t] = 2;
-  }
-  const auto space_owner = testing::make_space(mesh, m);
+  const auto space_owner = testing::bone_floor();
   const Space& space = *space_owner;
   Blade blade(space, {"b", {0, 0, 0}, {10, 0, 0}, 5});
   blade.reset({{-5, 0, 5}, {}});
@@ -46,6 +40,42 @@ TEST(Blade, ForceIsTheSumAndTorqueIsAboutTheToolOrigin) {
   EXPECT_NEAR(tick.torque_N_mm.y, -(0 + 2.5 + 5 + 7.5 + 10) * 0.2, 1e-9);
   EXPECT_EQ(tick.capped_points, 0);
   for (const Proxy& p : blade.proxies()) EXPECT_EQ(p.check_invariants(), "");
+}
+
+// The points are placed as a + s_i b and the torque summed as
+// (a - origin) x F + b x sum(s_i f_i) (docs/decisions.md): both agree with the
+// per-point definitions, origin + R t_i and sum((p_i - origin) x f_i), to
+// rounding, over tilted strokes into bone with a blade off the tool origin.
+TEST(Blade, PlacementAndTorqueAgreeWithThePerPointDefinitions) {
+  const auto space = testing::bone_floor();
+  Blade blade(space, {"b", {3, -2, 1}, {-9, 4, 6}, 37});
+  const Quaternion tilt = Quaternion{0.9, 0.2, -0.3, 0.1}.normalized();
+  blade.reset({{0, 0, 8}, tilt});
+  double largest_torque = 0.0;
+  for (int i = 0; i < 60; ++i) {
+    const Quaternion r = Quaternion{0.9, 0.2 + 0.004 * i, -0.3, 0.1 - 0.003 * i}.normalized();
+    const Pose pose{{0.1 * i, -0.05 * i, 8.0 - 0.2 * i}, r};
+    const BladeTick tick = blade.step(pose, 0.001);
+    ASSERT_FALSE(tick.rejected) << "tick " << i;
+    Vec3 torque;
+    for (int k = 0; k < blade.point_count(); ++k) {
+      const Vec3 expected = pose.position_mm + r.rotate(blade.tool_points()[k]);
+      ASSERT_LT(norm(blade.world_points()[k] - expected), 1e-12) << "tick " << i << " point " << k;
+      torque += cross(blade.world_points()[k] - pose.position_mm, blade.proxies()[k].force_N());
+    }
+    EXPECT_LT(norm(tick.torque_N_mm - torque), 1e-9 * (1.0 + norm(torque))) << "tick " << i;
+    largest_torque = std::max(largest_torque, norm(torque));
+  }
+  EXPECT_GT(largest_torque, 1.0);  // The blade was pressed into the bone.
+  // The workspace check on the two ends: a pose with one end just beyond the
+  // workspace is refused, the same pose just inside it taken.
+  Blade along_x(space, {"x", {0, 0, 0}, {10, 0, 0}, 7});
+  const Aabb workspace = space->workspace();
+  EXPECT_EQ(along_x.check_pose({{workspace.hi.x - 10.0 - 1e-6, 0, 5}, {}}), PoseCheck::Fine);
+  EXPECT_EQ(along_x.check_pose({{workspace.hi.x - 10.0 + 1e-6, 0, 5}, {}}),
+            PoseCheck::OutOfWorkspace);
+  EXPECT_EQ(along_x.check_pose({{workspace.lo.x + 1e-6, 0, 5}, {}}), PoseCheck::Fine);
+  EXPECT_EQ(along_x.check_pose({{workspace.lo.x - 1e-6, 0, 5}, {}}), PoseCheck::OutOfWorkspace);
 }
 
 TEST(Blade, NonFinitePoseIsRejected) {

@@ -24,21 +24,10 @@
 namespace hapticut {
 namespace {
 
+using testing::bone_floor;
 using testing::make_space;
 
 constexpr double kDt = 0.001;
-
-// Bone below z = 0 inside a free 40 mm box.
-std::shared_ptr<const Space> bone_floor(EngineSettings settings = {}) {
-  const MeshData mesh = grid_mesh({-20, 0, 20}, {-20, 0, 20}, {-20, 0, 20});
-  std::vector<std::int32_t> m(mesh.tets.size(), 0);
-  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
-    double z = 0;
-    for (std::int32_t v : mesh.tets[t]) z += mesh.vertices_mm[v].z * 0.25;
-    if (z < 0) m[t] = 2;
-  }
-  return make_space(mesh, m, testing::paper_materials(), settings);
-}
 
 // A free bar of 10 mm cells along x: a long move crosses many faces.
 std::shared_ptr<const Space> free_bar(EngineSettings settings = {}) {

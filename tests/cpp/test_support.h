@@ -34,4 +34,16 @@ inline std::shared_ptr<const Space> make_space(const MeshData& data, std::int32_
   return make_space(data, std::vector<std::int32_t>(data.tets.size(), material));
 }
 
+// Bone below z = 0 inside a free 40 mm box (material 2 of paper_materials).
+inline std::shared_ptr<const Space> bone_floor(EngineSettings settings = {}) {
+  const MeshData mesh = grid_mesh({-20, 0, 20}, {-20, 0, 20}, {-20, 0, 20});
+  std::vector<std::int32_t> m(mesh.tets.size(), 0);
+  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+    double z = 0;
+    for (std::int32_t v : mesh.tets[t]) z += mesh.vertices_mm[v].z * 0.25;
+    if (z < 0) m[t] = 2;
+  }
+  return make_space(mesh, m, paper_materials(), settings);
+}
+
 }  // namespace hapticut::testing

@@ -1,6 +1,8 @@
 // Blade: N points spread evenly on a segment in the tool frame, placed in the
-// world by the tool's pose; one Proxy per point. The device gets the summed
-// force and the torque about the tool origin (beyond the paper).
+// world by the tool's pose; one Proxy per point. Point i sits at fraction s_i
+// of the segment, so in the world it is a + s_i b, a the placed start and b
+// the rotated segment (docs/decisions.md, "A blade's points are placed as a + s_i b"). The device
+// gets the summed force and the torque about the tool origin (beyond the paper).
 //
 // Per tick (docs/decisions.md): settings come with the tick (RuntimeSettings,
 // space.h); the points share a work budget of transitions; force shading is
@@ -43,8 +45,9 @@ struct Pose {
 enum class PoseCheck : std::uint8_t { Fine, NotFinite, ZeroRotation, OutOfWorkspace };
 
 struct BladeTick {
-  Vec3 force_N;      // Sum of the points' forces (k (q_i - p_i), shaded when asked).
-  Vec3 torque_N_mm;  // Sum of (p_i - origin) x f_i.
+  Vec3 force_N;  // Sum of the points' forces (k (q_i - p_i), shaded when asked).
+  // Sum of (p_i - origin) x f_i, as (a - origin) x F + b x (sum of s_i f_i).
+  Vec3 torque_N_mm;
   // Points left unfinished when the work budget ran out: their proxies keep
   // their last valid place and force and catch up next tick.
   int capped_points = 0;
@@ -140,8 +143,14 @@ class Blade {
 
   std::shared_ptr<const Space> space_;
   std::shared_ptr<const ForceShading> shading_;
+  Vec3 tool_start_;  // The segment's start and its span (end - start), in the tool frame.
+  Vec3 tool_span_;
+  std::vector<double> fractions_;  // s_i: point i is tool_start_ + s_i tool_span_.
   std::vector<Vec3> tool_points_;
   std::vector<Vec3> world_points_;
+  // The last placed pose's a - origin (the rotated start) and b (the rotated span).
+  Vec3 world_lever_;
+  Vec3 world_span_;
   std::vector<Proxy> proxies_;
   std::vector<TickResult> point_ticks_;
   std::size_t first_ = 0;  // Where the next tick starts: the budget's round robin.
