@@ -1,5 +1,5 @@
-// The inline settles in a tet and on a face (Proxy::tick_in_tet and
-// tick_on_face) are shortcuts of the walk: every tick they take must leave
+// The inline settles in a tet, on a face and beside the mesh (Proxy::tick_in_tet,
+// tick_on_face and tick_beside_mesh) are shortcuts of the walk: every tick they take must leave
 // the proxy exactly as the walk would (place, force and counters, bit for
 // bit), and they must decline every other tick.
 #include <gtest/gtest.h>
@@ -9,6 +9,7 @@
 #include <cstring>
 #include <random>
 
+#include "hapticut/force_shading.h"
 #include "hapticut/proxy.h"
 #include "test_support.h"
 
@@ -30,6 +31,11 @@ struct TetSettleTestAccess {
   static bool settles_on_face(Proxy proxy, const Vec3& p, const RuntimeSettings& settings) {
     TickResult result;
     return proxy.tick_on_face(p, settings, settings.max_transitions_per_tick, nullptr, result);
+  }
+  static bool settles_beside(Proxy proxy, const Vec3& p, const RuntimeSettings& settings,
+                             const ForceShading* shading = nullptr) {
+    TickResult result;
+    return proxy.tick_beside_mesh(p, settings, settings.max_transitions_per_tick, shading, result);
   }
 };
 
@@ -137,6 +143,55 @@ TEST(TetSettle, DeclinesAnythingButAFreshTetTick) {
   proxy.reset({15.0, 5.0, 5.0});
   ASSERT_EQ(proxy.place().state, ProxyState::Outside);
   EXPECT_FALSE(TetSettleTestAccess::settles_in_tet(proxy, {15.0, 5.0, 5.01}, settings));
+  // Beside the mesh: the OUTSIDE shortcut takes a move beyond one face of the
+  // entry box, and declines one that could enter, any other state, or shading.
+  EXPECT_TRUE(TetSettleTestAccess::settles_beside(proxy, {15.0, 5.0, 5.01}, settings));
+  EXPECT_TRUE(TetSettleTestAccess::settles_beside(proxy, {25.0, -9.0, 30.0}, settings));
+  EXPECT_FALSE(TetSettleTestAccess::settles_beside(proxy, {5.0, 5.0, 5.0}, settings));
+  EXPECT_FALSE(TetSettleTestAccess::settles_beside(proxy, {10.0, 5.0, 5.0}, settings));
+  RuntimeSettings shaded = settings;
+  shaded.force_shading = true;
+  const ForceShading shading(*space);
+  EXPECT_FALSE(TetSettleTestAccess::settles_beside(proxy, {15.0, 5.0, 5.01}, shaded, &shading));
+  proxy.reset({2.0, 4.0, 6.0});
+  EXPECT_FALSE(TetSettleTestAccess::settles_beside(proxy, {2.0, 4.0, 6.01}, settings));
+}
+
+// OUTSIDE strokes round a body of rigid and soft tets, in and out of it: every
+// move the shortcut takes leaves the proxy as the walk does, and the moves it
+// declines (near the mesh, or entering it) go through the walk alike.
+TEST(TetSettle, BesideTheMeshGivesWhatTheWalkGives) {
+  const MeshData mesh = grid_mesh({0, 5, 10}, {0, 5, 10}, {0, 5, 10}, 0.3, 21);
+  std::vector<std::int32_t> materials(mesh.tets.size());
+  for (std::size_t t = 0; t < materials.size(); ++t) materials[t] = t % 3 == 0 ? 4 : 1;
+  const auto space = make_space(mesh, materials, all_models());
+  const RuntimeSettings settings = space->runtime_settings();
+  std::mt19937_64 random(5);
+  std::uniform_real_distribution<double> around(-12.0, 22.0);
+  std::normal_distribution<double> small(0.0, 0.3);
+  int beside = 0;
+  int declined = 0;
+  int steps = 0;
+  for (int stroke = 0; stroke < 200; ++stroke) {
+    Vec3 p{around(random), around(random), around(random)};
+    Proxy walking(space);
+    walking.reset(p);
+    Proxy settling = walking;
+    for (int k = 0; k < 200; ++k, ++steps) {
+      p += k % 23 == 0 ? Vec3{around(random), around(random), around(random)} * 0.2
+                       : Vec3{small(random), small(random), small(random)};
+      const bool takes = TetSettleTestAccess::settles_beside(settling, p, settings);
+      beside += takes ? 1 : 0;
+      declined += !takes && settling.place().state == ProxyState::Outside ? 1 : 0;
+      const TickResult rw = TetSettleTestAccess::step_walking(walking, p, 1e-3, settings);
+      const TickResult rs = settling.step(p, 1e-3, settings);
+      expect_same(settling, walking, rs, rw, steps);
+      if (::testing::Test::HasFatalFailure()) return;
+    }
+  }
+  EXPECT_GT(beside, steps / 10);
+  EXPECT_GT(declined, steps / 2000);
+  std::printf("beside the mesh %d, declined outside %d of %d\n", beside, declined, steps);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "hapticut/aabb_tree.h"
+#include "hapticut/geometry.h"
 #include "hapticut/material.h"
 #include "hapticut/space.h"
 
@@ -162,12 +163,18 @@ class alignas(64) Proxy {
   // its edges (step_face's settle). Declines also when the force is shaded.
   bool tick_on_face(const Vec3& p, const RuntimeSettings& settings, int limit,
                     const ForceShading* shading, TickResult& result);
+  // The same for OUTSIDE in free air beside the mesh: q -> p lies wholly
+  // beyond one face of the entry box, so q follows p (step_outside's first
+  // test, then the walk's probe that finds nothing more to do). Declines also
+  // when the force is shaded.
+  bool tick_beside_mesh(const Vec3& p, const RuntimeSettings& settings, int limit,
+                        const ForceShading* shading, TickResult& result);
   // The end of a tick that tick_in_tet or tick_on_face settled: q moved to
   // q1, a transition of `state` to itself when it changed q (settle_at).
   void end_settled_tick(const Vec3& p, const Vec3& q1, ProxyState state,
                         const RuntimeSettings& settings, TickResult& result);
   // A point's tick (inline, defined below; the blade's loop calls it too):
-  // tick_in_tet, else tick_on_face, else tick_walk.
+  // tick_in_tet, else tick_on_face, else tick_beside_mesh, else tick_walk.
   void tick_within(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
                    const ForceShading* shading, bool keep_capped_open, TickResult& result);
   void tick_walk(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
@@ -322,12 +329,26 @@ class alignas(64) Proxy {
   return true;
 }
 
+// step_outside's box test: q -> p meets nothing of the mesh, q' = p, and
+// the walk's next step would change nothing.
+[[gnu::always_inline]] inline bool Proxy::tick_beside_mesh(const Vec3& p,
+                                                           const RuntimeSettings& settings,
+                                                           int limit, const ForceShading* shading,
+                                                           TickResult& result) {
+  if (place_.state != ProxyState::Outside || result.transitions != 0 || limit < 1) return false;
+  if (shading != nullptr && settings.force_shading) return false;
+  if (!box_beyond_face(segment_box(place_.q, p), entry_box_)) return false;
+  end_settled_tick(p, p, ProxyState::Outside, settings, result);
+  return true;
+}
+
 [[gnu::always_inline]] inline void Proxy::tick_within(const Vec3& p, double dt_s,
                                                       const RuntimeSettings& settings, int limit,
                                                       const ForceShading* shading,
                                                       bool keep_capped_open, TickResult& result) {
   if (tick_in_tet(p, settings, limit, result) ||
-      tick_on_face(p, settings, limit, shading, result)) {
+      tick_on_face(p, settings, limit, shading, result) ||
+      tick_beside_mesh(p, settings, limit, shading, result)) {
     return;
   }
   tick_walk(p, dt_s, settings, limit, shading, keep_capped_open, result);
