@@ -9,6 +9,15 @@ frames per second received and their age on arrival. Targets: a
 50-point tick's compute p99 under 2 % of a 1 kHz period; a 500-point tick at
 10 kHz under 25 % of its period at p99; wake latency no worse than 1.2x the
 bare loop's; frame age on arrival p99 under 2 ms at 120 Hz.
+
+The whole table is measured ``rounds`` times in turn (default 3). A guest on
+a shared host is interrupted now and then for hundreds of microseconds, and
+one interruption in a 1.5 s row is a p99 (docs/benchmarks.md). So each
+column group shows its best round (compute from the round of lowest compute
+p99, wake from the round of lowest wake ratio, frames from the round of
+lowest age p99), the ``every round`` columns list all rounds, and the
+targets line counts the rows that met each target in their best round and
+in every round.
 """
 
 from __future__ import annotations
@@ -21,6 +30,7 @@ import subprocess
 import tempfile
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -147,33 +157,98 @@ def measure(
     return Row(name, tets, points, rate_Hz, stats, bare, len(ages) / max(elapsed, 1e-9), age_ms)
 
 
-def run(duration_s: float = 1.5, scenes: list[Path] | None = None) -> str:
+@dataclasses.dataclass(frozen=True)
+class Target:
+    """A target of the issue: which rows it applies to, and whether a row meets it."""
+
+    name: str
+    applies: Callable[[Row], bool]
+    met: Callable[[Row], bool]
+
+
+def _compute_share(row: Row) -> float:
+    return row.stats["compute_us"]["p99"] * row.rate_Hz / 1e6
+
+
+def _wake_ratio(row: Row) -> float:
+    bare = row.bare["wake_latency_us"]["p99"]
+    return row.stats["wake_latency_us"]["p99"] / bare if bare > 0 else float("inf")
+
+
+def _age_p99_ms(row: Row) -> float:
+    return float(np.percentile(row.age_ms, 99)) if len(row.age_ms) else float("inf")
+
+
+TARGETS = (
+    Target(
+        "50 points at 1 kHz, compute p99 < 2 %",
+        lambda r: r.points == 50 and r.rate_Hz == 1000.0,
+        lambda r: _compute_share(r) < 0.02,
+    ),
+    Target(
+        "500 points at 10 kHz, compute p99 < 25 %",
+        lambda r: r.points == 500 and r.rate_Hz == 10000.0,
+        lambda r: _compute_share(r) < 0.25,
+    ),
+    Target("wake p99 <= 1.2x the bare loop", lambda r: True, lambda r: _wake_ratio(r) <= 1.2),
+    Target("frame age p99 < 2 ms", lambda r: True, lambda r: _age_p99_ms(r) < 2.0),
+)
+
+
+def _targets_met(measured: list[list[Row]]) -> str:
+    """One line: per target, the rows meeting it in their best round, and in every round."""
+    best, every = [], []
+    for target in TARGETS:
+        rounds_of_rows = [rs for rs in zip(*measured, strict=True) if target.applies(rs[0])]
+        best.append(
+            f"{target.name}: {sum(any(map(target.met, rs)) for rs in rounds_of_rows)}"
+            f"/{len(rounds_of_rows)}"
+        )
+        every.append(
+            f"{sum(all(map(target.met, rs)) for rs in rounds_of_rows)}/{len(rounds_of_rows)}"
+        )
+    return (
+        f"targets met, best of {len(measured)} round(s): {'; '.join(best)} "
+        f"(in every round: {', '.join(every)})"
+    )
+
+
+def run(duration_s: float = 1.5, scenes: list[Path] | None = None, rounds: int = 3) -> str:
     if not scenes:
         found = [sorted(d.glob("*.hapticut.msgpack")) for d in EXAMPLE_DIRS]
         scenes = next((f for f in found if f), [])
     if not scenes:
         raise FileNotFoundError("no examples/*.hapticut.msgpack here: run from the repository")
-    rows: list[Row] = []
     # The servo's loop on a CPU of its own (--cpu), the client's receiving thread on the
     # others: a loop that wakes on another core each tick starts with cold caches.
     servo_cpu, client_cpus = cpus = _cpu_split()
+    measured: list[list[Row]] = []
     with tempfile.TemporaryDirectory() as tmp:
+        prepared = []
         for source in scenes:
             for points in (50, 500):
-                path, tets, stroke = _scene_with_points(source, points, Path(tmp))
+                prepared.append((*_scene_with_points(source, points, Path(tmp)), points))
+        for _ in range(max(1, rounds)):
+            rows = []
+            for path, tets, stroke, points in prepared:
                 for rate in (1000.0, 10000.0):
-                    row = measure(path, tets, stroke, points, rate, duration_s, *cpus)
-                    rows.append(row)
-    return render(rows, servo_cpu, client_cpus)
+                    rows.append(measure(path, tets, stroke, points, rate, duration_s, *cpus))
+            measured.append(rows)
+    return render(measured, servo_cpu, client_cpus)
 
 
-def render(rows: list[Row], servo_cpu: int | None = None, client_cpus: set[int] = ()) -> str:
+def render(
+    measured: list[list[Row]], servo_cpu: int | None = None, client_cpus: set[int] = ()
+) -> str:
+    """The table of `measured` (one list of rows per round, the same rows in each)."""
     table = []
-    for r in rows:
-        c, w, b = r.stats["compute_us"], r.stats["wake_latency_us"], r.bare["wake_latency_us"]
-        send = r.stats["send_age_us"]
-        period_us = 1e6 / r.rate_Hz
-        age = r.age_ms if len(r.age_ms) else np.array([np.nan])
+    for rounds_of_row in zip(*measured, strict=True):
+        r = min(rounds_of_row, key=_compute_share)
+        wr = min(rounds_of_row, key=_wake_ratio)
+        fr = min(rounds_of_row, key=_age_p99_ms)
+        c, w, b = r.stats["compute_us"], wr.stats["wake_latency_us"], wr.bare["wake_latency_us"]
+        send = fr.stats["send_age_us"]
+        age = fr.age_ms if len(fr.age_ms) else np.array([np.nan])
         table.append(
             [
                 r.scene,
@@ -181,12 +256,14 @@ def render(rows: list[Row], servo_cpu: int | None = None, client_cpus: set[int] 
                 r.points,
                 f"{r.rate_Hz / 1000:g} kHz",
                 f"{c['p50']:.1f} / {c['p99']:.1f} / {c['max']:.0f}",
-                f"{100 * c['p99'] / period_us:.1f} %",
+                f"{100 * _compute_share(r):.1f} %",
+                " ".join(f"{100 * _compute_share(x):.1f}" for x in rounds_of_row),
                 f"{w['p50']:.0f} / {w['p99']:.0f} / {w['max']:.0f}",
                 f"{b['p50']:.0f} / {b['p99']:.0f} / {b['max']:.0f}",
-                f"{w['p99'] / b['p99']:.2f}" if b["p99"] > 0 else "-",
-                f"{r.stats['late_ticks']} / {r.stats['ticks']}",
-                f"{r.frames_per_s:.0f}",
+                f"{_wake_ratio(wr):.2f}",
+                " ".join(f"{_wake_ratio(x):.2f}" for x in rounds_of_row),
+                f"{wr.stats['late_ticks']} / {wr.stats['ticks']}",
+                f"{fr.frames_per_s:.0f}",
                 f"{np.percentile(age, 50):.2f} / {np.percentile(age, 99):.2f}",
                 f"{send['p50'] / 1e3:.2f} / {send['p99'] / 1e3:.2f}",
             ]
@@ -198,21 +275,27 @@ def render(rows: list[Row], servo_cpu: int | None = None, client_cpus: set[int] 
         "rate",
         "compute µs p50/p99/max",
         "p99 of period",
+        "every round %",
         "wake µs p50/p99/max",
         "bare loop wake µs",
         "wake p99 ratio",
+        "every round",
         "late / ticks",
         "frames/s",
         "age ms p50/p99",
         "at send ms p50/p99",
     ]
-    realtime = rows[0].stats.get("realtime", "") if rows else ""
+    first = measured[0][0] if measured and measured[0] else None
+    realtime = first.stats.get("realtime", "") if first else ""
     notes = (
         "\ntargets: 50 points at 1 kHz: compute p99 < 2 % of the period; 500 points at 10 kHz: "
         "< 25 %;\nwake latency p99 <= 1.2x the bare clock_nanosleep loop's; frame age p99 < 2 ms "
         f"at 120 Hz (age: arrival at the client; at send: the servo's sendto).\n"
-        f"servo: {realtime}; bare loop: {rows[0].bare['realtime'] if rows else ''}; "
-        f"client: {rows[0].stats.get('client', '') if rows else ''}"
+        f"each row: compute from its round of lowest compute p99, wake and late ticks from its "
+        f"round of lowest wake ratio, frames from its round of lowest age p99, of "
+        f"{len(measured)} round(s) in turn\n"
+        f"servo: {realtime}; bare loop: {first.bare['realtime'] if first else ''}; "
+        f"client: {first.stats.get('client', '') if first else ''}"
         + (
             f"\nCPUs: the servo's loop alone on CPU {servo_cpu} (--cpu), its other threads and "
             f"the client on {', '.join(map(str, sorted(client_cpus)))}"
@@ -220,4 +303,4 @@ def render(rows: list[Row], servo_cpu: int | None = None, client_cpus: set[int] 
             else "\nCPUs: one CPU, nothing pinned"
         )
     )
-    return format_table(headers, table) + notes
+    return format_table(headers, table) + notes + "\n" + _targets_met(measured)

@@ -23,11 +23,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--rounds",
         type=int,
-        default=5,
-        help="time every row this many times in turn; each keeps its best round",
+        default=None,
+        help="time every row this many times in turn; each keeps its best round "
+        "(default: transitions 5, blade 5, servo 3)",
     )
     parser.add_argument(
-        "--duration", type=float, default=1.5, help="servo: seconds per row (16 rows)"
+        "--duration", type=float, default=1.5, help="servo: seconds per row (16 rows a round)"
     )
     parser.add_argument(
         "--no-max-points", action="store_true", help="blade: skip the points-in-100-µs search"
@@ -36,8 +37,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--scenes",
         type=Path,
         default=None,
-        help="blade: directory of example scenes (default: those shipped in the package)",
+        help="blade, servo: directory of scenes (default: the examples shipped in the package)",
     )
+
+
+def _rounds(args: argparse.Namespace, default: int) -> int:
+    return default if args.rounds is None else args.rounds
 
 
 def run(args: argparse.Namespace) -> int:
@@ -47,11 +52,12 @@ def run(args: argparse.Namespace) -> int:
     if args.which == "transitions":
         from hapticut.bench import transitions
 
-        print(transitions.run(args.repeats, args.batches, args.rounds))
+        print(transitions.run(args.repeats, args.batches, _rounds(args, 5)))
     elif args.which == "servo":
         from hapticut.bench import servo
 
-        print(servo.run(duration_s=args.duration))
+        scenes = sorted(args.scenes.glob("*.hapticut.msgpack")) if args.scenes else None
+        print(servo.run(duration_s=args.duration, scenes=scenes, rounds=_rounds(args, 3)))
     elif args.which == "stability":
         from hapticut.bench import stability
 
@@ -60,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
         from hapticut.bench import blade
 
         try:
-            print(blade.run(not args.no_max_points, args.rounds, args.scenes))
+            print(blade.run(not args.no_max_points, _rounds(args, 5), args.scenes))
         except FileNotFoundError as error:
             print(f"hapticut bench blade: {error}", file=sys.stderr)
             return 2
