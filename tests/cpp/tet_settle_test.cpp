@@ -77,6 +77,44 @@ std::vector<Material> all_models() {
           testing::rigid_material()};
 }
 
+// A vector of three draws from `d`, x first.
+template <class Distribution>
+Vec3 draw(Distribution& d, std::mt19937_64& random) {
+  const double x = d(random);
+  const double y = d(random);
+  return {x, y, d(random)};
+}
+
+// Counts a shortcut taken, or declined by a proxy in the state it is for.
+void tally(bool taken, bool in_its_state, int& taken_count, int& declined_count) {
+  taken_count += taken ? 1 : 0;
+  declined_count += !taken && in_its_state ? 1 : 0;
+}
+
+// 200 strokes of 200 steps, each from start() and on by p = next(k, p): at
+// every step the proxy's own tick (settles first) against the walk alone,
+// after look(settling proxy, p). Returns the steps run (fewer on a failure).
+template <class Start, class Next, class Look>
+int compare_strokes_with_walk(const std::shared_ptr<const Space>& space,
+                              const RuntimeSettings& settings, Start start, Next next, Look look) {
+  int steps = 0;
+  for (int stroke = 0; stroke < 200; ++stroke) {
+    Vec3 p = start();
+    Proxy walking(space);
+    walking.reset(p);
+    Proxy settling = walking;
+    for (int k = 0; k < 200; ++k, ++steps) {
+      p = next(k, p);
+      look(settling, p);
+      const TickResult rw = TetSettleTestAccess::step_walking(walking, p, 1e-3, settings);
+      const TickResult rs = settling.step(p, 1e-3, settings);
+      expect_same(settling, walking, rs, rw, steps);
+      if (::testing::Test::HasFatalFailure()) return steps;
+    }
+  }
+  return steps;
+}
+
 TEST(TetSettle, GivesWhatTheWalkGivesOnRandomStrokes) {
   const MeshData mesh =
       grid_mesh({0, 4, 9, 15, 20}, {0, 5, 10, 16, 20}, {0, 6, 10, 14, 20}, 0.3, 7);
@@ -97,28 +135,20 @@ TEST(TetSettle, GivesWhatTheWalkGivesOnRandomStrokes) {
   int slid = 0;
   int declined_in_tet = 0;
   int declined_on_face = 0;
-  int steps = 0;
-  for (int stroke = 0; stroke < 200; ++stroke) {
-    Vec3 p{inside(random), inside(random), inside(random)};
-    Proxy walking(space);
-    walking.reset(p);
-    Proxy settling = walking;
-    for (int k = 0; k < 200; ++k, ++steps) {
-      const bool jump = k % 17 == 0;
-      p += jump ? Vec3{large(random), large(random), large(random)}
-                : Vec3{small(random), small(random), small(random)};
-      const bool takes = TetSettleTestAccess::settles_in_tet(settling, p, settings);
-      settled += takes ? 1 : 0;
-      declined_in_tet += !takes && settling.place().state == ProxyState::Tet ? 1 : 0;
-      const bool slides = TetSettleTestAccess::settles_on_face(settling, p, settings);
-      slid += slides ? 1 : 0;
-      declined_on_face += !slides && settling.place().state == ProxyState::Face ? 1 : 0;
-      const TickResult rw = TetSettleTestAccess::step_walking(walking, p, 1e-3, settings);
-      const TickResult rs = settling.step(p, 1e-3, settings);
-      expect_same(settling, walking, rs, rw, steps);
-      if (::testing::Test::HasFatalFailure()) return;
-    }
-  }
+  const int steps = compare_strokes_with_walk(
+      space, settings, [&] { return draw(inside, random); },
+      [&](int k, const Vec3& p) {
+        const bool jump = k % 17 == 0;
+        return p + (jump ? draw(large, random) : draw(small, random));
+      },
+      [&](const Proxy& settling, const Vec3& p) {
+        const ProxyState state = settling.place().state;
+        tally(TetSettleTestAccess::settles_in_tet(settling, p, settings), state == ProxyState::Tet,
+              settled, declined_in_tet);
+        tally(TetSettleTestAccess::settles_on_face(settling, p, settings),
+              state == ProxyState::Face, slid, declined_on_face);
+      });
+  if (::testing::Test::HasFatalFailure()) return;
   // Both branches of both were exercised: many ticks settle or slide, and the
   // declined TET and FACE ticks (an exit, an edge reached, a free neighbour, a
   // viscous tet) went through the walk with the same result.
@@ -171,24 +201,16 @@ TEST(TetSettle, BesideTheMeshGivesWhatTheWalkGives) {
   std::normal_distribution<double> small(0.0, 0.3);
   int beside = 0;
   int declined = 0;
-  int steps = 0;
-  for (int stroke = 0; stroke < 200; ++stroke) {
-    Vec3 p{around(random), around(random), around(random)};
-    Proxy walking(space);
-    walking.reset(p);
-    Proxy settling = walking;
-    for (int k = 0; k < 200; ++k, ++steps) {
-      p += k % 23 == 0 ? Vec3{around(random), around(random), around(random)} * 0.2
-                       : Vec3{small(random), small(random), small(random)};
-      const bool takes = TetSettleTestAccess::settles_beside(settling, p, settings);
-      beside += takes ? 1 : 0;
-      declined += !takes && settling.place().state == ProxyState::Outside ? 1 : 0;
-      const TickResult rw = TetSettleTestAccess::step_walking(walking, p, 1e-3, settings);
-      const TickResult rs = settling.step(p, 1e-3, settings);
-      expect_same(settling, walking, rs, rw, steps);
-      if (::testing::Test::HasFatalFailure()) return;
-    }
-  }
+  const int steps = compare_strokes_with_walk(
+      space, settings, [&] { return draw(around, random); },
+      [&](int k, const Vec3& p) {
+        return p + (k % 23 == 0 ? draw(around, random) * 0.2 : draw(small, random));
+      },
+      [&](const Proxy& settling, const Vec3& p) {
+        tally(TetSettleTestAccess::settles_beside(settling, p, settings),
+              settling.place().state == ProxyState::Outside, beside, declined);
+      });
+  if (::testing::Test::HasFatalFailure()) return;
   EXPECT_GT(beside, steps / 10);
   EXPECT_GT(declined, steps / 2000);
   std::printf("beside the mesh %d, declined outside %d of %d\n", beside, declined, steps);
