@@ -277,6 +277,17 @@ TEST(InputChecks, BladePointCountIsBounded) {
   EXPECT_NO_THROW(Blade(space, {"b", {0, 0, 0}, {10, 0, 0}, 1}));
 }
 
+TEST(InputChecks, BladeWhoseSpanOverflowsIsRefused) {
+  // Both ends finite, end - start not: the points a + s_i b could not be placed.
+  const auto space = bone_floor();
+  try {
+    Blade blade(space, {"b", {-1e308, 0, 0}, {1e308, 0, 0}, 5});
+    ADD_FAILURE() << "accepted a span of 2e308 mm";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("end_mm - start_mm"), std::string::npos) << e.what();
+  }
+}
+
 TEST(InputChecks, ZeroQuaternionIsRejectedNotTakenForTheIdentity) {
   const auto space = bone_floor();
   Blade blade(space, {"b", {0, 0, 0}, {10, 0, 0}, 5});

@@ -169,7 +169,7 @@ class alignas(64) Proxy {
   // when the force is shaded.
   bool tick_beside_mesh(const Vec3& p, const RuntimeSettings& settings, int limit,
                         const ForceShading* shading, TickResult& result);
-  // The end of a tick that tick_in_tet or tick_on_face settled: q moved to
+  // The end of a tick that tick_in_tet, tick_on_face or tick_beside_mesh settled: q moved to
   // q1, a transition of `state` to itself when it changed q (settle_at).
   void end_settled_tick(const Vec3& p, const Vec3& q1, ProxyState state,
                         const RuntimeSettings& settings, TickResult& result);
