@@ -10,6 +10,9 @@ def report_lines(report: dict) -> list[str]:
         lines.append(f"  {name}: {count} tets")
     for name, deviation in report.get("deviation_mm", {}).items():
         lines.append(f"  {name}: surface deviation {deviation:.3g} mm")
+    meshings = len(report.get("meshing_attempts", []))
+    if meshings > 1:
+        lines.append(f"  meshed {meshings} times to hold the accuracy")
     quality = report.get("quality", {})
     if quality:
         lines.append(

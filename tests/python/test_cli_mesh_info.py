@@ -86,3 +86,16 @@ def test_parse_material():
     assert parse_material("goo=viscous")[1].viscosity_N_s_per_mm > 0
     with pytest.raises(ValueError, match="unknown parameter"):
         parse_material("x=drag,speed=3")
+
+
+def test_info_tells_when_a_build_meshed_again_to_hold_its_accuracy():
+    from hapticut.commands.info import format_build_report
+
+    once = [{"envelope_mm": 0.2, "deviation_mm": {"ball": 0.1}}]
+    again = [
+        {"envelope_mm": 0.2, "deviation_mm": {"ball": 0.6}},
+        {"envelope_mm": 0.1, "deviation_mm": {"ball": 0.4}},
+    ]
+    assert not any("meshed" in line for line in format_build_report({"meshing_attempts": once}))
+    lines = format_build_report({"meshing_attempts": again})
+    assert "  meshed 2 times to hold the accuracy (envelope 0.2 -> 0.1 mm)" in lines

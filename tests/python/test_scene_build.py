@@ -14,6 +14,7 @@ from hapticut.scenebuild import (
     RefineZone,
     Region,
     build,
+    builder,
 )
 from hapticut.scenebuild.geometry import (
     boundary_faces,
@@ -125,10 +126,11 @@ def test_a_refine_zone_makes_small_tets_along_a_blade_reach():
     refined = build([region], settings=replace(settings, refine=(zone,)))
 
     def edges_near_zone(scene):
-        centroids = scene.vertices[scene.tets].mean(axis=1)
-        near = np.linalg.norm(centroids - [-20.0, 0, 0], axis=1) < 4
-        ends = scene.vertices[scene.tets[near]]
-        return near.sum(), np.linalg.norm(ends[:, 0] - ends[:, 1], axis=1).mean()
+        # How many tets lie within 4 mm of the zone's middle (a coarse mesh may have none),
+        # and the mean edge of the four nearest it.
+        distance = np.linalg.norm(scene.vertices[scene.tets].mean(axis=1) - [-20.0, 0, 0], axis=1)
+        ends = scene.vertices[scene.tets[np.argsort(distance)[:4]]]
+        return (distance < 4).sum(), np.linalg.norm(ends[:, 0] - ends[:, 1], axis=1).mean()
 
     plain_count, plain_edge = edges_near_zone(plain)
     refined_count, refined_edge = edges_near_zone(refined)
@@ -158,6 +160,38 @@ def test_progress_runs_from_0_to_1_and_a_cancel_stops_the_build():
         build([region], settings=BuildSettings(accuracy_mm=0.2), progress=cancel_while_tetwild_runs)
     assert "fTetWild," in polled[-1]
     assert sum("fTetWild," in m for m in polled) == 1
+
+
+def test_a_meshing_beyond_the_accuracy_is_made_again_with_a_tighter_envelope(monkeypatch):
+    """The builder holds every region's meshed surface within accuracy_mm of its input: an
+    envelope of three times the accuracy (monkeypatched) lets fTetWild stray beyond it, and
+    the builder meshes again with half the envelope until the surface is within."""
+    monkeypatch.setattr(builder, "ENVELOPE_SHARE", 3.0)
+    seen: list[tuple[float, str]] = []
+    scene = build(
+        [Region("ball", *icosphere(10.0, 2), BONE)],
+        settings=BuildSettings(accuracy_mm=0.3),
+        progress=lambda f, m: seen.append((f, m)),
+    )
+    report = scene.metadata["build_report"]
+    attempts = report["meshing_attempts"]
+    assert len(attempts) >= 2
+    assert attempts[0]["envelope_mm"] == pytest.approx(0.9)
+    assert attempts[0]["deviation_mm"]["ball"] > 0.3
+    assert all(later["deviation_mm"]["ball"] > 0.3 for later in attempts[:-1])
+    assert attempts[-1]["deviation_mm"] == report["deviation_mm"]
+    assert report["deviation_mm"]["ball"] <= report["settings"]["accuracy_mm"] == 0.3
+    assert report["settings"]["envelope_mm"] == pytest.approx(0.9 / 2 ** (len(attempts) - 1))
+    fractions = [f for f, _ in seen]
+    assert fractions == sorted(fractions) and fractions[-1] == 1.0
+    assert any("meshing again with a 0.45 mm envelope" in m for _, m in seen)
+
+
+def test_a_meshing_that_stays_beyond_the_accuracy_is_refused(monkeypatch):
+    monkeypatch.setattr(builder, "ENVELOPE_SHARE", 3.0)
+    monkeypatch.setattr(builder, "MESHING_ATTEMPTS", 1)
+    with pytest.raises(BuildError, match=r"'ball'.*beyond accuracy_mm \(0\.3 mm\), after 1"):
+        build([Region("ball", *icosphere(10.0, 2), BONE)], settings=BuildSettings(accuracy_mm=0.3))
 
 
 def test_regions_sharing_a_material_share_its_entry():

@@ -118,6 +118,13 @@ def format_build_report(build: dict) -> list[str]:
             f"Built: {settings['enclosure']} enclosure (margin {settings['margin_mm']:.3g} mm), "
             f"accuracy {settings['accuracy_mm']:.3g} mm, {sizing}"
         )
+    meshings = build.get("meshing_attempts") or []
+    if len(meshings) > 1:
+        lines.append(
+            f"  meshed {len(meshings)} times to hold the accuracy (envelope "
+            + " -> ".join(f"{m['envelope_mm']:.3g}" for m in meshings)
+            + " mm)"
+        )
     for region, repairs in (build.get("repairs") or {}).items():
         if repairs:
             text = ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in repairs.items())

@@ -21,7 +21,7 @@ import math
 import os
 import time
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
@@ -78,6 +78,9 @@ SIZING_GRID_CELLS = 32
 # output within the envelope of its input but not the converse, so a fifth is held back.
 SIMPLIFY_SHARE = 0.4
 ENVELOPE_SHARE = 0.4
+# How often the tet mesh is made, halving the envelope each time, until every region's meshed
+# surface lies within accuracy_mm of its input (when measure_deviation is on).
+MESHING_ATTEMPTS = 3
 
 
 @dataclass(frozen=True, eq=False)
@@ -181,19 +184,30 @@ class _Progress:
         self.start = 0.0
         self.step = ""
         self.timings: dict[str, float] = {}
+        self.repeating = False  # Steps run again (again()): their weight is already counted.
+        self.reached = 0.0  # The last fraction reported.
         self._clock = time.perf_counter()
 
     def begin(self, step: str, message: str) -> None:
         now = time.perf_counter()
         if self.step:
-            self.timings[self.step] = round(now - self._clock, 3)
-            self.start += self.WEIGHTS[self.step]
+            self.timings[self.step] = round(self.timings.get(self.step, 0.0) + now - self._clock, 3)
+            if not self.repeating:
+                self.start += self.WEIGHTS[self.step]
         self.step, self._clock = step, now
         self(0.0, message)
 
+    def again(self, message: str) -> None:
+        """The meshing steps are run once more: the progress holds where it got to (it never
+        goes back) and the messages say why; their time adds to the same steps."""
+        self.repeating, self.start = True, self.reached
+        self.begin("", message)
+
     def finish(self) -> None:
         if self.step:
-            self.timings[self.step] = round(time.perf_counter() - self._clock, 3)
+            self.timings[self.step] = round(
+                self.timings.get(self.step, 0.0) + time.perf_counter() - self._clock, 3
+            )
         self.step = ""
         if self.callback is not None and self.callback(1.0, "done") is False:
             raise BuildCancelled("cancelled at the end of the build")
@@ -201,8 +215,9 @@ class _Progress:
     def __call__(self, fraction: float, message: str) -> None:
         if self.callback is None:
             return
-        overall = self.start + self.WEIGHTS.get(self.step, 0.0) * min(max(fraction, 0.0), 1.0)
-        if self.callback(min(overall, 1.0), message) is False:
+        weight = 0.0 if self.repeating else self.WEIGHTS.get(self.step, 0.0)
+        self.reached = min(self.start + weight * min(max(fraction, 0.0), 1.0), 1.0)
+        if self.callback(self.reached, message) is False:
             raise BuildCancelled(f"cancelled while {message}")
 
 
@@ -370,15 +385,33 @@ def build(
     in_subprocess = (
         settings.in_subprocess if settings.in_subprocess is not None else progress is not None
     )
-    vertices, tets = _tetrahedralize(
-        enclosure, surfaces, sizing, edge_mm, lengths, settings, in_subprocess, steps, report
-    )
-    inside, tet_materials = _label(
-        vertices, tets, regions, surfaces, volumes, materials, lengths, steps, report
-    )
-    _measure(
-        vertices, tets, tet_materials, inside, regions, repaired, materials, settings, steps, report
-    )
+    for attempt in range(1, MESHING_ATTEMPTS + 1):
+        vertices, tets = _tetrahedralize(
+            enclosure, surfaces, sizing, edge_mm, lengths, settings, in_subprocess, steps, report
+        )
+        inside, tet_materials = _label(
+            vertices, tets, regions, surfaces, volumes, materials, lengths, steps, report
+        )
+        _measure(
+            vertices,
+            tets,
+            tet_materials,
+            inside,
+            regions,
+            repaired,
+            materials,
+            settings,
+            steps,
+            report,
+        )
+        if _accurate_enough(lengths, attempt, report):
+            break
+        # The meshed surface strays by the simplification, fTetWild's envelope and the
+        # labelling together, and fTetWild's output differs between runs: beyond the accuracy,
+        # mesh again with half the envelope.
+        lengths = replace(lengths, envelope_mm=lengths.envelope_mm / 2)
+        report.settings["envelope_mm"] = round(lengths.envelope_mm, 6)
+        steps.again(f"meshing again with a {lengths.envelope_mm:.3g} mm envelope")
     steps.finish()
     report.timings_s = dict(steps.timings)
     report.timings_s["total"] = round(sum(steps.timings.values()), 3)
@@ -635,3 +668,26 @@ def _measure(
         meshed = Surface(vertices[used], compact.reshape(-1, 3))
         report.deviation_mm[region.name] = round(surface_deviation(repaired[r], meshed), 6)
         steps((r + 1) / len(regions), "measuring surface deviation")
+
+
+def _accurate_enough(lengths: Lengths, attempt: int, report: BuildReport) -> bool:
+    """Whether every region's meshed surface lies within accuracy_mm of its input (always
+    true unmeasured). The attempt is listed in the report; BuildError after the last one."""
+    if report.deviation_mm is None:
+        return True
+    worst = max(report.deviation_mm, key=report.deviation_mm.get)
+    report.meshing_attempts.append(
+        {"envelope_mm": round(lengths.envelope_mm, 6), "deviation_mm": dict(report.deviation_mm)}
+    )
+    deviation = report.deviation_mm[worst]
+    if deviation <= lengths.accuracy_mm:
+        return True
+    if attempt == MESHING_ATTEMPTS:
+        meshings = f"{attempt} meshing" + ("s" if attempt > 1 else "")
+        raise BuildError(
+            worst,
+            f"its meshed surface lies up to {deviation:.3g} mm from the input surface, beyond "
+            f"accuracy_mm ({lengths.accuracy_mm:.3g} mm), after {meshings} down to a "
+            f"{lengths.envelope_mm:.3g} mm envelope; raise accuracy_mm or report this input",
+        )
+    return False

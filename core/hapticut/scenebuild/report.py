@@ -36,6 +36,8 @@ class BuildReport:
     tets_per_region: dict[str, int] = field(default_factory=dict)  # "(air)" too.
     mesh: dict[str, Any] = field(default_factory=dict)  # quality.mesh_report.
     deviation_mm: dict[str, float] | None = None  # Per region, when measured.
+    # Each meshing's envelope and deviations, when measured (builder.MESHING_ATTEMPTS).
+    meshing_attempts: list[dict[str, Any]] = field(default_factory=list)
     timings_s: dict[str, float] = field(default_factory=dict)  # Per step, and "total".
 
     def as_json(self) -> dict[str, Any]:
@@ -58,6 +60,7 @@ class BuildReport:
         }
         if self.deviation_mm is not None:
             out["deviation_mm"] = self.deviation_mm
+            out["meshing_attempts"] = self.meshing_attempts
         out["timings_s"] = self.timings_s
         return _plain(out)
 

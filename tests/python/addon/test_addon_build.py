@@ -98,6 +98,8 @@ def test_the_report_reaches_the_panel(built):
     assert set(report["timings_s"]) >= {"repair", "tetrahedralize", "label", "total"}
     lines = report_lines(report)
     assert lines[0].startswith(f"{report['tets']} tets")
+    meshed_again = len(report["meshing_attempts"]) > 1
+    assert any("to hold the accuracy" in line for line in lines) == meshed_again
     assert any("tets per edge" in line for line in lines)
 
 
