@@ -392,18 +392,7 @@ def build(
         inside, tet_materials = _label(
             vertices, tets, regions, surfaces, volumes, materials, lengths, steps, report
         )
-        _measure(
-            vertices,
-            tets,
-            tet_materials,
-            inside,
-            regions,
-            repaired,
-            materials,
-            settings,
-            steps,
-            report,
-        )
+        _measure_deviation(vertices, tets, inside, regions, repaired, settings, steps, report)
         if _accurate_enough(lengths, attempt, report):
             break
         # The meshed surface strays by the simplification, fTetWild's envelope and the
@@ -412,6 +401,9 @@ def build(
         lengths = replace(lengths, envelope_mm=lengths.envelope_mm / 2)
         report.settings["envelope_mm"] = round(lengths.envelope_mm, 6)
         steps.again(f"meshing again with a {lengths.envelope_mm:.3g} mm envelope")
+    # Quality and valence of the mesh kept only, not of the meshings made again.
+    steps(0.5, "measuring quality")
+    report.mesh = mesh_report(vertices, tets, tet_materials, [m.name for m in materials])
     steps.finish()
     report.timings_s = dict(steps.timings)
     report.timings_s["total"] = round(sum(steps.timings.values()), 3)
@@ -642,21 +634,18 @@ def _label(
     return inside, tet_materials
 
 
-def _measure(
+def _measure_deviation(
     vertices: np.ndarray,
     tets: np.ndarray,
-    tet_materials: np.ndarray,
     inside: np.ndarray,
     regions: list[Region],
     repaired: list[Surface],
-    materials: list[Material],
     settings: BuildSettings,
     steps: _Progress,
     report: BuildReport,
 ) -> None:
-    """Quality and valence, and each region's meshed surface's deviation from its input."""
-    steps.begin("report", "measuring quality")
-    report.mesh = mesh_report(vertices, tets, tet_materials, [m.name for m in materials])
+    """Each region's meshed surface's deviation from its input (when measured)."""
+    steps.begin("report", "measuring surface deviation")
     if not settings.measure_deviation:
         return
     report.deviation_mm = {}
@@ -667,7 +656,7 @@ def _measure(
         used, compact = np.unique(faces, return_inverse=True)
         meshed = Surface(vertices[used], compact.reshape(-1, 3))
         report.deviation_mm[region.name] = round(surface_deviation(repaired[r], meshed), 6)
-        steps((r + 1) / len(regions), "measuring surface deviation")
+        steps(0.5 * (r + 1) / len(regions), "measuring surface deviation")
 
 
 def _accurate_enough(lengths: Lengths, attempt: int, report: BuildReport) -> bool:
