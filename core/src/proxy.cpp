@@ -438,6 +438,7 @@ Proxy::Outcome Proxy::step_face(const Vec3& p, const MoveContext& context) {
       if (slide_reaches_edge(side.signed_distance(moved.q), dot(target - q, side.normal), eps)) {
         const int local_edge = kEdgeOfFaces[face][exit.touching];
         const std::int32_t e = mesh.edge_of(t, local_edge);
+        space_->prefetch_edge_fan(t, local_edge);
         return go(ProxyState::Edge, t, local_edge,
                   project_to_line(moved.q, mesh.vertex(mesh.edge_vertices(e)[0]),
                                   mesh.edge_direction(e)));
@@ -445,7 +446,9 @@ Proxy::Outcome Proxy::step_face(const Vec3& p, const MoveContext& context) {
     }
     return settle_at(moved.q);
   }
-  return go(ProxyState::Edge, t, kEdgeOfFaces[face][exit.face], q + (moved.q - q) * exit.parameter);
+  const int local_edge = kEdgeOfFaces[face][exit.face];
+  space_->prefetch_edge_fan(t, local_edge);
+  return go(ProxyState::Edge, t, local_edge, q + (moved.q - q) * exit.parameter);
 }
 
 // EDGE: (a-1) into a tet of the fan whose wedge holds p (eq. 7); (a-2) out
@@ -461,7 +464,7 @@ Proxy::Outcome Proxy::step_edge(const Vec3& p, const MoveContext& context) {
   const Vec3 d = p - q;
   const double eps = context.tolerance_mm;
   if (within_tolerance(d, eps)) return Outcome::Unchanged;
-  const auto fan = mesh.edge_fan(e);
+  const auto fan = mesh.edge_fan_of(t, local_edge);
 
   // One pass over the fan, as in step_vertex: (a-1) returns at once; the
   // (a-2) verdict and the best (a-3) candidate are gathered on the way.
@@ -502,7 +505,10 @@ Proxy::Outcome Proxy::step_edge(const Vec3& p, const MoveContext& context) {
   if (!any_toward && outside_every_wedge && boundary) {
     return go(ProxyState::Outside, kNoTet, 0, q);
   }
-  if (best.tet != kNoTet) return go(best.state, best.tet, best.local, q);
+  if (best.tet != kNoTet) {
+    mesh.prefetch_edge_fans_of(best.tet);  // A slide on goes on to one of its edges.
+    return go(best.state, best.tet, best.local, q);
+  }
 
   const auto& ends = mesh.edge_vertices(e);
   const Vec3& direction = mesh.edge_direction(e);

@@ -236,6 +236,7 @@ void TetMesh::build_edges() {
   }
   std::sort(edges.begin(), edges.end());
   tet_edges_.assign(6 * n, -1);
+  tet_edge_fans_.assign(6 * n, {0, 0});
   edge_fan_.reserve(edges.size());
   for (std::size_t k = 0; k < edges.size();) {
     std::size_t end = k + 1;
@@ -246,10 +247,13 @@ void TetMesh::build_edges() {
     edge_vertices_.push_back({v0, v1});
     const Vec3 d = vertices_[v1] - vertices_[v0];
     edge_directions_.push_back(d / norm(d));
-    edge_fan_start_.push_back(static_cast<std::int32_t>(edge_fan_.size()));
+    const auto fan_begin = static_cast<std::int32_t>(edge_fan_.size());
+    const auto fan_end = static_cast<std::int32_t>(fan_begin + (end - k));
+    edge_fan_start_.push_back(fan_begin);
     for (std::size_t j = k; j < end; ++j) {
       const int e = edges[j].local;
       tet_edges_[6 * edges[j].tet + e] = id;
+      tet_edge_fans_[6 * edges[j].tet + e] = {fan_begin, fan_end};
       edge_fan_.push_back({edges[j].tet,
                            static_cast<std::int8_t>(e),
                            {static_cast<std::int8_t>(kEdgeFaces[e][0]),
@@ -365,11 +369,11 @@ std::size_t TetMesh::memory_bytes() const {
   return vertices_.capacity() * sizeof(Vec3) + tets_.capacity() * sizeof(tets_[0]) +
          materials_.capacity() * 4 + planes_.capacity() * sizeof(TetPlanes) +
          neighbours_.capacity() * 4 + neighbour_faces_.capacity() + tet_edges_.capacity() * 4 +
-         edge_vertices_.capacity() * 8 + edge_directions_.capacity() * sizeof(Vec3) +
-         edge_fan_start_.capacity() * 4 + edge_fan_.capacity() * sizeof(EdgeFanEntry) +
-         vertex_fan_start_.capacity() * 4 + vertex_fan_.capacity() * sizeof(VertexFanEntry) +
-         boundary_edge_.capacity() + boundary_vertex_.capacity() +
-         boundary_faces_.capacity() * sizeof(FaceRef) +
+         tet_edge_fans_.capacity() * sizeof(tet_edge_fans_[0]) + edge_vertices_.capacity() * 8 +
+         edge_directions_.capacity() * sizeof(Vec3) + edge_fan_start_.capacity() * 4 +
+         edge_fan_.capacity() * sizeof(EdgeFanEntry) + vertex_fan_start_.capacity() * 4 +
+         vertex_fan_.capacity() * sizeof(VertexFanEntry) + boundary_edge_.capacity() +
+         boundary_vertex_.capacity() + boundary_faces_.capacity() * sizeof(FaceRef) +
          boundary_planes_.capacity() * sizeof(Plane) +
          boundary_side_planes_.capacity() * sizeof(Plane) + boundary_tree_.memory_bytes() +
          tet_tree_.memory_bytes();

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -125,6 +126,24 @@ TEST(TetMesh, EachTetsPlanesStartOnACacheLine) {
     EXPECT_EQ(address % 64, 0U) << "tet " << t;
     EXPECT_EQ(reinterpret_cast<std::uintptr_t>(&mesh.face_plane(t, 3)) - address,
               3 * sizeof(Plane));
+  }
+}
+
+// The fan an EDGE step reads from its tet (edge_fan_of) is the edge's own fan,
+// entry for entry, and holds that tet at that local edge.
+TEST(TetMesh, TheFanFoundFromATetIsTheEdgesFan) {
+  const TetMesh mesh = build(grid_mesh({0, 1, 2, 3}, {0, 1, 2}, {0, 1, 2}, 0.2, 5));
+  for (std::int32_t t = 0; t < mesh.tet_count(); ++t) {
+    for (int local_edge = 0; local_edge < 6; ++local_edge) {
+      const auto by_tet = mesh.edge_fan_of(t, local_edge);
+      const auto by_edge = mesh.edge_fan(mesh.edge_of(t, local_edge));
+      ASSERT_EQ(by_tet.data(), by_edge.data()) << "tet " << t << " edge " << local_edge;
+      ASSERT_EQ(by_tet.size(), by_edge.size()) << "tet " << t << " edge " << local_edge;
+      const bool holds_it = std::any_of(by_tet.begin(), by_tet.end(), [&](const EdgeFanEntry& f) {
+        return f.tet == t && f.local_edge == local_edge;
+      });
+      EXPECT_TRUE(holds_it) << "tet " << t << " edge " << local_edge;
+    }
   }
 }
 
