@@ -506,7 +506,7 @@ Proxy::Outcome Proxy::step_edge(const Vec3& p, const MoveContext& context) {
     return go(ProxyState::Outside, kNoTet, 0, q);
   }
   if (best.tet != kNoTet) {
-    mesh.prefetch_edge_fans_of(best.tet);  // A slide on goes on to one of its edges.
+    mesh.prefetch_fan_ranges(best.tet);  // A slide on goes on to one of its edges.
     return go(best.state, best.tet, best.local, q);
   }
 

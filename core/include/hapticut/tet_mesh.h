@@ -158,7 +158,7 @@ class TetMesh {
   }
   // Asks the cache for the fan ranges of tet t's six edges (48 bytes, up to two
   // lines): a slide that goes on over a face of t next ends on one of its edges.
-  void prefetch_edge_fans_of(std::int32_t t) const {
+  void prefetch_fan_ranges(std::int32_t t) const {
     __builtin_prefetch(&tet_edge_fans_[6 * static_cast<std::size_t>(t)]);
     __builtin_prefetch(&tet_edge_fans_[6 * static_cast<std::size_t>(t) + 5]);
   }
