@@ -72,7 +72,11 @@ def start(context) -> live_session.Session:
     try:
         modules = link(context)
         path = log_path(scene)
-        _session = live_session.start(modules, path, port=live.port, realtime=live.realtime)
+        # Recordings (Record, Simulate Stroke) go to the scene's work folder only.
+        work = build_job.work_directory(scene, bpy.data.filepath)
+        _session = live_session.start(
+            modules, path, port=live.port, realtime=live.realtime, extra=("--record-dir", work)
+        )
     except live_session.SessionError as error:
         _last_error = live.error = str(error)
         raise

@@ -198,6 +198,9 @@ def run(
     request(session, "subscribe", rate_Hz=120.0)
     if record_path:
         os.makedirs(os.path.dirname(record_path) or ".", exist_ok=True)
+        # The servo never overwrites a recording: the last stroke's goes first.
+        with contextlib.suppress(FileNotFoundError):
+            os.remove(record_path)
         request(session, "record", record_path)
         session.recording_path = record_path
     request(session, "start")

@@ -12,6 +12,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
+#include <string_view>
 
 #include "clock.h"
 #include "hapticut/scene_io.h"
@@ -24,6 +26,17 @@ namespace {
 void set_nonblocking(int fd) { fcntl(fd, F_SETFL, fcntl(fd, F_GETFL, 0) | O_NONBLOCK); }
 
 bool is_loopback(const in_addr& address) { return (ntohl(address.s_addr) >> 24) == 127; }
+
+// Compares in time that depends only on the expected token's length, so that
+// the time of a refusal does not tell how much of a guess was right.
+bool same_token(std::string_view given, std::string_view expected) {
+  unsigned difference = given.size() == expected.size() ? 0U : 1U;
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    const char g = i < given.size() ? given[i] : '\0';
+    difference |= static_cast<unsigned char>(g ^ expected[i]);
+  }
+  return difference == 0;
+}
 
 std::string errno_text() { return std::strerror(errno); }
 
@@ -226,22 +239,18 @@ void ControlServer::write_client(Client& client) {
 void ControlServer::handle(Client& client, const std::string& text) {
   ++counters_.messages;
   nlohmann::json reply;
-  nlohmann::json id;
+  ControlJson id;
   std::string type = "error";
   try {
-    nlohmann::json message;
+    ControlMessage message;
     try {
-      message = nlohmann::json::parse(text);
-    } catch (const nlohmann::json::exception& e) {
+      message = parse_control_message(text);
+    } catch (const MalformedMessage&) {
       ++counters_.malformed;
-      throw CommandError(std::string("malformed JSON: ") + e.what());
+      throw;
     }
-    if (!message.is_object() || !message.contains("type") || !message["type"].is_string()) {
-      ++counters_.malformed;
-      throw CommandError("malformed message: expected an object with a string \"type\"");
-    }
-    if (message.contains("id")) id = message["id"];
-    type = message["type"].get<std::string>();
+    id = message.id;
+    type = message.type;
     reply = dispatch(client, message);
     reply["ok"] = true;
   } catch (const CommandError& e) {
@@ -250,52 +259,72 @@ void ControlServer::handle(Client& client, const std::string& text) {
     reply = {{"ok", false}, {"error", std::string("scene: ") + e.what()}};
   } catch (const DeviceError& e) {
     reply = {{"ok", false}, {"error", e.what()}};
-  } catch (const nlohmann::json::exception& e) {
-    ++counters_.malformed;
-    reply = {{"ok", false}, {"error", std::string("bad field: ") + e.what()}};
   } catch (const std::exception& e) {
-    reply = {{"ok", false}, {"error", e.what()}};
+    // A bug: say that it is one, without the library's text.
+    reply = {{"ok", false}, {"error", std::string("internal error: ") + e.what()}};
   }
   if (!reply.value("ok", false)) ++counters_.errors;
   reply["type"] = type;
-  if (!id.is_null()) reply["id"] = id;
+  if (!id.is_null()) reply["id"] = nlohmann::json::parse(id.dump());
   // Replace, not throw, on invalid UTF-8 (an error message may quote the bad bytes).
   client.out += frame_message(reply.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
 }
 
-nlohmann::json ControlServer::dispatch(Client& client, const nlohmann::json& message) {
-  const std::string type = message["type"].get<std::string>();
-  if (type == "hello") {
-    const int version = message.value("version", 0);
-    if (version != kProtocolVersion) {
+nlohmann::json ControlServer::hello(Client& client, const ControlJson& message) {
+  const std::int64_t version =
+      integer_field(message, "version", 0, std::numeric_limits<std::int64_t>::max());
+  if (version != kProtocolVersion) {
+    ++counters_.unauthenticated;
+    throw CommandError("protocol version " + std::to_string(version) +
+                       " not supported (this servo speaks version " +
+                       std::to_string(kProtocolVersion) + ")");
+  }
+  if (!options_.token.empty()) {
+    const double now_s = monotonic_now_s();
+    if (now_s < token_locked_until_s_) {
       ++counters_.unauthenticated;
-      throw CommandError("protocol version " + std::to_string(version) +
-                         " not supported (this servo speaks version " +
-                         std::to_string(kProtocolVersion) + ")");
+      ++counters_.token_lockouts;
+      client.closing = true;
+      throw CommandError(
+          "too many wrong tokens; hello is refused for " +
+          std::to_string(static_cast<int>(std::ceil(token_locked_until_s_ - now_s))) + " s more");
     }
-    if (!options_.token.empty() && message.value("token", std::string()) != options_.token) {
+    const std::string token = message.contains("token") && message.at("token").is_string()
+                                  ? message.at("token").get<std::string>()
+                                  : std::string();
+    if (!same_token(token, options_.token)) {
       ++counters_.unauthenticated;
       client.closing = true;
+      if (++wrong_tokens_ >= kMaxWrongTokens) {
+        wrong_tokens_ = 0;
+        token_locked_until_s_ = now_s + kTokenLockout_s;
+      }
       throw CommandError("wrong or missing token");
     }
-    client.hello = true;
-    return {{"version", kProtocolVersion},
-            {"frame_version", kFrameVersion},
-            {"record_version", kRecordVersion},
-            {"servo", "hapticut-servo 0.1.0"},
-            {"stream_source_port", stream_port_}};
+    wrong_tokens_ = 0;
   }
+  client.hello = true;
+  return {{"version", kProtocolVersion},
+          {"frame_version", kFrameVersion},
+          {"record_version", kRecordVersion},
+          {"servo", "hapticut-servo 0.1.0"},
+          {"stream_source_port", stream_port_}};
+}
+
+nlohmann::json ControlServer::dispatch(Client& client, const ControlMessage& request) {
+  const std::string& type = request.type;
+  const ControlJson& message = request.body;
+  if (type == "hello") return hello(client, message);
   if (!client.hello) {
     ++counters_.out_of_order;
     throw CommandError("\"" + type +
                        "\" before \"hello\" (send hello with the protocol version first)");
   }
   if (type == "subscribe") {
-    const double rate =
-        message.contains("rate_Hz") ? message["rate_Hz"].get<double>() : options_.stream_rate_Hz;
-    if (!(rate >= 1.0 && rate <= 1000.0)) throw CommandError("rate_Hz: 1 to 1000");
-    const int port = message.at("port").get<int>();
-    if (port < 1 || port > 65535) throw CommandError("port: 1 to 65535");
+    const double rate = has_field(message, "rate_Hz")
+                            ? number_field(message, "rate_Hz", kMinStreamRate_Hz, kMaxStreamRate_Hz)
+                            : options_.stream_rate_Hz;
+    const auto port = static_cast<int>(integer_field(message, "port", 1, 65535));
     client.stream_port = port;
     client.stream_address = client.peer.sin_addr;
     client.rate_Hz = rate;
@@ -313,14 +342,14 @@ nlohmann::json ControlServer::dispatch(Client& client, const nlohmann::json& mes
     status["protocol"] = counters_json();
     return status;
   }
-  if (type == "set" && message.contains("stream_rate_Hz")) {
-    const double rate = message["stream_rate_Hz"].get<double>();
-    if (!(rate >= 1.0 && rate <= 1000.0)) throw CommandError("stream_rate_Hz: 1 to 1000");
+  if (type == "set" && has_field(message, "stream_rate_Hz")) {
+    const double rate =
+        number_field(message, "stream_rate_Hz", kMinStreamRate_Hz, kMaxStreamRate_Hz);
     if (client.stream_port == 0) throw CommandError("stream_rate_Hz: not subscribed");
     client.rate_Hz = rate;
     update_stream_interval();
   }
-  return servo_.command(message);
+  return servo_.command(request);
 }
 
 void ControlServer::update_stream_interval() {
@@ -389,6 +418,7 @@ nlohmann::json ControlServer::counters_json() const {
           {"oversized", c.oversized},
           {"out_of_order", c.out_of_order},
           {"unauthenticated", c.unauthenticated},
+          {"token_lockouts", c.token_lockouts},
           {"refused_clients", c.refused_clients},
           {"frames_sent", c.frames_sent},
           {"frames_dropped", c.frames_dropped},

@@ -17,6 +17,7 @@
 #include <thread>
 #include <vector>
 
+#include "control_message.h"
 #include "histogram.h"
 #include "protocol.h"
 #include "servo.h"
@@ -36,6 +37,7 @@ struct ControlCounters {
   std::uint64_t oversized = 0;        // Length prefix over the limit (connection closed).
   std::uint64_t out_of_order = 0;     // Before hello.
   std::uint64_t unauthenticated = 0;  // Wrong token or protocol version.
+  std::uint64_t token_lockouts = 0;   // Hellos refused while wrong tries lock the token.
   std::uint64_t refused_clients = 0;  // Over the client limit.
   std::uint64_t frames_sent = 0;
   std::uint64_t frames_dropped = 0;   // Send buffer full (slow client).
@@ -75,7 +77,8 @@ class ControlServer {
   void read_client(Client& client);
   void write_client(Client& client);
   void handle(Client& client, const std::string& text);
-  nlohmann::json dispatch(Client& client, const nlohmann::json& message);
+  nlohmann::json dispatch(Client& client, const ControlMessage& request);
+  nlohmann::json hello(Client& client, const ControlJson& message);
   void send_frames();
   void drain_stray_datagrams();
   void update_stream_interval();
@@ -91,13 +94,20 @@ class ControlServer {
   ControlCounters counters_;
   // Tick to sendto, per frame sent (the servo's share of a frame's age).
   std::unique_ptr<LatencyHistogram> send_age_us_ = std::make_unique<LatencyHistogram>();
-  double last_frame_time_s_ = 0.0;    // servo_time_s of the last frame fetched.
-  double stray_pause_until_s_ = 0.0;  // Stream socket not read until then.
+  double last_frame_time_s_ = 0.0;     // servo_time_s of the last frame fetched.
+  double stray_pause_until_s_ = 0.0;   // Stream socket not read until then.
+  int wrong_tokens_ = 0;               // In a row, from any client.
+  double token_locked_until_s_ = 0.0;  // Every hello refused until then.
   std::thread thread_;
   std::atomic<bool> quit_{false};
 };
 
 inline constexpr std::size_t kMaxClients = 16;
 inline constexpr std::size_t kMaxClientBacklog = 4U << 20;  // Unsent replies before a drop.
+inline constexpr double kMinStreamRate_Hz = 1.0;
+inline constexpr double kMaxStreamRate_Hz = 1000.0;
+// Wrong tokens in a row (from any client) before every hello is refused for a while.
+inline constexpr int kMaxWrongTokens = 5;
+inline constexpr double kTokenLockout_s = 10.0;
 
 }  // namespace hapticut::servo

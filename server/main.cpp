@@ -5,7 +5,9 @@
 #include <pthread.h>
 #include <signal.h>
 
+#include <atomic>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <thread>
@@ -104,6 +106,43 @@ int list_devices(const Options& options) {
 #endif
 }
 
+// After a signal, the loop gets its --stop-ramp and this much more to end (a
+// few ticks late at most); the rest of the process then this much to wind up.
+constexpr double kSignalLoopGrace_s = 0.2;
+constexpr double kSignalExitGrace_s = 0.8;
+
+// After SIGINT or SIGTERM: the loop ramps the force to zero on its own; the
+// rest (recording, devices, threads) is wound up on a thread of its own, and
+// if that is stuck (a thread blocked in the kernel) the process exits without
+// it once the loop has ended, so a signal always ends the servo.
+int wind_down_after_signal(Servo& servo, ControlServer* control, double stop_ramp_s) {
+  auto done = std::make_shared<std::atomic<bool>>(false);
+  std::thread wind_down([&servo, control, done] {
+    servo.stop();
+    if (control != nullptr) control->stop();
+    done->store(true);
+  });
+  const double loop_deadline_s = monotonic_now_s() + stop_ramp_s + kSignalLoopGrace_s;
+  while (servo.shared().running.load() && monotonic_now_s() < loop_deadline_s) {
+    sleep_until(monotonic_now_s() + 0.001);
+  }
+  const double exit_deadline_s = monotonic_now_s() + kSignalExitGrace_s;
+  while (!done->load() && monotonic_now_s() < exit_deadline_s)
+    sleep_until(monotonic_now_s() + 0.001);
+  if (done->load()) {
+    wind_down.join();
+    return kExitOk;
+  }
+  std::fprintf(stderr,
+               "hapticut-servo: a thread did not finish within %g s of the signal (%s); exiting "
+               "without it\n",
+               kSignalExitGrace_s,
+               servo.shared().running.load() ? "the loop is still running" : "the force is zero");
+  std::fflush(stderr);
+  std::fflush(stdout);
+  std::_Exit(servo.shared().running.load() ? kExitInternal : kExitStuck);
+}
+
 int run(const Options& options) {
   // SIGINT and SIGTERM are taken by sigtimedwait below, in no other thread.
   sigset_t signals;
@@ -169,9 +208,15 @@ int run(const Options& options) {
   // Wait: a signal, a shutdown message, or (without a control channel) the
   // run ending by itself.
   const timespec poll_interval = to_timespec(0.05);
+  bool signalled = false;
   for (;;) {
     const int signal_number = sigtimedwait(&signals, nullptr, &poll_interval);
     if (signal_number == SIGINT || signal_number == SIGTERM) {
+      // Straight to the loop's flag, which it reads every tick: the ramp to
+      // zero must not wait for a lock another thread (a stuck file open, a
+      // flooding client) may hold.
+      servo_state.shared().stop_requested.store(true);
+      signalled = true;
       if (!options.quiet) {
         std::fprintf(stderr, "hapticut-servo: %s: ramping the force to zero and stopping\n",
                      signal_number == SIGINT ? "SIGINT" : "SIGTERM");
@@ -181,6 +226,7 @@ int run(const Options& options) {
     if (servo_state.shutdown_requested()) break;
     if (!control && servo_state.run_ended()) break;
   }
+  if (signalled) return wind_down_after_signal(servo_state, control.get(), options.stop_ramp_s);
   servo_state.stop();
   if (control) control->stop();
   return kExitOk;

@@ -31,11 +31,17 @@ constexpr const char* kUsage =
     "  --wait                  load SCENE but start only on a \"start\" message\n"
     "  --record FILE           record every tick of every run to FILE\n"
     "  --record-buffer-s S     records held in memory for the writer (2 s)\n"
+    "  --record-dir DIR        where \"record\" messages may create recordings, new\n"
+    "                          files only (default $XDG_STATE_HOME/hapticut/recordings,\n"
+    "                          else ~/.local/state/hapticut/recordings)\n"
+    "  --max-scene-bytes N     the largest scene file a \"load\" reads (256 MiB)\n"
     "  --control PORT          open the control channel (TCP) on PORT (0: any free\n"
     "                          port); prints \"control: ADDRESS:PORT\"\n"
     "  --listen ADDRESS        address of the control channel (127.0.0.1); any other\n"
     "                          needs --token\n"
-    "  --token TOKEN           clients must present it in \"hello\"\n"
+    "  --token-file FILE       clients must present the token FILE holds (its first\n"
+    "                          line) in \"hello\"; or $HAPTICUT_SERVO_TOKEN; --token\n"
+    "                          TOKEN works too but shows in the process list\n"
     "  --stream-rate HZ        default frame rate of a subscription (120)\n"
     "  --engage                engaged from the start (else: an \"engage\" message or\n"
     "                          a button of --engage-buttons)\n"
@@ -77,7 +83,23 @@ constexpr const char* kExitCodes =
     "SIGTERM: the force is ramped to zero and the recording closed first), 1 internal\n"
     "error, 2 bad command line, 3 scene file missing or invalid, 4 device binding or\n"
     "device failure, 5 control port unavailable or non-loopback without --token,\n"
-    "6 recording file not writable.\n";
+    "6 recording file not writable, 7 after SIGINT or SIGTERM the force reached zero but a\n"
+    "thread stayed stuck (the process exits without it).\n";
+
+// The first line of a token file, without its line end.
+std::string read_token_file(const std::string& path) {
+  std::vector<std::uint8_t> bytes;
+  try {
+    bytes = read_regular_file(path, 64 * 1024);
+  } catch (const FileRefused& e) {
+    throw UsageError(std::string("--token-file: ") + e.what());
+  }
+  std::string token(bytes.begin(), bytes.end());
+  token = token.substr(0, token.find_first_of("\r\n"));
+  if (token.empty())
+    throw UsageError("--token-file: '" + path + "' holds no token on its first line");
+  return token;
+}
 
 double number(const std::string& option, const char* text) {
   char* end = nullptr;
@@ -137,6 +159,17 @@ Options parse_options(int argc, const char* const* argv) {
       o.listen_address = value();
     } else if (arg == "--token") {
       o.token = value();
+    } else if (arg == "--token-file") {
+      o.token = read_token_file(value());
+    } else if (arg == "--record-dir") {
+      o.record_dir = value();
+      if (o.record_dir.empty()) throw UsageError("--record-dir: needs a directory");
+    } else if (arg == "--max-scene-bytes") {
+      const double bytes = number(arg, value());
+      if (!(bytes >= 1.0 && bytes <= 1e12) || bytes != std::floor(bytes)) {
+        throw UsageError("--max-scene-bytes: a whole number of bytes, 1 to 1e12");
+      }
+      o.max_scene_bytes = static_cast<std::uint64_t>(bytes);
     } else if (arg == "--stream-rate") {
       o.stream_rate_Hz = positive(number(arg, value()));
     } else if (arg == "--engage") {
@@ -195,6 +228,11 @@ Options parse_options(int argc, const char* const* argv) {
       throw UsageError("more than one scene given ('" + o.scene_path + "', '" + arg + "')");
     }
   }
+  if (o.token.empty()) {
+    const char* token = std::getenv("HAPTICUT_SERVO_TOKEN");
+    if (token != nullptr) o.token = token;
+  }
+  if (o.record_dir.empty()) o.record_dir = default_recording_directory();
   if (o.json && !o.list_devices) throw UsageError("--json goes with --list-devices");
   if (o.list_devices && !o.json && o.rate_Hz > 0.0) {
     throw UsageError("--rate with --list-devices goes with --json (the limits at that rate)");

@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "client_files.h"
+
 namespace hapticut::servo {
 
 // Exit codes (docs/servo.md).
@@ -16,6 +18,7 @@ enum ExitCode : int {
   kExitDevice = 4,     // A --device binding is wrong or its device cannot start.
   kExitNetwork = 5,    // The control port cannot be opened, or non-loopback without a token.
   kExitRecording = 6,  // The --record file cannot be written.
+  kExitStuck = 7,      // After SIGINT or SIGTERM the force reached zero but a thread stayed stuck.
 };
 
 class UsageError : public std::runtime_error {
@@ -31,6 +34,8 @@ struct Options {
   std::string listen_address = "127.0.0.1";
   std::string token;
   std::string record_path;
+  std::string record_dir;  // Where "record" messages write; "": default_recording_directory().
+  std::uint64_t max_scene_bytes = kDefaultMaxSceneBytes;
   double record_buffer_s = 2.0;
   double duration_s = 0.0;
   bool exit_when_done = false;

@@ -30,11 +30,10 @@ Recorder::~Recorder() {
   if (file_ != nullptr) std::fclose(file_);
 }
 
-void Recorder::start(const std::string& path, LoopShared& shared) {
-  if (active()) throw std::runtime_error("already recording to '" + path_ + "'");
-  std::FILE* file = std::fopen(path.c_str(), "wb");
-  if (file == nullptr) {
-    throw std::runtime_error("cannot open recording '" + path + "': " + std::strerror(errno));
+void Recorder::start(std::FILE* file, const std::string& path, LoopShared& shared) {
+  if (active()) {
+    std::fclose(file);
+    throw std::runtime_error("already recording to '" + path_ + "'");
   }
   const std::vector<unsigned char> preamble = recording_preamble(info_);
   if (std::fwrite(preamble.data(), 1, preamble.size(), file) != preamble.size()) {

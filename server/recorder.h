@@ -24,9 +24,10 @@ class Recorder {
   Recorder(const Recorder&) = delete;
   Recorder& operator=(const Recorder&) = delete;
 
-  // Opens `path` (std::runtime_error naming it when it cannot), writes the
-  // header and asks the loop for records.
-  void start(const std::string& path, LoopShared& shared);
+  // Takes `file` (opened for `path` by client_files.h; closed here on every
+  // path), writes the header (std::runtime_error naming the path when it
+  // cannot) and asks the loop for records.
+  void start(std::FILE* file, const std::string& path, LoopShared& shared);
   // Asks the loop to stop pushing, waits until it has, writes what is left
   // and closes the file. Does nothing when not recording.
   void stop(LoopShared& shared);

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <future>
 
+#include "client_files.h"
 #include "clock.h"
 #include "devices/viewport_device.h"
 #include "hapticut/scene_io.h"
@@ -42,13 +43,9 @@ nlohmann::json percentiles(const LatencyHistogram& h) {
           {"count", h.count()}};
 }
 
-double number_field(const nlohmann::json& message, const char* key) {
-  const auto& v = message.at(key);
-  if (!v.is_number() || !std::isfinite(v.get<double>())) {
-    throw CommandError(std::string(key) + ": expected a finite number");
-  }
-  return v.get<double>();
-}
+// A blade's transitions per tick ("set blade_transition_budget"; 0: 16 per
+// point): the loop sums them in an int.
+constexpr std::int64_t kMaxBladeTransitionBudget = 1000000000;
 
 std::string newtons_per_mm(double k) {
   char text[64];
@@ -95,6 +92,7 @@ Servo::~Servo() {
 SessionConfig Servo::config_from_options() const {
   SessionConfig c;
   c.scene_path = options_.scene_path;
+  c.max_scene_bytes = options_.max_scene_bytes;
   c.devices = options_.devices;
   c.rate_Hz = options_.rate_Hz;
   c.as_fast_as_possible = options_.as_fast_as_possible;
@@ -183,7 +181,7 @@ void Servo::start() {
   }
   if (!options_.record_path.empty()) {
     try {
-      recorder_->start(options_.record_path, s);
+      recorder_->start(open_operator_recording(options_.record_path), options_.record_path, s);
     } catch (...) {
       for (Binding& b : session_->bindings()) b.device->stop();
       throw;
@@ -348,8 +346,10 @@ void Servo::housekeeping() {
 
 // "set": settings per tick (validated as the scene file's, handed to the loop
 // through a LatestValue: the next tick steps with them), safety limits, the
-// stream rate. All or nothing: a bad value applies none.
-nlohmann::json Servo::set_parameters(const nlohmann::json& message) {
+// stream rate. All or nothing: a bad value applies none. Every number is
+// checked against the engine's range for it (parameter_range.h, the scene
+// file's table).
+nlohmann::json Servo::set_parameters(const ControlJson& message) {
   static const char* const kKnown[] = {"type",
                                        "id",
                                        "stiffness_N_per_mm",
@@ -363,8 +363,8 @@ nlohmann::json Servo::set_parameters(const nlohmann::json& message) {
                                        "stream_rate_Hz"};
   for (const auto& [key, value] : message.items()) {
     if (std::find(std::begin(kKnown), std::end(kKnown), key) == std::end(kKnown)) {
-      throw CommandError("unknown parameter '" + key +
-                         "' (known: stiffness_N_per_mm, shading, max_transitions_per_tick, "
+      throw CommandError("unknown parameter " + quoted_excerpt(key) +
+                         " (known: stiffness_N_per_mm, shading, max_transitions_per_tick, "
                          "capped_tick_force_N, blade_transition_budget, max_force_N, "
                          "max_torque_N_mm, ramp_time_s, stream_rate_Hz); nothing applied");
     }
@@ -378,28 +378,35 @@ nlohmann::json Servo::set_parameters(const nlohmann::json& message) {
   bool limits_changed = false;
   nlohmann::json applied = nlohmann::json::object();
   for (const auto& [key, value] : message.items()) {
+    const char* name = key.c_str();
     if (key == "type" || key == "id") continue;
-    if (key == "stiffness_N_per_mm" || key == "capped_tick_force_N") {
-      (key == "stiffness_N_per_mm" ? settings.stiffness_N_per_mm : settings.capped_tick_force_N) =
-          number_field(message, key.c_str());
+    if (key == "stiffness_N_per_mm") {
+      settings.stiffness_N_per_mm = number_field(message, name, setting_range::kStiffness);
       settings_changed = true;
-    } else if (key == "max_transitions_per_tick" || key == "blade_transition_budget") {
-      if (!value.is_number_integer()) throw CommandError(key + ": expected an integer");
-      const auto v = value.get<std::int64_t>();
-      if (v < 0 || v > 1000000000) throw CommandError(key + ": out of range");
-      (key == "max_transitions_per_tick" ? settings.max_transitions_per_tick
-                                         : settings.blade_transition_budget) = static_cast<int>(v);
+    } else if (key == "capped_tick_force_N") {
+      settings.capped_tick_force_N = number_field(message, name, setting_range::kCappedTickForce);
+      settings_changed = true;
+    } else if (key == "max_transitions_per_tick") {
+      const auto& range = setting_range::kMaxTransitions;
+      settings.max_transitions_per_tick =
+          static_cast<int>(integer_field(message, name, static_cast<std::int64_t>(range.minimum),
+                                         static_cast<std::int64_t>(range.maximum)));
+      settings_changed = true;
+    } else if (key == "blade_transition_budget") {
+      settings.blade_transition_budget =
+          static_cast<int>(integer_field(message, name, 0, kMaxBladeTransitionBudget));
       settings_changed = true;
     } else if (key == "shading") {
-      if (!value.is_boolean()) throw CommandError("shading: expected true or false");
-      settings.force_shading = value.get<bool>();
+      settings.force_shading = boolean_field(message, name);
       settings_changed = true;
-    } else if (key == "max_force_N" || key == "max_torque_N_mm" || key == "ramp_time_s") {
-      const double v = number_field(message, key.c_str());
-      if (!(v > 0.0)) throw CommandError(key + ": must be positive");
-      (key == "max_force_N"       ? limits.max_force_N
-       : key == "max_torque_N_mm" ? limits.max_torque_N_mm
-                                  : limits.ramp_time_s) = v;
+    } else if (key == "max_force_N") {
+      limits.max_force_N = number_field(message, name, setting_range::kMaxForce);
+      limits_changed = true;
+    } else if (key == "max_torque_N_mm") {
+      limits.max_torque_N_mm = number_field(message, name, setting_range::kMaxTorque);
+      limits_changed = true;
+    } else if (key == "ramp_time_s") {
+      limits.ramp_time_s = number_field(message, name, setting_range::kRampTime);
       limits_changed = true;
     }
     applied[key] = value;
@@ -428,42 +435,120 @@ nlohmann::json Servo::set_parameters(const nlohmann::json& message) {
   return {{"applied", applied}, {"note", "safety limits only lower the device's"}};
 }
 
-nlohmann::json Servo::command(const nlohmann::json& message) {
-  const std::string type = message.at("type").get<std::string>();
-  if (type == "load") {
-    SessionConfig config = config_from_options();
-    config.scene_path.clear();
-    if (message.contains("path")) {
-      config.scene_path = message.at("path").get<std::string>();
-    } else if (message.contains("scene")) {
-      if (!message.at("scene").is_object()) throw CommandError("scene: expected an object");
-      config.scene_json = message.at("scene").dump();
-    } else {
-      throw CommandError("load needs \"path\" or \"scene\"");
-    }
-    if (message.contains("devices")) {
-      config.devices.clear();
-      for (const auto& d : message.at("devices")) config.devices.push_back(d.get<std::string>());
-    }
-    if (message.contains("rate_Hz")) config.rate_Hz = number_field(message, "rate_Hz");
-    if (message.contains("as_fast_as_possible")) {
-      config.as_fast_as_possible = message.at("as_fast_as_possible").get<bool>();
-    }
-    load(config);
-    std::lock_guard<std::mutex> lock(mutex_);
-    nlohmann::json blades = nlohmann::json::array();
-    for (const Binding& b : session_->bindings()) {
-      blades.push_back({{"name", b.blade_name},
-                        {"points", b.frame.point_count()},
-                        {"device", b.device_text},
-                        {"kind", b.device->kind()},
-                        {"max_stiffness_N_per_mm", b.max_stiffness_N_per_mm}});
-    }
-    return {{"blades", blades},
-            {"rate_Hz", session_->rate_Hz()},
-            {"frame_bytes", session_->frame_bytes()},
-            {"record_bytes", session_->recording_info().record_bytes}};
+nlohmann::json Servo::load_command(const ControlJson& message) {
+  SessionConfig config = config_from_options();
+  config.scene_path.clear();
+  if (has_field(message, "path")) {
+    config.scene_path = string_field(message, "path", kMaxPathBytes);
+  } else if (has_field(message, "scene")) {
+    if (!message.at("scene").is_object()) throw CommandError("scene: expected an object");
+    config.scene_json = message.at("scene").dump();
+  } else {
+    throw CommandError("load needs \"path\" or \"scene\"");
   }
+  if (has_field(message, "devices")) {
+    const ControlJson& devices = message.at("devices");
+    if (!devices.is_array() || devices.size() > kMaxBlades) {
+      throw CommandError("devices: expected a list of at most " + std::to_string(kMaxBlades) +
+                         " --device texts");
+    }
+    config.devices.clear();
+    for (const ControlJson& d : devices) {
+      if (!d.is_string() || d.get_ref<const std::string&>().empty() ||
+          d.get_ref<const std::string&>().size() > kMaxNameBytes) {
+        throw CommandError("devices: expected strings of 1 to " + std::to_string(kMaxNameBytes) +
+                           " bytes");
+      }
+      config.devices.push_back(d.get<std::string>());
+    }
+  }
+  if (has_field(message, "rate_Hz")) {
+    config.rate_Hz = number_field(message, "rate_Hz", 1.0, kMaxRate_Hz);
+  }
+  if (has_field(message, "as_fast_as_possible")) {
+    config.as_fast_as_possible = boolean_field(message, "as_fast_as_possible");
+  }
+  try {
+    load(config);
+  } catch (const FileRefused& e) {
+    throw CommandError(std::string("scene: ") + e.what());
+  } catch (const SceneError& e) {
+    if (config.scene_path.empty()) throw;
+    // A file that is not a scene: say so, not what its "format" holds.
+    throw CommandError("scene: '" + config.scene_path + "': " +
+                       (e.field() == "/format" ? std::string("not a hapticut scene file")
+                                               : std::string(e.what())));
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  nlohmann::json blades = nlohmann::json::array();
+  for (const Binding& b : session_->bindings()) {
+    blades.push_back({{"name", b.blade_name},
+                      {"points", b.frame.point_count()},
+                      {"device", b.device_text},
+                      {"kind", b.device->kind()},
+                      {"max_stiffness_N_per_mm", b.max_stiffness_N_per_mm}});
+  }
+  return {{"blades", blades},
+          {"rate_Hz", session_->rate_Hz()},
+          {"frame_bytes", session_->frame_bytes()},
+          {"record_bytes", session_->recording_info().record_bytes}};
+}
+
+nlohmann::json Servo::record_command(const ControlJson& message) {
+  const std::string action =
+      has_field(message, "action") ? string_field(message, "action", kMaxTypeBytes) : "start";
+  if (action != "start" && action != "stop") {
+    throw CommandError("action: expected \"start\" or \"stop\"");
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!recorder_) throw CommandError("no scene loaded");
+  if (action == "stop") {
+    recorder_->stop(*shared_);
+    return {{"written", recorder_->written()}, {"dropped", shared_->dropped_records.load()}};
+  }
+  if (!has_field(message, "path")) throw CommandError("record start needs \"path\"");
+  const std::string requested = string_field(message, "path", kMaxPathBytes);
+  if (recorder_->active()) {
+    throw CommandError("already recording to '" + recorder_->path() + "' (stop it first)");
+  }
+  try {
+    std::string path;
+    std::FILE* file = create_recording_file(options_.record_dir, requested, path);
+    recorder_->start(file, path, *shared_);
+  } catch (const std::runtime_error& e) {
+    throw CommandError(std::string("record: ") + e.what());
+  }
+  return {{"recording", recorder_->path()}};
+}
+
+nlohmann::json Servo::pose_command(const ControlJson& message) {
+  const std::string blade = string_field(message, "blade", kMaxNameBytes);
+  const auto& p = message.contains("pose") ? message.at("pose") : ControlJson();
+  if (!p.is_array() || p.size() != 7)
+    throw CommandError("pose: expected [x, y, z, qw, qx, qy, qz]");
+  double v[7];
+  for (int i = 0; i < 7; ++i) {
+    if (!p[i].is_number()) throw CommandError("pose/" + std::to_string(i) + ": not a number");
+    v[i] = p[i].get<double>();  // NaN cannot be written in JSON; the guard still checks.
+  }
+  const auto buttons = has_field(message, "buttons")
+                           ? static_cast<unsigned>(integer_field(message, "buttons", 0, 0xFFFFFFFF))
+                           : 0U;
+  std::lock_guard<std::mutex> lock(mutex_);
+  Binding* b = session_ ? session_->find(blade) : nullptr;
+  if (b == nullptr) throw CommandError("pose: no blade " + quoted_excerpt(blade));
+  if (b->viewport == nullptr) {
+    throw CommandError("pose: blade '" + blade + "' is driven by " + b->device->kind() +
+                       ", not a viewport device");
+  }
+  b->viewport->push({{v[0], v[1], v[2]}, {v[3], v[4], v[5], v[6]}}, buttons, monotonic_now_s());
+  return nlohmann::json::object();
+}
+
+nlohmann::json Servo::command(const ControlMessage& request) {
+  const std::string& type = request.type;
+  const ControlJson& message = request.body;
+  if (type == "load") return load_command(message);
   if (type == "start") {
     start();
     return {{"session", shared_->session.load()}};
@@ -473,59 +558,19 @@ nlohmann::json Servo::command(const nlohmann::json& message) {
     return {{"stats", stats}};
   }
   if (type == "engage") {
-    const auto& v = message.at("engaged");
-    if (!v.is_boolean()) throw CommandError("engaged: expected true or false");
-    shared_->engaged.store(v.get<bool>());
-    return {{"engaged", v.get<bool>()}};
+    const bool engaged = boolean_field(message, "engaged");
+    shared_->engaged.store(engaged);
+    return {{"engaged", engaged}};
   }
   if (type == "set") return set_parameters(message);
   if (type == "status") return status();
-  if (type == "record") {
-    const std::string action = message.value("action", "start");
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!recorder_) throw CommandError("no scene loaded");
-    if (action == "start") {
-      if (!message.contains("path")) throw CommandError("record start needs \"path\"");
-      try {
-        recorder_->start(message.at("path").get<std::string>(), *shared_);
-      } catch (const std::runtime_error& e) {
-        throw CommandError(e.what());
-      }
-      return {{"recording", recorder_->path()}};
-    }
-    if (action == "stop") {
-      recorder_->stop(*shared_);
-      return {{"written", recorder_->written()}, {"dropped", shared_->dropped_records.load()}};
-    }
-    throw CommandError("record: action must be \"start\" or \"stop\"");
-  }
-  if (type == "pose") {
-    const std::string blade = message.at("blade").get<std::string>();
-    const auto& p = message.at("pose");
-    if (!p.is_array() || p.size() != 7) {
-      throw CommandError("pose: expected [x, y, z, qw, qx, qy, qz]");
-    }
-    double v[7];
-    for (int i = 0; i < 7; ++i) {
-      if (!p[i].is_number()) throw CommandError("pose/" + std::to_string(i) + ": not a number");
-      v[i] = p[i].get<double>();  // NaN cannot be written in JSON; the guard still checks.
-    }
-    const auto buttons = message.value("buttons", 0U);
-    std::lock_guard<std::mutex> lock(mutex_);
-    Binding* b = session_ ? session_->find(blade) : nullptr;
-    if (b == nullptr) throw CommandError("pose: no blade '" + blade + "'");
-    if (b->viewport == nullptr) {
-      throw CommandError("pose: blade '" + blade + "' is driven by " + b->device->kind() +
-                         ", not a viewport device");
-    }
-    b->viewport->push({{v[0], v[1], v[2]}, {v[3], v[4], v[5], v[6]}}, buttons, monotonic_now_s());
-    return nlohmann::json::object();
-  }
+  if (type == "record") return record_command(message);
+  if (type == "pose") return pose_command(message);
   if (type == "shutdown") {
     request_shutdown();
     return nlohmann::json::object();
   }
-  throw CommandError("unknown message type '" + type + "'");
+  throw CommandError("unknown message type " + quoted_excerpt(type));
 }
 
 }  // namespace hapticut::servo

@@ -11,18 +11,13 @@
 #include <string>
 #include <thread>
 
+#include "control_message.h"
 #include "options.h"
 #include "recorder.h"
 #include "servo_loop.h"
 #include "session.h"
 
 namespace hapticut::servo {
-
-// A command that cannot be done; the reply's "error" is its message.
-class CommandError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
 
 class Servo {
  public:
@@ -44,7 +39,7 @@ class Servo {
 
   // One control message (already parsed); the reply without "id". Throws
   // CommandError with the reason when it cannot be done.
-  nlohmann::json command(const nlohmann::json& message);
+  nlohmann::json command(const ControlMessage& message);
 
   LoopShared& shared() { return *shared_; }
   nlohmann::json status();
@@ -54,7 +49,10 @@ class Servo {
   bool run_ended() const { return run_ended_.load(); }
 
  private:
-  nlohmann::json set_parameters(const nlohmann::json& message);
+  nlohmann::json set_parameters(const ControlJson& message);
+  nlohmann::json load_command(const ControlJson& message);
+  nlohmann::json record_command(const ControlJson& message);
+  nlohmann::json pose_command(const ControlJson& message);
   nlohmann::json finish_run_locked();
   nlohmann::json stats_locked() const;
   void housekeeping();

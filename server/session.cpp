@@ -20,7 +20,13 @@ Scene read_scene_source(const SessionConfig& config) {
     return parse_scene(bytes, SceneEncoding::Json);
   }
   if (config.scene_path.empty()) throw SceneError("(file)", "no scene given");
-  return load_scene(config.scene_path);
+  std::vector<std::uint8_t> bytes;
+  try {
+    bytes = read_regular_file(config.scene_path, config.max_scene_bytes);
+  } catch (const FileRefused& e) {
+    throw SceneError("(file)", e.what());
+  }
+  return parse_scene(bytes, encoding_for_path(config.scene_path));
 }
 
 void bounds(const Scene& scene, Vec3& lo, Vec3& hi) {

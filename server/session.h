@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "blade_frame.h"
+#include "client_files.h"
 #include "devices/device.h"
 #include "devices/device_factory.h"
 #include "devices/recording_file.h"
@@ -22,10 +23,11 @@ namespace hapticut::servo {
 class ViewportDevice;
 
 struct SessionConfig {
-  std::string scene_path;            // Either a path ...
-  std::string scene_json;            // ... or the scene itself (JSON text).
-  std::vector<std::string> devices;  // --device texts.
-  double rate_Hz = 0.0;              // 0: the scene's servo_rate_Hz.
+  std::string scene_path;                                 // Either a path ...
+  std::string scene_json;                                 // ... or the scene itself (JSON text).
+  std::uint64_t max_scene_bytes = kDefaultMaxSceneBytes;  // A larger file is refused.
+  std::vector<std::string> devices;                       // --device texts.
+  double rate_Hz = 0.0;                                   // 0: the scene's servo_rate_Hz.
   bool as_fast_as_possible = false;
   double watchdog_ms = 100.0;
   SafetySettings safety_request;      // Lowered to each device's limits.

@@ -70,12 +70,26 @@ std::string printable(std::string_view text) {
   return out;
 }
 
-// "[json.exception.parse_error.101] parse error at ..." -> "parse error at ...".
+// "[json.exception.parse_error.101] parse error at line 1, column 3: syntax
+// error while parsing value - invalid literal; last read: 'tru'" -> "parse
+// error at line 1, column 3: syntax error while parsing value - invalid
+// literal": neither the library's exception id nor the input's bytes.
 std::string without_exception_id(const char* what) {
   std::string_view text(what);
   const auto end_of_id = text.find("] ");
   if (!text.empty() && text.front() == '[' && end_of_id != std::string_view::npos) {
     text.remove_prefix(end_of_id + 2);
+  }
+  const auto last_read = text.find("; last read: ");
+  if (last_read != std::string_view::npos) {
+    std::string out(text.substr(0, last_read));
+    // What the decoder expected instead is the library's text, not the input's.
+    const auto expected = text.rfind("'; expected ");
+    if (expected != std::string_view::npos && expected > last_read) {
+      out += "; ";
+      out += text.substr(expected + 3);
+    }
+    return printable(out);
   }
   return printable(text);
 }
@@ -223,17 +237,16 @@ void append_pointer_token(std::string& out, std::string_view key) {
   }
 }
 
-SceneTree decode_scene_tree(const std::vector<std::uint8_t>& bytes, SceneEncoding encoding) {
+SceneTree decode_scene_tree(std::string_view bytes, SceneEncoding encoding) {
   const bool json = encoding == SceneEncoding::Json;
   const std::string_view name = json ? "JSON" : "MessagePack";
   if (json) {
     // nlohmann's lexer takes a NUL byte for the end of the input, so text
     // after one would be ignored; JSON text never holds a raw NUL.
-    const void* nul = bytes.empty() ? nullptr : std::memchr(bytes.data(), 0, bytes.size());
-    if (nul != nullptr) {
-      const auto offset = static_cast<const std::uint8_t*>(nul) - bytes.data();
+    const auto nul = bytes.find('\0');
+    if (nul != std::string_view::npos) {
       throw SceneError("(root)",
-                       "truncated or not valid JSON: NUL byte at offset " + std::to_string(offset));
+                       "truncated or not valid JSON: NUL byte at offset " + std::to_string(nul));
     }
   }
   TreeBuilder builder(name);
@@ -249,6 +262,11 @@ SceneTree decode_scene_tree(const std::vector<std::uint8_t>& bytes, SceneEncodin
   if (builder.failed()) builder.rethrow();
   if (!ok) throw SceneError("(root)", "truncated or not valid " + std::string(name));
   return builder.take_root();
+}
+
+SceneTree decode_scene_tree(const std::vector<std::uint8_t>& bytes, SceneEncoding encoding) {
+  return decode_scene_tree(
+      std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()), encoding);
 }
 
 }  // namespace hapticut

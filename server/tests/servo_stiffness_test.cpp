@@ -52,7 +52,7 @@ TEST(ServoStiffness, SceneStiffnessAboveTheLimitIsLoweredInTheTick) {
 
 std::string command_error(Servo& servo, const nlohmann::json& message) {
   try {
-    servo.command(message);
+    servo.command(parse_control_message(message.dump()));
   } catch (const CommandError& e) {
     return e.what();
   }

@@ -93,7 +93,7 @@ def test_record_by_message_while_running(tmp_path):
 
     record = tmp_path / "message.rec"
     args = [str(SPHERE), "--device", "sim:press-slide,speed=20", "--engage"]
-    with ServoProcess(args) as servo:
+    with ServoProcess([*args, "--record-dir", str(tmp_path)]) as servo:
         client = connect(servo)
         time.sleep(0.2)
         assert client.record(record)["recording"] == str(record)

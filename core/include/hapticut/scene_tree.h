@@ -28,6 +28,7 @@ inline constexpr int kMaxSceneNesting = 64;
 // Appends one JSON pointer step (RFC 6901: '~' becomes "~0", '/' becomes "~1").
 void append_pointer_token(std::string& out, std::string_view key);
 
+SceneTree decode_scene_tree(std::string_view bytes, SceneEncoding encoding);
 SceneTree decode_scene_tree(const std::vector<std::uint8_t>& bytes, SceneEncoding encoding);
 
 }  // namespace hapticut

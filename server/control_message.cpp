@@ -1,0 +1,129 @@
+#include "control_message.h"
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "hapticut/scene_io.h"
+#include "hapticut/scene_tree.h"
+
+namespace hapticut::servo {
+
+namespace {
+
+[[noreturn]] void refuse(const char* key, const std::string& reason) {
+  throw CommandError(std::string(key) + ": " + reason);
+}
+
+const ControlJson& field(const ControlJson& message, const char* key) {
+  const auto it = message.find(key);
+  if (it == message.end()) refuse(key, "missing");
+  return *it;
+}
+
+}  // namespace
+
+std::string quoted_excerpt(std::string_view text) {
+  static constexpr char kHex[] = "0123456789abcdef";
+  const bool cut = text.size() > kMaxEchoBytes;
+  if (cut) text = text.substr(0, kMaxEchoBytes);
+  std::string out = "'";
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte >= 0x20 && byte < 0x7F) {
+      out += c;
+    } else {
+      out += "\\x";
+      out += kHex[byte >> 4];
+      out += kHex[byte & 0xF];
+    }
+  }
+  out += cut ? "'..." : "'";
+  return out;
+}
+
+ControlMessage parse_control_message(std::string_view text) {
+  ControlMessage message;
+  try {
+    message.body = decode_scene_tree(text, SceneEncoding::Json);
+  } catch (const SceneError& e) {
+    throw MalformedMessage(std::string("malformed JSON: ") + e.what());
+  }
+  const ControlJson& body = message.body;
+  if (!body.is_object()) throw MalformedMessage("malformed message: expected an object");
+  const auto type = body.find("type");
+  if (type == body.end() || !type->is_string()) {
+    throw MalformedMessage("malformed message: expected a string \"type\"");
+  }
+  message.type = type->get<std::string>();
+  if (message.type.empty() || message.type.size() > kMaxTypeBytes) {
+    throw MalformedMessage("type: expected 1 to " + std::to_string(kMaxTypeBytes) + " bytes");
+  }
+  const auto id = body.find("id");
+  if (id != body.end()) {
+    const bool fits = id->is_number_integer() ||
+                      (id->is_string() && id->get_ref<const std::string&>().size() <= kMaxIdBytes);
+    if (!fits) {
+      throw MalformedMessage("id: expected an integer or a string of at most " +
+                             std::to_string(kMaxIdBytes) + " bytes");
+    }
+    message.id = *id;
+  }
+  return message;
+}
+
+bool has_field(const ControlJson& message, const char* key) { return message.contains(key); }
+
+std::int64_t integer_field(const ControlJson& message, const char* key, std::int64_t minimum,
+                           std::int64_t maximum) {
+  const ControlJson& value = field(message, key);
+  const std::string range = std::to_string(minimum) + " to " + std::to_string(maximum);
+  if (!value.is_number_integer()) refuse(key, "expected an integer, " + range);
+  if (value.is_number_unsigned()) {
+    const auto v = value.get<std::uint64_t>();
+    if (v > static_cast<std::uint64_t>(maximum)) refuse(key, "out of range (" + range + ")");
+    return static_cast<std::int64_t>(v);
+  }
+  const auto v = value.get<std::int64_t>();
+  if (v < minimum || v > maximum) refuse(key, "out of range (" + range + ")");
+  return v;
+}
+
+double number_field(const ControlJson& message, const char* key, const ParameterRange& range) {
+  const ControlJson& value = field(message, key);
+  if (!value.is_number()) refuse(key, "expected a number");
+  const double v = value.get<double>();
+  const std::string reason = range_reason(range, v);
+  if (!reason.empty()) refuse(key, reason);
+  return v;
+}
+
+double number_field(const ControlJson& message, const char* key, double minimum, double maximum) {
+  const ControlJson& value = field(message, key);
+  if (!value.is_number()) refuse(key, "expected a number");
+  const double v = value.get<double>();
+  if (!std::isfinite(v) || v < minimum || v > maximum) {
+    refuse(key, "expected " + format_bound(minimum) + " to " + format_bound(maximum) + ", got " +
+                    format_value(v));
+  }
+  return v;
+}
+
+bool boolean_field(const ControlJson& message, const char* key) {
+  const ControlJson& value = field(message, key);
+  if (!value.is_boolean()) refuse(key, "expected true or false");
+  return value.get<bool>();
+}
+
+std::string string_field(const ControlJson& message, const char* key, std::size_t max_bytes) {
+  const ControlJson& value = field(message, key);
+  if (!value.is_string()) refuse(key, "expected a string");
+  const auto& text = value.get_ref<const std::string&>();
+  if (text.empty() || text.size() > max_bytes) {
+    refuse(key, "expected 1 to " + std::to_string(max_bytes) + " bytes");
+  }
+  if (text.find('\0') != std::string::npos) refuse(key, "contains a NUL byte");
+  return text;
+}
+
+}  // namespace hapticut::servo
