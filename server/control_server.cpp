@@ -40,6 +40,16 @@ bool same_token(std::string_view given, std::string_view expected) {
 
 std::string errno_text() { return std::strerror(errno); }
 
+// Closes a connection whose last reply is sent. What the client sent after the
+// message that ended it is read and dropped first (a bounded amount): closing
+// with unread bytes would reset the connection and could lose that reply.
+void close_after_reply(int fd) {
+  char scratch[65536];
+  for (int i = 0; i < 16 && recv(fd, scratch, sizeof(scratch), MSG_DONTWAIT) > 0; ++i) {
+  }
+  close(fd);
+}
+
 }  // namespace
 
 ControlServer::ControlServer(Servo& servo, const Options& options)
@@ -99,10 +109,12 @@ ControlServer::~ControlServer() {
 
 void ControlServer::start() {
   thread_ = std::thread([this] { run(); });
+  stream_thread_ = std::thread([this] { stream(); });
 }
 
 void ControlServer::stop() {
   quit_.store(true);
+  if (stream_thread_.joinable()) stream_thread_.join();
   if (thread_.joinable()) thread_.join();
 }
 
@@ -127,38 +139,72 @@ void ControlServer::serve() {
     // while: a flood then costs the kernel's drops, not this thread's time.
     const bool stray_paused = monotonic_now_s() < stray_pause_until_s_;
     fds.push_back({udp_fd_, static_cast<short>(stray_paused ? 0 : POLLIN), 0});
+    bool pending = false;  // Whole messages left over from the last round.
     for (const Client& c : clients_) {
-      fds.push_back({c.fd, static_cast<short>(POLLIN | (c.out.empty() ? 0 : POLLOUT)), 0});
+      // Not read while its unsent replies are over the budget: it is not reading them.
+      const bool readable = c.out.size() <= kClientBacklogBudget;
+      pending = pending || (readable && c.reader.has_message());
+      fds.push_back(
+          {c.fd, static_cast<short>((readable ? POLLIN : 0) | (c.out.empty() ? 0 : POLLOUT)), 0});
     }
-    // Frames: wake just after the next one is due (then every 0.1 ms until it
-    // is there); else every 50 ms.
-    double wait_s = 0.05;
+    const timespec timeout = to_timespec(pending ? 0.0 : 0.05);
+    const int ready = ppoll(fds.data(), fds.size(), &timeout, nullptr);
+    if (ready < 0 && errno != EINTR) break;
+    if (ready > 0 && (fds[0].revents & POLLIN)) accept_clients();
+    if (ready > 0 && (fds[1].revents & POLLIN)) drain_stray_datagrams();
+    const double now_s = monotonic_now_s();
+    const std::size_t polled = fds.size() - 2;
+    for (std::size_t i = 0; i < polled && i < clients_.size(); ++i) {
+      Client& c = clients_[i];
+      const short events = ready > 0 ? fds[i + 2].revents : 0;
+      if (c.fd >= 0 && (events & (POLLIN | POLLHUP | POLLERR))) read_client(c);
+      if (c.fd >= 0 && c.out.size() <= kClientBacklogBudget) handle_pending(c);
+      if (c.fd >= 0 && !c.out.empty()) write_client(c);
+      if (c.fd < 0) continue;
+      if (c.out.size() <= kClientBacklogBudget) {
+        c.backlog_since_s = 0.0;
+      } else if (c.backlog_since_s == 0.0) {
+        c.backlog_since_s = now_s;
+      } else if (now_s - c.backlog_since_s > kBacklogCutOff_s) {
+        cut_off(c);
+      }
+    }
+    const std::size_t before = clients_.size();
+    clients_.erase(std::remove_if(clients_.begin(), clients_.end(),
+                                  [this](Client& c) {
+                                    if (c.fd >= 0 && !(c.closing && c.out.empty())) return false;
+                                    if (c.fd >= 0) close_after_reply(c.fd);
+                                    set_subscription(c, 0, 0.0);
+                                    return true;
+                                  }),
+                   clients_.end());
+    if (clients_.size() != before) update_stream_interval();
+  }
+}
+
+void ControlServer::cut_off(Client& client) {
+  ++counters_.cut_off_clients;
+  std::fprintf(stderr,
+               "hapticut-servo: control client %s:%d cut off: %zu bytes of replies unread for "
+               "over %g s\n",
+               inet_ntoa(client.peer.sin_addr), ntohs(client.peer.sin_port), client.out.size(),
+               kBacklogCutOff_s);
+  close(client.fd);
+  client.fd = -1;
+}
+
+void ControlServer::stream() {
+  // Frames: wake just after the next one is due (then every 0.1 ms until it
+  // is there); else every 20 ms to see whether anyone subscribed.
+  while (!quit_.load()) {
+    double wait_s = 0.02;
     const double interval_s = servo_.shared().stream_interval_s.load();
     if (interval_s > 0.0 && servo_.shared().running.load()) {
       const double due_s = last_frame_time_s_ + interval_s + 0.0001;
       wait_s = std::clamp(due_s - monotonic_now_s(), 0.0001, interval_s);
     }
-    const timespec timeout = to_timespec(wait_s);
-    const int ready = ppoll(fds.data(), fds.size(), &timeout, nullptr);
-    if (ready < 0 && errno != EINTR) break;
+    sleep_until(monotonic_now_s() + wait_s);
     send_frames();
-    if (ready <= 0) continue;
-    if (fds[0].revents & POLLIN) accept_clients();
-    if (fds[1].revents & POLLIN) drain_stray_datagrams();
-    for (std::size_t i = 2; i < fds.size(); ++i) {
-      Client& c = clients_[i - 2];
-      if (fds[i].revents & (POLLIN | POLLHUP | POLLERR)) read_client(c);
-      if (!c.out.empty() && c.fd >= 0) write_client(c);
-    }
-    const std::size_t before = clients_.size();
-    clients_.erase(std::remove_if(clients_.begin(), clients_.end(),
-                                  [](const Client& c) {
-                                    if (c.fd >= 0 && !(c.closing && c.out.empty())) return false;
-                                    if (c.fd >= 0) close(c.fd);
-                                    return true;
-                                  }),
-                   clients_.end());
-    if (clients_.size() != before) update_stream_interval();
   }
 }
 
@@ -181,13 +227,17 @@ void ControlServer::accept_clients() {
     Client client;
     client.fd = fd;
     client.peer = peer;
+    client.slot = free_slot();
     clients_.push_back(std::move(client));
   }
 }
 
 void ControlServer::read_client(Client& client) {
   char buffer[65536];
-  for (;;) {
+  std::size_t read_bytes = 0;
+  // At most a round's budget, and never more than one whole message beyond
+  // what is buffered: a flooding client waits for its own messages.
+  while (read_bytes < kReadBytesPerRound && !client.reader.has_message()) {
     const ssize_t n = recv(client.fd, buffer, sizeof(buffer), 0);
     if (n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) {
       close(client.fd);  // Gone: its subscription goes with it.
@@ -196,26 +246,29 @@ void ControlServer::read_client(Client& client) {
     }
     if (n < 0) break;
     client.reader.feed(buffer, static_cast<std::size_t>(n));
-    std::string message;
-    std::uint32_t length = 0;
-    for (;;) {
-      const MessageReader::Result r = client.reader.next(message, length);
-      if (r == MessageReader::Result::NeedMore) break;
-      if (r == MessageReader::Result::TooLarge) {
-        ++counters_.oversized;
-        ++counters_.errors;
-        const nlohmann::json reply = {
-            {"type", "error"},
-            {"ok", false},
-            {"error", "message of " + std::to_string(length) + " bytes exceeds the limit of " +
-                          std::to_string(kMaxMessageBytes) + " bytes; closing the connection"}};
-        client.out += frame_message(reply.dump());
-        client.closing = true;
-        return;
-      }
-      handle(client, message);
-      if (client.closing) return;
+    read_bytes += static_cast<std::size_t>(n);
+  }
+}
+
+void ControlServer::handle_pending(Client& client) {
+  std::string message;
+  std::uint32_t length = 0;
+  for (int handled = 0; handled < kMessagesPerRound && !client.closing; ++handled) {
+    const MessageReader::Result r = client.reader.next(message, length);
+    if (r == MessageReader::Result::NeedMore) return;
+    if (r == MessageReader::Result::TooLarge) {
+      ++counters_.oversized;
+      ++counters_.errors;
+      const nlohmann::json reply = {
+          {"type", "error"},
+          {"ok", false},
+          {"error", "message of " + std::to_string(length) + " bytes exceeds the limit of " +
+                        std::to_string(kMaxMessageBytes) + " bytes; closing the connection"}};
+      client.out += frame_message(reply.dump());
+      client.closing = true;
+      return;
     }
+    handle(client, message);
   }
 }
 
@@ -230,10 +283,7 @@ void ControlServer::write_client(Client& client) {
     }
     client.out.erase(0, static_cast<std::size_t>(n));
   }
-  if (client.out.size() > kMaxClientBacklog) {  // Not reading its replies: let it go.
-    close(client.fd);
-    client.fd = -1;
-  }
+  if (client.out.size() > kMaxClientBacklog) cut_off(client);  // Not reading its replies.
 }
 
 void ControlServer::handle(Client& client, const std::string& text) {
@@ -325,15 +375,12 @@ nlohmann::json ControlServer::dispatch(Client& client, const ControlMessage& req
                             ? number_field(message, "rate_Hz", kMinStreamRate_Hz, kMaxStreamRate_Hz)
                             : options_.stream_rate_Hz;
     const auto port = static_cast<int>(integer_field(message, "port", 1, 65535));
-    client.stream_port = port;
-    client.stream_address = client.peer.sin_addr;
-    client.rate_Hz = rate;
-    client.next_frame_s = 0.0;
+    set_subscription(client, port, rate);
     update_stream_interval();
     return {{"port", port}, {"rate_Hz", rate}, {"stream_source_port", stream_port_}};
   }
   if (type == "unsubscribe") {
-    client.stream_port = 0;
+    set_subscription(client, 0, 0.0);
     update_stream_interval();
     return nlohmann::json::object();
   }
@@ -345,17 +392,42 @@ nlohmann::json ControlServer::dispatch(Client& client, const ControlMessage& req
   if (type == "set" && has_field(message, "stream_rate_Hz")) {
     const double rate =
         number_field(message, "stream_rate_Hz", kMinStreamRate_Hz, kMaxStreamRate_Hz);
-    if (client.stream_port == 0) throw CommandError("stream_rate_Hz: not subscribed");
-    client.rate_Hz = rate;
+    if (!client.subscribed) throw CommandError("stream_rate_Hz: not subscribed");
+    {
+      const std::lock_guard<std::mutex> lock(subscribers_mutex_);
+      subscribers_[client.slot].rate_Hz = rate;
+    }
     update_stream_interval();
   }
   return servo_.command(request);
 }
 
+std::size_t ControlServer::free_slot() const {
+  std::array<bool, kMaxClients> used{};
+  for (const Client& c : clients_) used[c.slot] = true;
+  std::size_t slot = 0;
+  while (slot < kMaxClients && used[slot]) ++slot;
+  return slot;  // accept_clients keeps clients_ below kMaxClients.
+}
+
+void ControlServer::set_subscription(Client& client, int port, double rate_Hz) {
+  const std::lock_guard<std::mutex> lock(subscribers_mutex_);
+  Subscriber& s = subscribers_[client.slot];
+  s.active = port != 0;
+  s.address = client.peer.sin_addr;
+  s.port = port;
+  s.rate_Hz = rate_Hz;
+  s.next_frame_s = 0.0;
+  client.subscribed = s.active;
+}
+
 void ControlServer::update_stream_interval() {
   double fastest = 0.0;
-  for (const Client& c : clients_) {
-    if (c.fd >= 0 && c.stream_port != 0) fastest = std::max(fastest, c.rate_Hz);
+  {
+    const std::lock_guard<std::mutex> lock(subscribers_mutex_);
+    for (const Subscriber& s : subscribers_) {
+      if (s.active) fastest = std::max(fastest, s.rate_Hz);
+    }
   }
   servo_.shared().stream_interval_s.store(fastest > 0.0 ? 1.0 / fastest : 0.0);
 }
@@ -377,21 +449,28 @@ void ControlServer::send_frames() {
   header.wake_max_us = shared.wake_us.max_us();
   header.late_ticks = shared.late_ticks.load();
   std::memcpy(frame.bytes, &header, sizeof(header));
-  for (Client& c : clients_) {
-    if (c.fd < 0 || c.stream_port == 0) continue;
-    if (header.servo_time_s + 1e-6 < c.next_frame_s) continue;
-    c.next_frame_s = std::max(c.next_frame_s + 1.0 / c.rate_Hz, header.servo_time_s);
-    sockaddr_in to{};
-    to.sin_family = AF_INET;
-    to.sin_addr = c.stream_address;
-    to.sin_port = htons(static_cast<std::uint16_t>(c.stream_port));
+  // Who gets this frame, decided under the lock; the sends happen outside it.
+  std::array<sockaddr_in, kMaxClients> targets{};
+  std::size_t count = 0;
+  {
+    const std::lock_guard<std::mutex> lock(subscribers_mutex_);
+    for (Subscriber& s : subscribers_) {
+      if (!s.active || header.servo_time_s + 1e-6 < s.next_frame_s) continue;
+      s.next_frame_s = std::max(s.next_frame_s + 1.0 / s.rate_Hz, header.servo_time_s);
+      sockaddr_in& to = targets[count++];
+      to.sin_family = AF_INET;
+      to.sin_addr = s.address;
+      to.sin_port = htons(static_cast<std::uint16_t>(s.port));
+    }
+  }
+  for (std::size_t i = 0; i < count; ++i) {
     const ssize_t n = sendto(udp_fd_, frame.bytes, frame.size, 0,
-                             reinterpret_cast<const sockaddr*>(&to), sizeof(to));
+                             reinterpret_cast<const sockaddr*>(&targets[i]), sizeof(targets[i]));
     if (n == static_cast<ssize_t>(frame.size)) {
-      ++counters_.frames_sent;
+      frames_sent_.fetch_add(1, std::memory_order_relaxed);
       send_age_us_->add((monotonic_now_s() - header.servo_time_s) * 1e6);
     } else {
-      ++counters_.frames_dropped;
+      frames_dropped_.fetch_add(1, std::memory_order_relaxed);
     }
   }
 }
@@ -408,7 +487,7 @@ void ControlServer::drain_stray_datagrams() {
 nlohmann::json ControlServer::counters_json() const {
   const ControlCounters& c = counters_;
   std::size_t subscribers = 0;
-  for (const Client& client : clients_) subscribers += client.stream_port != 0 ? 1 : 0;
+  for (const Client& client : clients_) subscribers += client.subscribed ? 1 : 0;
   return {{"connections", c.connections},
           {"clients", clients_.size()},
           {"subscribers", subscribers},
@@ -420,8 +499,9 @@ nlohmann::json ControlServer::counters_json() const {
           {"unauthenticated", c.unauthenticated},
           {"token_lockouts", c.token_lockouts},
           {"refused_clients", c.refused_clients},
-          {"frames_sent", c.frames_sent},
-          {"frames_dropped", c.frames_dropped},
+          {"cut_off_clients", c.cut_off_clients},
+          {"frames_sent", frames_sent_.load()},
+          {"frames_dropped", frames_dropped_.load()},
           {"stray_datagrams", c.stray_datagrams},
           {"frame_age_at_send_us",
            {{"p50", send_age_us_->percentile_us(0.5)},

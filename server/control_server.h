@@ -1,16 +1,22 @@
-// ControlServer: the network thread. The control channel (TCP,
-// length-prefixed JSON, protocol.h) and the state stream (UDP, one frame per
-// datagram to every subscriber). Malformed, oversized, out-of-order or
-// unauthenticated messages are answered with an error and counted, never
-// fatal; a slow or vanished client costs only its own frames: the loop hands
-// frames over through a lock-free triple buffer and never waits for this thread.
+// ControlServer: two threads. The control thread serves the control channel
+// (TCP, length-prefixed JSON, protocol.h); the stream thread sends the state
+// stream (UDP, one frame per datagram to every subscriber) and does nothing
+// else, so no message, however large or slow to answer, delays a frame.
+// Malformed, oversized, out-of-order or unauthenticated messages are answered
+// with an error and counted, never fatal. Each client has a budget per round
+// (bytes read, messages handled) and for unsent replies: a client that floods
+// or stops reading is held back, then cut off and counted, and the others are
+// served between its messages. The loop hands frames over through a
+// lock-free triple buffer and never waits for either thread.
 #pragma once
 
 #include <netinet/in.h>
 
+#include <array>
 #include <atomic>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
@@ -39,10 +45,11 @@ struct ControlCounters {
   std::uint64_t unauthenticated = 0;  // Wrong token or protocol version.
   std::uint64_t token_lockouts = 0;   // Hellos refused while wrong tries lock the token.
   std::uint64_t refused_clients = 0;  // Over the client limit.
-  std::uint64_t frames_sent = 0;
-  std::uint64_t frames_dropped = 0;   // Send buffer full (slow client).
+  std::uint64_t cut_off_clients = 0;  // Replies left unread past the budget's time.
   std::uint64_t stray_datagrams = 0;  // Datagrams that arrived at the stream socket.
 };
+
+inline constexpr std::size_t kMaxClients = 16;
 
 class ControlServer {
  public:
@@ -64,17 +71,29 @@ class ControlServer {
     MessageReader reader;
     std::string out;
     bool hello = false;
-    bool closing = false;  // Close once `out` is sent.
-    int stream_port = 0;   // 0: not subscribed.
-    in_addr stream_address{};
+    bool closing = false;        // Close once `out` is sent.
+    std::size_t slot = 0;        // Its entry in subscribers_.
+    bool subscribed = false;     // Its slot is streamed to.
+    double backlog_since_s = 0;  // When `out` went over the budget (0: under it).
+  };
+  // A subscription, shared by the two threads under subscribers_mutex_.
+  struct Subscriber {
+    bool active = false;
+    in_addr address{};
+    int port = 0;
     double rate_Hz = 0.0;
     double next_frame_s = 0.0;
   };
 
   void run();
   void serve();
+  void stream();
+  void set_subscription(Client& client, int port, double rate_Hz);
   void accept_clients();
   void read_client(Client& client);
+  void handle_pending(Client& client);
+  void cut_off(Client& client);
+  std::size_t free_slot() const;
   void write_client(Client& client);
   void handle(Client& client, const std::string& text);
   nlohmann::json dispatch(Client& client, const ControlMessage& request);
@@ -92,18 +111,30 @@ class ControlServer {
   int stream_port_ = 0;
   std::vector<Client> clients_;
   ControlCounters counters_;
+  std::mutex subscribers_mutex_;  // Held for a copy or an update, never across I/O.
+  std::array<Subscriber, kMaxClients> subscribers_{};
+  std::atomic<std::uint64_t> frames_sent_{0};
+  std::atomic<std::uint64_t> frames_dropped_{0};  // Send buffer full (slow client).
   // Tick to sendto, per frame sent (the servo's share of a frame's age).
   std::unique_ptr<LatencyHistogram> send_age_us_ = std::make_unique<LatencyHistogram>();
-  double last_frame_time_s_ = 0.0;     // servo_time_s of the last frame fetched.
+  double last_frame_time_s_ = 0.0;     // servo_time_s of the last frame fetched (stream thread).
   double stray_pause_until_s_ = 0.0;   // Stream socket not read until then.
   int wrong_tokens_ = 0;               // In a row, from any client.
   double token_locked_until_s_ = 0.0;  // Every hello refused until then.
   std::thread thread_;
+  std::thread stream_thread_;
   std::atomic<bool> quit_{false};
 };
 
-inline constexpr std::size_t kMaxClients = 16;
-inline constexpr std::size_t kMaxClientBacklog = 4U << 20;  // Unsent replies before a drop.
+// Unsent replies: over this a client is not read (it is not reading its
+// replies); over it for kBacklogCutOff_s, or over kMaxClientBacklog, it is cut off.
+inline constexpr std::size_t kClientBacklogBudget = 1U << 20;
+inline constexpr std::size_t kMaxClientBacklog = 4U << 20;
+inline constexpr double kBacklogCutOff_s = 2.0;
+// Per client per round of the control thread, so that one client's messages
+// wait behind each other, not another client's.
+inline constexpr std::size_t kReadBytesPerRound = 256U << 10;
+inline constexpr int kMessagesPerRound = 32;
 inline constexpr double kMinStreamRate_Hz = 1.0;
 inline constexpr double kMaxStreamRate_Hz = 1000.0;
 // Wrong tokens in a row (from any client) before every hello is refused for a while.

@@ -188,11 +188,10 @@ int run(const Options& options) {
       std::fprintf(stderr, "hapticut-servo: %s\n", e.what());
       return kExitNetwork;
     }
-    std::printf("control: %s:%d\n", options.listen_address.c_str(), control->port());
-    std::fflush(stdout);
-    control->start();
   }
 
+  // The run starts before the control channel answers (its port is bound, not
+  // yet served): a client's first "status" sees it running.
   if (!options.scene_path.empty() && !options.wait_for_start) {
     try {
       servo_state.start();
@@ -203,6 +202,11 @@ int run(const Options& options) {
       std::fprintf(stderr, "hapticut-servo: %s\n", e.what());
       return kExitRecording;
     }
+  }
+  if (control) {
+    std::printf("control: %s:%d\n", options.listen_address.c_str(), control->port());
+    std::fflush(stdout);
+    control->start();
   }
 
   // Wait: a signal, a shutdown message, or (without a control channel) the

@@ -14,6 +14,14 @@ MessageReader::Result MessageReader::next(std::string& message, std::uint32_t& l
   return Result::Message;
 }
 
+bool MessageReader::has_message() const {
+  if (buffer_.size() < 4) return false;
+  const auto* b = reinterpret_cast<const unsigned char*>(buffer_.data());
+  const std::uint32_t length = (std::uint32_t(b[0]) << 24) | (std::uint32_t(b[1]) << 16) |
+                               (std::uint32_t(b[2]) << 8) | std::uint32_t(b[3]);
+  return length > kMaxMessageBytes || buffer_.size() >= 4 + std::size_t(length);
+}
+
 std::string frame_message(const std::string& json_text) {
   const auto n = static_cast<std::uint32_t>(json_text.size());
   std::string out;

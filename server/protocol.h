@@ -22,6 +22,8 @@ class MessageReader {
   // prefix; the stream cannot be resynchronised (close it).
   Result next(std::string& message, std::uint32_t& length);
   std::size_t buffered() const { return buffer_.size(); }
+  // Whether next() would return a message (or refuse one) without more bytes.
+  bool has_message() const;
 
  private:
   std::string buffer_;

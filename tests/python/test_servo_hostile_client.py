@@ -6,10 +6,12 @@ over loopback."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import socket
 import struct
+import threading
 import time
 
 import pytest
@@ -216,3 +218,70 @@ def test_the_token_from_a_file_or_the_environment_and_wrong_tries_are_limited(
         with pytest.raises(ServoError, match="wrong or missing token"):
             ServoClient(port=servo.port).hello()
         assert ServoClient(port=servo.port, token="s3cret-env").hello()["ok"]
+
+
+def frame_gaps_while(servo: ServoProcess, action) -> tuple[float, int]:
+    """The longest gap between stream frames (s) and the frames received while action() runs."""
+    watcher = connect(servo)
+    watcher.subscribe(rate_Hz=500.0)
+    times: list[float] = []
+    done = threading.Event()
+
+    def watch() -> None:
+        while not done.is_set():
+            if watcher.poll_all():
+                times.append(time.monotonic())
+            time.sleep(0.0005)
+
+    thread = threading.Thread(target=watch, daemon=True)
+    thread.start()
+    time.sleep(0.3)
+    action()
+    time.sleep(0.3)
+    done.set()
+    thread.join(5)
+    watcher.close()
+    gaps = [b - a for a, b in zip(times, times[1:], strict=False)]
+    return (max(gaps) if gaps else float("inf")), len(times)
+
+
+def test_a_flooding_client_is_cut_off_and_the_others_are_served():
+    with ServoProcess(LIVE) as servo:
+        flood = raw_connection(servo.port)
+        hello(flood)
+        request = b'{"type":"status"}'
+        burst = (struct.pack(">I", len(request)) + request) * 50_000
+
+        def pipeline_without_reading() -> None:
+            flood.settimeout(0.5)
+            with contextlib.suppress(OSError):
+                flood.sendall(burst)
+            other = raw_connection(servo.port)
+            hello(other)  # answered between the flood's messages
+            assert ask(other, b'{"type":"status"}')["state"] == "running"
+            time.sleep(3.0)  # past the cut-off time of unread replies
+
+        gap_s, frames = frame_gaps_while(servo, pipeline_without_reading)
+        print(
+            f"\nflood of 50 000 status requests: {frames} frames, longest gap {gap_s * 1e3:.1f} ms"
+        )
+        client = connect(servo)
+        protocol = client.status()["protocol"]
+        assert protocol["cut_off_clients"] == 1 and frames > 100
+        assert any("cut off" in line for line in servo.stderr_lines)
+
+
+def test_a_large_message_does_not_hold_up_the_stream():
+    with ServoProcess(LIVE) as servo:
+        big = raw_connection(servo.port)
+        hello(big)
+        padding = b"x" * (16 * 1024 * 1024 - 64)
+        text = b'{"type":"status","pad":"' + padding + b'"}'
+
+        def send_big() -> None:
+            reply = ask(big, text)
+            assert reply["ok"] and reply["state"] == "running"
+
+        gap_s, frames = frame_gaps_while(servo, send_big)
+        print(f"\none 16 MiB message: {frames} frames, longest gap {gap_s * 1e3:.1f} ms")
+        assert frames > 100
