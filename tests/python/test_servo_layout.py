@@ -25,6 +25,7 @@ def printed() -> dict:
         ("frame_header", layout.FRAME_HEADER),
         ("record_header", layout.RECORD_HEADER),
         ("blade_block", layout.BLADE_BLOCK),
+        ("recording_trailer", layout.RECORDING_TRAILER),
     ],
 )
 def test_fixed_structs_agree(printed, key, dtype):
