@@ -1,8 +1,10 @@
-"""docs/protocol.md names every field the real servo's `status` reply has."""
+"""docs/protocol.md against the real servo: every field of the `status` reply is named, and
+the `"type": "error"` reply is what it says."""
 
 from __future__ import annotations
 
 import re
+import struct
 from pathlib import Path
 
 from servo_test_support import SPHERE, ServoProcess, connect
@@ -45,3 +47,20 @@ def test_every_status_field_is_documented():
         name for name in field_names(status) if name.rsplit(".", 1)[-1] not in documented
     )
     assert not missing, f"status fields docs/protocol.md does not name: {missing}"
+
+
+def test_a_message_without_a_request_type_gets_the_error_reply():
+    with ServoProcess([str(SPHERE), "--device", "scalpel=sim"]) as servo:
+        client = connect(servo, ["scalpel"])
+        for payload, error in (
+            (b'{"id": 7}', 'malformed message: expected an object with a string "type"'),
+            (b'{"type": 7, "id": 7}', 'malformed message: expected an object with a string "type"'),
+            (b"not json", "malformed JSON: "),
+        ):
+            client.send_raw(struct.pack(">I", len(payload)) + payload)
+            reply = client.receive_message()
+            assert set(reply) == {"type", "ok", "error"}, reply
+            assert reply["type"] == "error" and reply["ok"] is False
+            assert reply["error"].startswith(error)
+        assert client.status()["state"] == "running"  # the connection goes on
+        client.close()
