@@ -187,7 +187,7 @@ def test_a_recording_killed_with_sigkill_is_truncated(tmp_path):
         process.wait(30)
     assert process.returncode == -signal.SIGKILL
     killed = read_recording(path)
-    assert killed.truncated and len(killed) > 100
+    assert killed.truncated and len(killed) >= 100
     assert f"{len(killed)} whole records" in killed.problem and str(path) in killed.problem
     ticks = killed.ticks["tick"]
     assert np.all(np.diff(ticks) > 0)
@@ -197,3 +197,18 @@ def test_a_recording_killed_with_sigkill_is_truncated(tmp_path):
     cut_at_boundary = read_recording(path)
     assert cut_at_boundary.truncated and cut_at_boundary.truncated_bytes == 0
     assert cut_at_boundary.records.tobytes() == killed.records.tobytes()
+
+
+def test_a_recording_closed_by_sigterm_is_complete(tmp_path):
+    path = tmp_path / "terminated.rec"
+    args = [str(SPHERE), "--device", "scalpel=sim:press-slide", "--engage", "--record", str(path)]
+    with ServoProcess(args) as servo:
+        while whole_records(path) < 100:
+            assert servo.process.poll() is None, servo.stderr_lines
+            time.sleep(0.01)
+        assert servo.stop() == 0  # SIGTERM: the force ramps down, the recording closes.
+    recording = read_recording(path)
+    assert not recording.truncated
+    assert len(recording) == servo.stats()["recording"]["written"] >= 100
+    # The stop ramp is recorded: the last ticks are flagged stopping.
+    assert int(recording.ticks["servo_flags"][-1]) & 2
