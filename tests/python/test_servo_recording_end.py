@@ -212,3 +212,17 @@ def test_a_recording_closed_by_sigterm_is_complete(tmp_path):
     assert len(recording) == servo.stats()["recording"]["written"] >= 100
     # The stop ramp is recorded: the last ticks are flagged stopping.
     assert int(recording.ticks["servo_flags"][-1]) & 2
+
+
+def test_the_trailer_counts_the_records_the_loop_dropped(tmp_path):
+    """As fast as possible into the smallest ring (64 records) the writer, which drains every
+    2 ms, falls behind: the trailer counts every tick that is not in the file."""
+    path = tmp_path / "dropping.rec"
+    stats = bake(SPHERE, path, "scalpel=sim:press-slide", extra=("--record-buffer-s", "0.001"))
+    recording = read_recording(path)
+    assert not recording.truncated
+    assert recording.dropped_records == stats["dropped_records"] > 0
+    assert len(recording) + recording.dropped_records == stats["ticks"]
+    ticks = recording.ticks["tick"]
+    gaps = int(np.sum(np.diff(ticks) - 1)) + int(ticks[0])
+    assert gaps <= recording.dropped_records  # the rest were dropped after the last record
