@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 import os
+import stat
 import struct
 from dataclasses import dataclass
 
@@ -71,9 +72,22 @@ class Recording:
         return len(self.records)
 
 
+def _read_regular_file(path: str | os.PathLike, where: str) -> bytes:
+    """A regular file's bytes (OSError when it cannot be opened). A FIFO or a device would
+    block or never end (/dev/zero): refused before a byte is read; O_NONBLOCK keeps the open
+    of a FIFO from waiting for a writer."""
+    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+    info = os.fstat(fd)
+    if not stat.S_ISREG(info.st_mode):
+        os.close(fd)
+        raise RecordingError(f"{where}: not a regular file")
+    with os.fdopen(fd, "rb") as file:
+        return file.read(info.st_size)
+
+
 def read_recording(path: str | os.PathLike) -> Recording:
-    data = open(path, "rb").read()  # noqa: SIM115 - whole file, closed by refcount
     where = f"recording {os.fspath(path)!r}"
+    data = _read_regular_file(path, where)
     if len(data) < 16 or data[:8] != layout.RECORDING_MAGIC:
         raise RecordingError(f"{where}: not a hapticut recording (no HCREC001 magic)")
     (length,) = struct.unpack_from("<Q", data, 8)

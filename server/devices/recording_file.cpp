@@ -1,8 +1,11 @@
 #include "devices/recording_file.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cstring>
-#include <fstream>
-#include <iterator>
 #include <nlohmann/json.hpp>
 
 #include "devices/device_args.h"
@@ -61,12 +64,42 @@ std::string RecordingContents::truncation_message() const {
   return text;
 }
 
+namespace {
+
+// A regular file's bytes. A FIFO or a device would block the caller (the
+// control thread, for a `load`) or never end (/dev/zero): refused before a
+// byte is read. O_NONBLOCK keeps the open of a FIFO from waiting for a writer.
+std::vector<unsigned char> read_regular_file(const std::string& path, const std::string& where) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) throw DeviceError(where + "cannot open (" + std::strerror(errno) + ")");
+  struct stat info {};
+  if (::fstat(fd, &info) != 0 || !S_ISREG(info.st_mode)) {
+    ::close(fd);
+    throw DeviceError(where + "not a regular file");
+  }
+  std::vector<unsigned char> bytes(static_cast<std::size_t>(info.st_size));
+  std::size_t got = 0;
+  while (got < bytes.size()) {
+    const ssize_t n = ::read(fd, bytes.data() + got, bytes.size() - got);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const int error = errno;
+      ::close(fd);
+      throw DeviceError(where + "cannot read (" + std::strerror(error) + ")");
+    }
+    if (n == 0) break;  // Shorter than it was a moment ago: what is there.
+    got += static_cast<std::size_t>(n);
+  }
+  ::close(fd);
+  bytes.resize(got);
+  return bytes;
+}
+
+}  // namespace
+
 RecordingContents read_recording(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw DeviceError("recording '" + path + "': cannot open");
-  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)),
-                                   std::istreambuf_iterator<char>());
   const std::string where = "recording '" + path + "': ";
+  const std::vector<unsigned char> bytes = read_regular_file(path, where);
   if (bytes.size() < 16 || std::memcmp(bytes.data(), kRecordingMagic, 8) != 0) {
     throw DeviceError(where + "not a hapticut recording (no HCREC001 magic)");
   }

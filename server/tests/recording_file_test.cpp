@@ -3,6 +3,8 @@
 #include "devices/recording_file.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstring>
@@ -158,6 +160,21 @@ TEST(RecordingFile, AnOlderVersionIsRefusedNamingBothVersions) {
                                 std::to_string(kRecordVersion - 1) + ", this servo reads version " +
                                 std::to_string(kRecordVersion) +
                                 " only (record it again with this servo)");
+}
+
+TEST(RecordingFile, WhatIsNotARegularFileIsRefusedWithoutWaiting) {
+  const std::string fifo = ::testing::TempDir() + "recording.fifo";
+  ::unlink(fifo.c_str());
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  // No writer ever opens it: a blocking open would never return.
+  EXPECT_EQ(error_of(fifo), "recording '" + fifo + "': not a regular file");
+  ::unlink(fifo.c_str());
+  EXPECT_EQ(error_of("/dev/zero"), "recording '/dev/zero': not a regular file");
+  EXPECT_EQ(error_of(::testing::TempDir()),
+            "recording '" + ::testing::TempDir() + "': not a regular file");
+  const std::string missing = ::testing::TempDir() + "no-such.rec";
+  EXPECT_EQ(error_of(missing),
+            "recording '" + missing + "': cannot open (No such file or directory)");
 }
 
 TEST(RecordingFile, NotARecordingIsNamed) {

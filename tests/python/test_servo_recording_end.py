@@ -226,3 +226,15 @@ def test_the_trailer_counts_the_records_the_loop_dropped(tmp_path):
     ticks = recording.ticks["tick"]
     gaps = int(np.sum(np.diff(ticks) - 1)) + int(ticks[0])
     assert gaps <= recording.dropped_records  # the rest were dropped after the last record
+
+
+def test_what_is_not_a_regular_file_is_refused_without_waiting(tmp_path):
+    fifo = tmp_path / "recording.fifo"
+    os.mkfifo(fifo)  # No writer ever opens it: a blocking open would never return.
+    for path in (fifo, "/dev/zero", tmp_path):
+        with pytest.raises(RecordingError) as error:
+            read_recording(path)
+        assert str(error.value) == f"recording {str(path)!r}: not a regular file"
+        result = run_servo(str(SPHERE), "--device", f"scalpel=replay:{path}", timeout_s=60)
+        assert result.returncode == 4
+        assert f"recording '{path}': not a regular file" in result.stderr
