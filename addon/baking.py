@@ -186,6 +186,8 @@ def bake(scene, link, recording_path: str, preview_path: str) -> dict:
         "ticks": len(recording),
         "frames": len(frames),
         "dropped_records": int(recording.ticks["dropped_records"][-1]),
+        # A cut recording bakes its whole records; the panel says it was cut.
+        "truncated": recording.problem,
         "blades": {},
     }
     for name in recording.blade_names:

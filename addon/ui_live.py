@@ -151,6 +151,8 @@ class HAPTICUT_PT_bake(SidebarSubpanel, bpy.types.Panel):
                 text=f"baked {report['frames']} frames from {report['ticks']} ticks "
                 f"in {report['seconds']:.1f} s"
             )
+            if report.get("truncated"):
+                layout.label(text=report["truncated"], icon="ERROR")
             for name, blade in report["blades"].items():
                 layout.label(
                     text=f"{name}: {blade['cut_faces']} cut faces, "

@@ -68,6 +68,13 @@ std::string layout_json() {
 #undef STRUCT
     out["blade_block"] = describe<BladeBlock>(fields);
   }
+  {
+    nlohmann::json fields = nlohmann::json::array();
+#define STRUCT RecordingTrailer
+    HAPTICUT_RECORDING_TRAILER_FIELDS(HAPTICUT_DESCRIBE_FIELD, HAPTICUT_DESCRIBE_ARRAY)
+#undef STRUCT
+    out["recording_trailer"] = describe<RecordingTrailer>(fields);
+  }
   out["points_block"] = {{"arrays",
                           {{{"name", "q"}, {"type", "f8"}, {"per_point", 3}},
                            {{"name", "p"}, {"type", "f8"}, {"per_point", 3}},

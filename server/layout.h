@@ -7,6 +7,7 @@
 //
 // A frame:  FrameHeader, then per blade: BladeBlock, points block.
 // A record: RecordHeader, then per blade: BladeBlock, points block.
+// A recording ends with one RecordingTrailer (devices/recording_file.h).
 // Points block of a blade with N points: q (N x 3 f64), p (N x 3 f64),
 // state (N x u8), zero padding to a multiple of 8 bytes.
 #pragma once
@@ -18,8 +19,9 @@
 namespace hapticut::servo {
 
 inline constexpr std::uint16_t kFrameVersion = 2;
-inline constexpr std::uint16_t kRecordVersion = 2;
+inline constexpr std::uint16_t kRecordVersion = 3;
 inline constexpr char kFrameMagic[4] = {'H', 'C', 'F', 'R'};
+inline constexpr char kRecordingEndMarker[8] = {'H', 'C', 'R', 'E', 'C', 'E', 'N', 'D'};
 // The largest UDP payload over IPv4; a scene whose frame is larger is refused.
 inline constexpr std::size_t kMaxFrameBytes = 65507;
 
@@ -82,6 +84,14 @@ inline constexpr std::size_t kMaxFrameBytes = 65507;
   F(std::uint8_t, engine_rejected) /* 1: the engine refused the sample. */             \
   F(std::uint8_t, force_shading)   /* 1: this tick's settings shade. */
 
+// Written once, after the last record, when a recording is closed cleanly:
+// a file without it was cut short. The marker is last, so that the file's
+// final 8 bytes tell a complete recording.
+#define HAPTICUT_RECORDING_TRAILER_FIELDS(F, A)                                             \
+  F(std::uint64_t, record_count)    /* Records in the file. */                              \
+  F(std::uint64_t, dropped_records) /* Records lost (ring full) while the file was open. */ \
+  A(char, end_marker, 8)            /* "HCRECEND" */
+
 #define HAPTICUT_DECLARE_FIELD(type, name) type name{};
 #define HAPTICUT_DECLARE_ARRAY(type, name, count) type name[count]{};
 
@@ -95,9 +105,16 @@ struct BladeBlock {
   HAPTICUT_BLADE_BLOCK_FIELDS(HAPTICUT_DECLARE_FIELD, HAPTICUT_DECLARE_ARRAY)
 };
 
+struct RecordingTrailer {
+  HAPTICUT_RECORDING_TRAILER_FIELDS(HAPTICUT_DECLARE_FIELD, HAPTICUT_DECLARE_ARRAY)
+};
+
 static_assert(sizeof(FrameHeader) % 8 == 0);
 static_assert(sizeof(RecordHeader) % 8 == 0);
 static_assert(sizeof(BladeBlock) % 8 == 0);
+static_assert(sizeof(RecordingTrailer) % 8 == 0);
+// Shorter than any record, so a trailer cut in half never reads as a record.
+static_assert(sizeof(RecordingTrailer) < sizeof(RecordHeader));
 
 // What the engine did with a blade this tick (BladeBlock::step_kind).
 enum class StepKind : std::uint8_t { None = 0, Step = 1, ResetAndStep = 2 };

@@ -64,18 +64,39 @@ void Recorder::stop(LoopShared& shared) {
   stop_.store(true);
   if (thread_.joinable()) thread_.join();
   drain();
+  // The trailer says the file is complete, so a file with a failed write
+  // gets none: readers then report it truncated.
+  if (error_.empty()) {
+    const std::uint64_t dropped =
+        written_.load() == 0 ? 0 : shared.dropped_records.load() - first_dropped_;
+    const RecordingTrailer trailer = recording_trailer(written_.load(), dropped);
+    if (std::fwrite(&trailer, 1, sizeof(trailer), file_) != sizeof(trailer)) {
+      error_ = std::string("write failed: ") + std::strerror(errno);
+    }
+  }
   if (std::fclose(file_) != 0 && error_.empty()) error_ = std::strerror(errno);
   file_ = nullptr;
 }
 
 void Recorder::drain() {
   while (const unsigned char* record = ring_->front()) {
-    if (std::fwrite(record, 1, ring_->slot_bytes(), file_) != ring_->slot_bytes() &&
-        error_.empty()) {
-      error_ = std::string("write failed: ") + std::strerror(errno);
+    if (written_.load(std::memory_order_relaxed) == 0) {
+      // The ring is empty when a recording starts, so nothing is lost before
+      // its first record: drops from here on are this recording's.
+      RecordHeader header;
+      std::memcpy(&header, record, sizeof(header));
+      first_dropped_ = header.dropped_records;
+    }
+    // After a failed write the file's records are no longer in step: none
+    // is written after it.
+    if (error_.empty()) {
+      if (std::fwrite(record, 1, ring_->slot_bytes(), file_) == ring_->slot_bytes()) {
+        written_.fetch_add(1, std::memory_order_relaxed);
+      } else {
+        error_ = std::string("write failed: ") + std::strerror(errno);
+      }
     }
     ring_->pop();
-    written_.fetch_add(1, std::memory_order_relaxed);
   }
 }
 

@@ -29,7 +29,9 @@ class Recorder {
   // cannot) and asks the loop for records.
   void start(std::FILE* file, const std::string& path, LoopShared& shared);
   // Asks the loop to stop pushing, waits until it has, writes what is left
-  // and closes the file. Does nothing when not recording.
+  // and the trailer (record count, records dropped) and closes the file. A
+  // recording with a failed write gets no trailer. Does nothing when not
+  // recording.
   void stop(LoopShared& shared);
 
   bool active() const { return file_ != nullptr; }
@@ -50,6 +52,8 @@ class Recorder {
   std::thread thread_;
   std::atomic<bool> stop_{false};
   std::atomic<std::uint64_t> written_{0};
+  // The loop's dropped_records count in this recording's first record.
+  std::uint64_t first_dropped_ = 0;
 };
 
 }  // namespace hapticut::servo

@@ -29,4 +29,6 @@ class HAPTICUT_OT_bake_recording(bpy.types.Operator):
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         self.report({"INFO"}, f"baked {figures['frames']} frames in {figures['seconds']:.1f} s")
+        if figures["truncated"]:
+            self.report({"WARNING"}, figures["truncated"])
         return {"FINISHED"}

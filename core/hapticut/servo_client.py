@@ -46,7 +46,18 @@ class Frame:
 
     @property
     def sequence(self) -> int:
+        """From 1 at every ``start``, shared by all subscribers: compare with ``order``."""
         return int(self.header["sequence"])
+
+    @property
+    def session(self) -> int:
+        """The run the frame belongs to: increments with every ``start``."""
+        return int(self.header["session"])
+
+    @property
+    def order(self) -> tuple[int, int]:
+        """Newer frames are larger, across runs too (the sequence restarts at each start)."""
+        return (self.session, self.sequence)
 
     @property
     def age_s(self) -> float:
@@ -81,11 +92,18 @@ def parse_frame(data: bytes, names: Sequence[str] | None = None, received_s: flo
     return Frame(header, blades, received_s)
 
 
-def _sequence_of(data: bytes) -> int | None:
-    """A datagram's frame sequence from its header alone, or None when it is no frame."""
+_SESSION_OFFSET = layout.FRAME_HEADER.fields["session"][1]
+_SEQUENCE_OFFSET = layout.FRAME_HEADER.fields["sequence"][1]
+
+
+def _order_of(data: bytes) -> tuple[int, int] | None:
+    """A datagram's (session, sequence) from its header alone (``Frame.order``), or None
+    when it is no frame."""
     if len(data) < layout.FRAME_HEADER.itemsize or data[:4] != layout.FRAME_MAGIC:
         return None
-    return int(struct.unpack_from("<Q", data, 16)[0])
+    (session,) = struct.unpack_from("<I", data, _SESSION_OFFSET)
+    (sequence,) = struct.unpack_from("<Q", data, _SEQUENCE_OFFSET)
+    return (int(session), int(sequence))
 
 
 class ServoClient:
@@ -106,6 +124,10 @@ class ServoClient:
         self.frames_received = 0
         self.bad_datagrams = 0
         self.datagrams_read = 0
+        # Datagrams from any sender but the servo's stream socket, ignored: any local
+        # process can send to the stream port.
+        self.foreign_datagrams = 0
+        self.stream_source: tuple[str, int] | None = None  # The servo's (address, port).
         self._sock: socket.socket | None = None
         self._stream: socket.socket | None = None
         self._next_id = 0
@@ -222,7 +244,15 @@ class ServoClient:
         fields = {"version": PROTOCOL_VERSION}
         if self.token is not None:
             fields["token"] = self.token
-        return self.request("hello", **fields)
+        reply = self.request("hello", **fields)
+        self._learn_stream_source(reply)
+        return reply
+
+    def _learn_stream_source(self, reply: dict) -> None:
+        """The servo sends frames from ``stream_source_port`` on the address the control
+        channel reached; frames from anywhere else are not its."""
+        assert self._sock is not None
+        self.stream_source = (self._sock.getpeername()[0], int(reply["stream_source_port"]))
 
     def load(
         self,
@@ -281,7 +311,25 @@ class ServoClient:
             self._stream.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 20)
             self._stream.bind(("127.0.0.1", 0))
             self._stream.setblocking(False)
-        return self.request("subscribe", port=self._stream.getsockname()[1], rate_Hz=rate_Hz)
+        reply = self.request("subscribe", port=self._stream.getsockname()[1], rate_Hz=rate_Hz)
+        self._learn_stream_source(reply)
+        return reply
+
+    def _receive_datagram(self) -> tuple[bytes | None, float] | None:
+        """The next datagram waiting and its arrival time; None when none waits. A datagram
+        from another sender than the servo's stream socket comes back as None data, counted
+        (``foreign_datagrams``): it is read, so it counts against a caller's bound."""
+        assert self._stream is not None
+        try:
+            data, sender = self._stream.recvfrom(layout.MAX_FRAME_BYTES + 1)
+        except (BlockingIOError, InterruptedError):
+            return None
+        now = time.monotonic()
+        self.datagrams_read += 1
+        if sender[:2] != self.stream_source:
+            self.foreign_datagrams += 1
+            return None, now
+        return data, now
 
     def unsubscribe(self) -> dict:
         return self.request("unsubscribe")
@@ -299,19 +347,18 @@ class ServoClient:
         if self._stream is None:
             return None
         began = time.monotonic()
-        newest_data, newest_sequence, newest_s = None, -1, 0.0
+        newest_data, newest_order, newest_s = None, (-1, -1), 0.0
         for _ in range(max_datagrams):
-            try:
-                data = self._stream.recv(layout.MAX_FRAME_BYTES + 1)
-            except (BlockingIOError, InterruptedError):
+            received = self._receive_datagram()
+            if received is None:
                 break
-            now = time.monotonic()
-            self.datagrams_read += 1
-            sequence = _sequence_of(data)
-            if sequence is None:
-                self.bad_datagrams += 1
-            elif sequence > newest_sequence:
-                newest_data, newest_sequence, newest_s = data, sequence, now
+            data, now = received
+            if data is not None:
+                order = _order_of(data)
+                if order is None:
+                    self.bad_datagrams += 1
+                elif order > newest_order:
+                    newest_data, newest_order, newest_s = data, order, now
             if now - began >= budget_s:
                 break
         if newest_data is None:
@@ -329,21 +376,19 @@ class ServoClient:
         if self._stream is None:
             return []
         out: list[Frame] = []
-        newest = -1
-        while True:
-            try:
-                data = self._stream.recv(layout.MAX_FRAME_BYTES + 1)
-            except (BlockingIOError, InterruptedError):
-                break
-            now = time.monotonic()
+        newest = (-1, -1)
+        while (received := self._receive_datagram()) is not None:
+            data, now = received
+            if data is None:
+                continue
             try:
                 frame = parse_frame(data, self.blade_names or None, now)
             except ValueError:
                 self.bad_datagrams += 1
                 continue
-            if frame.sequence <= newest:
+            if frame.order <= newest:
                 continue
-            newest = frame.sequence
+            newest = frame.order
             self.frames_received += 1
             out.append(frame)
         return out

@@ -7,6 +7,7 @@ Blender add-on imports it without the compiled module.
 
 A frame:  FRAME_HEADER, then per blade: BLADE_BLOCK, its points block.
 A record: RECORD_HEADER, then per blade: BLADE_BLOCK, its points block.
+A recording ends with RECORDING_TRAILER, written when it is closed cleanly.
 Points block of N points: q (N, 3) f8, p (N, 3) f8, state (N,) u1, zero
 padding to a multiple of 8 bytes.
 """
@@ -16,9 +17,10 @@ from __future__ import annotations
 import numpy as np
 
 FRAME_VERSION = 2
-RECORD_VERSION = 2
+RECORD_VERSION = 3
 FRAME_MAGIC = b"HCFR"
 RECORDING_MAGIC = b"HCREC001"
+RECORDING_END_MARKER = b"HCRECEND"
 MAX_FRAME_BYTES = 65507
 
 FRAME_HEADER = np.dtype(
@@ -85,6 +87,16 @@ BLADE_BLOCK = np.dtype(
         ("deferred_points", "<u2"),
         ("engine_rejected", "u1"),
         ("force_shading", "u1"),
+    ]
+)
+
+# After the last record of a recording closed cleanly; shorter than any record. The
+# marker is last: a complete file's final 8 bytes.
+RECORDING_TRAILER = np.dtype(
+    [
+        ("record_count", "<u8"),
+        ("dropped_records", "<u8"),  # Lost (ring full) while the file was open.
+        ("end_marker", "S1", (8,)),
     ]
 )
 

@@ -1,10 +1,15 @@
 #include "devices/recording_file.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cstring>
-#include <fstream>
-#include <iterator>
+#include <limits>
 #include <nlohmann/json.hpp>
 
+#include "client_files.h"
 #include "devices/device_args.h"
 
 namespace hapticut::servo {
@@ -42,12 +47,35 @@ std::vector<unsigned char> recording_preamble(const RecordingInfo& info) {
   return out;
 }
 
+RecordingTrailer recording_trailer(std::uint64_t record_count, std::uint64_t dropped_records) {
+  RecordingTrailer trailer;
+  trailer.record_count = record_count;
+  trailer.dropped_records = dropped_records;
+  std::memcpy(trailer.end_marker, kRecordingEndMarker, sizeof(trailer.end_marker));
+  return trailer;
+}
+
+std::string RecordingContents::truncation_message() const {
+  if (!truncated) return "";
+  std::string text =
+      "recording '" + path +
+      "' is truncated (no end trailer: the run was cut short): " + std::to_string(record_count()) +
+      " whole records";
+  if (partial_bytes > 0)
+    text += ", a partial last record of " + std::to_string(partial_bytes) + " bytes dropped";
+  return text;
+}
+
 RecordingContents read_recording(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw DeviceError("recording '" + path + "': cannot open");
-  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)),
-                                   std::istreambuf_iterator<char>());
   const std::string where = "recording '" + path + "': ";
+  // A FIFO or a device would block the caller (the control thread, for a
+  // `load`) or never end (/dev/zero): refused before a byte is read.
+  std::vector<unsigned char> bytes;
+  try {
+    bytes = read_regular_file(path, std::numeric_limits<std::uint64_t>::max());
+  } catch (const FileRefused& e) {
+    throw DeviceError(std::string("recording ") + e.what());
+  }
   if (bytes.size() < 16 || std::memcmp(bytes.data(), kRecordingMagic, 8) != 0) {
     throw DeviceError(where + "not a hapticut recording (no HCREC001 magic)");
   }
@@ -57,9 +85,11 @@ RecordingContents read_recording(const std::string& path) {
   RecordingContents out;
   try {
     const auto header = nlohmann::json::parse(bytes.begin() + 16, bytes.begin() + 16 + length);
-    if (header.value("version", 0) != kRecordVersion) {
-      throw DeviceError(where + "record version " + std::to_string(header.value("version", 0)) +
-                        ", this servo reads " + std::to_string(kRecordVersion));
+    const int version = header.value("version", 0);
+    if (version != kRecordVersion) {
+      throw DeviceError(where + "record version " + std::to_string(version) +
+                        ", this servo reads version " + std::to_string(kRecordVersion) +
+                        " only (record it again with this servo)");
     }
     out.info.rate_Hz = header.at("rate_Hz").get<double>();
     out.info.as_fast_as_possible = header.value("as_fast_as_possible", false);
@@ -78,10 +108,31 @@ RecordingContents read_recording(const std::string& path) {
     throw DeviceError(where + "bad header (" + e.what() + ")");
   }
   const std::size_t data = 16 + length;
-  const std::size_t count = (bytes.size() - data) / out.info.record_bytes;
-  out.records.assign(
-      bytes.begin() + static_cast<std::ptrdiff_t>(data),
-      bytes.begin() + static_cast<std::ptrdiff_t>(data + count * out.info.record_bytes));
+  const std::size_t body = bytes.size() - data;
+  const std::size_t record_bytes = out.info.record_bytes;
+  const std::size_t trailer_bytes = sizeof(RecordingTrailer);
+  std::size_t count = body / record_bytes;
+  // The trailer is shorter than a record: a complete file's body is whole
+  // records and one trailer, which ends with the marker.
+  const bool has_trailer = body % record_bytes == trailer_bytes &&
+                           std::memcmp(bytes.data() + bytes.size() - sizeof(kRecordingEndMarker),
+                                       kRecordingEndMarker, sizeof(kRecordingEndMarker)) == 0;
+  if (has_trailer) {
+    RecordingTrailer trailer;
+    std::memcpy(&trailer, bytes.data() + bytes.size() - trailer_bytes, trailer_bytes);
+    if (trailer.record_count != count) {
+      throw DeviceError(where + "damaged: its trailer counts " +
+                        std::to_string(trailer.record_count) + " records, the file holds " +
+                        std::to_string(count));
+    }
+    out.dropped_records = trailer.dropped_records;
+  } else {
+    out.truncated = true;
+    out.partial_bytes = body - count * record_bytes;
+  }
+  out.path = path;
+  out.records.assign(bytes.begin() + static_cast<std::ptrdiff_t>(data),
+                     bytes.begin() + static_cast<std::ptrdiff_t>(data + count * record_bytes));
   return out;
 }
 

@@ -5,7 +5,10 @@
 //               records start at a multiple of 8
 //   then        fixed-size records (layout.h: RecordHeader, then per blade a
 //               BladeBlock and its points block), record_bytes each
-// A run cut short leaves at most one partial record at the end; readers drop it.
+//   last        the trailer (layout.h: RecordingTrailer, ending "HCRECEND"),
+//               written when the recording is closed cleanly
+// A file without the trailer was cut short (killed, disk full): readers
+// return its whole records, drop a partial last one and say it is truncated.
 #pragma once
 
 #include <cstdint>
@@ -38,9 +41,19 @@ void lay_out_record(RecordingInfo& info);
 // The bytes before the first record.
 std::vector<unsigned char> recording_preamble(const RecordingInfo& info);
 
+// The trailer that closes a recording of `record_count` records.
+RecordingTrailer recording_trailer(std::uint64_t record_count, std::uint64_t dropped_records);
+
 struct RecordingContents {
   RecordingInfo info;
   std::vector<unsigned char> records;  // record_count() * info.record_bytes bytes.
+  // No trailer: the run was cut short. The whole records are all in `records`.
+  bool truncated = false;
+  std::size_t partial_bytes = 0;      // Of a cut last record, dropped.
+  std::uint64_t dropped_records = 0;  // From the trailer (0 when truncated).
+  std::string path;
+  // "recording 'P' is truncated (...): N whole records" when truncated, else "".
+  std::string truncation_message() const;
   std::size_t record_count() const {
     return info.record_bytes ? records.size() / info.record_bytes : 0;
   }
@@ -49,7 +62,8 @@ struct RecordingContents {
   }
 };
 
-// Reads a whole recording; throws DeviceError naming the file and what is wrong.
+// Reads a whole recording; throws DeviceError naming the file and what is
+// wrong. A truncated file is read (see RecordingContents::truncated).
 RecordingContents read_recording(const std::string& path);
 
 }  // namespace hapticut::servo

@@ -1,5 +1,6 @@
 #include "devices/replay_device.h"
 
+#include <cstdio>
 #include <cstring>
 
 #include "devices/recording_file.h"
@@ -25,6 +26,16 @@ std::unique_ptr<Device> make_replay_device(const DeviceSpec& spec, const DeviceC
   if (spec.value.empty()) throw DeviceError(spec.describe() + ": replay needs a recording file");
   const std::string blade = spec.string("blade", context.blade);
   RecordingContents recording = read_recording(spec.value);
+  // A cut recording still holds a usable stroke up to its cut: play that
+  // and say so, so that a short replay is not taken for the whole run.
+  if (recording.truncated) {
+    if (recording.record_count() == 0) {
+      throw DeviceError(spec.describe() + ": " + recording.truncation_message() +
+                        ": nothing to replay");
+    }
+    std::fprintf(stderr, "warning: %s: %s; replaying those\n", spec.describe().c_str(),
+                 recording.truncation_message().c_str());
+  }
   const RecordingBlade* found = nullptr;
   std::string names;
   for (const RecordingBlade& b : recording.info.blades) {

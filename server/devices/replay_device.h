@@ -1,7 +1,8 @@
 // The replay device: plays one blade of a recording, one recorded tick per
 // servo tick: the device status, pose, buttons and the dt the engine stepped
-// with. With the same scene it gives bit-identical proxy paths and forces.
-// Input only: nothing is rendered.
+// with. With the same scene it gives bit-identical proxy paths and engine
+// forces. Input only: nothing is rendered. A truncated recording (no end
+// trailer) plays its whole records, with a warning on stderr.
 #pragma once
 
 #include <atomic>
@@ -15,7 +16,8 @@ namespace hapticut::servo {
 
 inline constexpr const char* kReplayDeviceUsage =
     "  replay:FILE[,blade=NAME]            plays a recording's blade NAME (default: the\n"
-    "      bound blade's name) tick by tick, with the recorded dt\n";
+    "      bound blade's name) tick by tick, with the recorded dt (a truncated\n"
+    "      recording: its whole records, with a warning)\n";
 
 struct ReplayTick {
   DeviceStatus status;

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import os
+import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -25,6 +27,7 @@ def printed() -> dict:
         ("frame_header", layout.FRAME_HEADER),
         ("record_header", layout.RECORD_HEADER),
         ("blade_block", layout.BLADE_BLOCK),
+        ("recording_trailer", layout.RECORDING_TRAILER),
     ],
 )
 def test_fixed_structs_agree(printed, key, dtype):
@@ -46,6 +49,46 @@ def test_points_block_and_versions_agree(printed):
             layout.points_block_bytes(points)
         )
         assert layout.blade_dtype(points).itemsize % 8 == 0
+
+
+DOCS = Path(__file__).resolve().parents[2] / "docs"
+DOC_TYPES = {"char": "S1", "u8": "u1", "u16": "u2", "u32": "u4", "u64": "u8", "f64": "f8"}
+
+
+def documented_struct(doc: str, name: str) -> tuple[int, list[dict]]:
+    """The size and the rows (as --print-layout's fields) of the table after **name** (N
+    bytes) in docs/doc."""
+    text = (DOCS / doc).read_text()
+    match = re.search(rf"\*\*{name}\*\* \((\d+) bytes\)", text)
+    assert match, f"docs/{doc} has no **{name}** (N bytes) table"
+    rows = []
+    for line in text[match.end() :].splitlines():
+        if rows and not line.startswith("|"):
+            break
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        if not line.startswith("|") or not cells[0].isdigit():
+            continue
+        offset, kind, field = int(cells[0]), cells[1], cells[2]
+        array = re.fullmatch(r"(\w+)\[(\d+)\]", kind)
+        base, shape = (array[1], [int(array[2])]) if array else (kind, [])
+        assert base in DOC_TYPES, f"docs/{doc}, {name}.{field}: type {kind!r}"
+        rows.append({"name": field, "type": DOC_TYPES[base], "offset": offset, "shape": shape})
+    return int(match[1]), rows
+
+
+@pytest.mark.parametrize(
+    ("doc", "name", "key"),
+    [
+        ("protocol.md", "FrameHeader", "frame_header"),
+        ("protocol.md", "BladeBlock", "blade_block"),
+        ("servo.md", "RecordHeader", "record_header"),
+        ("servo.md", "RecordingTrailer", "recording_trailer"),
+    ],
+)
+def test_the_docs_tables_are_the_printed_layout(printed, doc, name, key):
+    size, rows = documented_struct(doc, name)
+    assert size == printed[key]["size"]
+    assert rows == printed[key]["fields"]
 
 
 def test_servo_path_names_a_missing_override(monkeypatch, tmp_path):

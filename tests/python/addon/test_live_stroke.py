@@ -3,6 +3,7 @@ and flesh onto its bone; the ideal blade's keyframes follow the recording; the c
 in cuttable material only (checked against the scene's tets by the engine); Clear; the bake
 survives a save and reopen and renders."""
 
+import json
 import time
 
 import bpy
@@ -48,6 +49,9 @@ def test_the_stroke_ran_every_tick_and_the_bake_made_its_objects(baked):
     assert duration_s * 1000 <= len(rec) <= duration_s * 1000 + 110
     assert rec.ticks["dropped_records"][-1] == 0
     assert rec.header["as_fast_as_possible"] is True
+    # The servo closed it cleanly: the trailer is there, and the bake says nothing of a cut.
+    assert not rec.truncated and rec.dropped_records == 0
+    assert json.loads(baked.hapticut_live.bake_report)["truncated"] == ""
     names = {o.name for o in bpy.data.collections["Hapticut Bake"].objects}
     assert names == {"Ideal Knife", "Force Knife", "Cut Knife"}
 
@@ -121,6 +125,25 @@ def test_clear_removes_the_bake_and_bake_remakes_it_from_the_recording(baked):
     assert bpy.data.objects["Knife"].data.name in bpy.data.meshes  # The blade's mesh stays.
     assert bpy.ops.hapticut.bake_recording() == {"FINISHED"}
     assert len(baking.baked_objects(baked)) == 3
+
+
+def test_a_truncated_recording_bakes_its_whole_records_and_says_so(baked, tmp_path):
+    from addon import live
+
+    complete = recording(baked)
+    original = baked.hapticut_live.recording_path
+    data = open(original, "rb").read()  # noqa: SIM115
+    keep = len(complete) // 2
+    records_start = 16 + int.from_bytes(data[8:16], "little")  # After the magic and header.
+    cut = tmp_path / "cut.rec"
+    cut.write_bytes(data[: records_start + keep * complete.records.itemsize])
+    assert bpy.ops.hapticut.bake_recording(filepath=str(cut)) == {"FINISHED"}
+    report = json.loads(baked.hapticut_live.bake_report)
+    problem = live.link().recording.read_recording(cut).problem
+    assert report["ticks"] == keep and report["truncated"] == problem
+    assert problem.startswith(f"recording {str(cut)!r} is truncated") and f"{keep} whole" in problem
+    assert bpy.ops.hapticut.bake_recording(filepath=original) == {"FINISHED"}
+    assert json.loads(baked.hapticut_live.bake_report)["truncated"] == ""
 
 
 def test_the_bake_survives_save_and_reopen_and_renders(baked, tmp_path):
