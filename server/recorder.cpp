@@ -47,7 +47,10 @@ void Recorder::start(const std::string& path, LoopShared& shared) {
   shared.ring.store(ring_.get(), std::memory_order_release);
   file_ = file;
   path_ = path;
-  error_.clear();
+  {
+    std::lock_guard<std::mutex> lock(error_mutex_);
+    error_.clear();
+  }
   written_.store(0);
   stop_.store(false);
   thread_ = std::thread([this] { run(); });
@@ -65,19 +68,28 @@ void Recorder::stop(LoopShared& shared) {
   stop_.store(true);
   if (thread_.joinable()) thread_.join();
   drain();
-  if (std::fclose(file_) != 0 && error_.empty()) error_ = std::strerror(errno);
+  if (std::fclose(file_) != 0) note_error(std::strerror(errno));
   file_ = nullptr;
 }
 
 void Recorder::drain() {
   while (const unsigned char* record = ring_->front()) {
-    if (std::fwrite(record, 1, ring_->slot_bytes(), file_) != ring_->slot_bytes() &&
-        error_.empty()) {
-      error_ = std::string("write failed: ") + std::strerror(errno);
+    if (std::fwrite(record, 1, ring_->slot_bytes(), file_) != ring_->slot_bytes()) {
+      note_error(std::string("write failed: ") + std::strerror(errno));
     }
     ring_->pop();
     written_.fetch_add(1, std::memory_order_relaxed);
   }
+}
+
+void Recorder::note_error(const std::string& error) {
+  std::lock_guard<std::mutex> lock(error_mutex_);
+  if (error_.empty()) error_ = error;
+}
+
+std::string Recorder::error() const {
+  std::lock_guard<std::mutex> lock(error_mutex_);
+  return error_;
 }
 
 void Recorder::run() {
