@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
-# The servo (hapticut-servo) built with ThreadSanitizer in its own build directory
-# (build/tsan), and the Python tests that run its threads against it: `build`
-# configures and compiles the servo (tests/scripts/setup.sh calls it), `run` runs
-# the tests with HAPTICUT_SERVO pointing at it and fails on any report
+# The servo (hapticut-servo) and its unit tests built with ThreadSanitizer in their
+# own build directory (build/tsan): `build` configures and compiles them
+# (tests/scripts/setup.sh calls it), `run` runs the unit tests (among them the
+# handoffs between the threads, server/tests/handoff_threads_test.cpp), then the
+# Python tests with HAPTICUT_SERVO pointing at the servo, and fails on any report
 # (tests/run_all.sh calls it).
 #
-# The tests: every servo test file that runs the loop, control/stream, recorder and
+# The Python tests: every servo test file that runs the loop, control/stream, recorder and
 # housekeeping threads (and the bridge device's receive thread), about a minute under
 # TSan on 2 cores. Left out: test_servo_layout.py (--print-layout, no thread runs) and
 # test_udp_flood_at_the_stream_port, whose assertion is a count of frames the network
@@ -22,10 +23,10 @@ case "${1:-run}" in
   build)
     # clang: its TSan runtime comes with libclang-rt-14-dev (setup.sh installs it).
     cmake -S . -B build/tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-      -DCMAKE_CXX_COMPILER=clang++ -DHAPTICUT_BUILD_TESTS=OFF -DHAPTICUT_BUILD_PYTHON=OFF \
+      -DCMAKE_CXX_COMPILER=clang++ -DHAPTICUT_BUILD_TESTS=ON -DHAPTICUT_BUILD_PYTHON=OFF \
       -DCMAKE_CXX_FLAGS="-fsanitize=thread -fno-omit-frame-pointer" \
       -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=thread" >/dev/null
-    cmake --build build/tsan -j 2 --target hapticut-servo
+    cmake --build build/tsan -j 2 --target hapticut-servo hapticut_servo_tests
     ;;
   run)
     tests=(tests/python/test_servo_stream.py tests/python/test_servo_replay.py
@@ -36,18 +37,19 @@ case "${1:-run}" in
     reports="$PWD/build/tsan/reports"
     rm -rf "$reports"
     mkdir -p "$reports"
-    # Each servo writes its reports to reports/tsan.PID and keeps running (exiting
-    # with 66 where a test may expect 0); the report files are the verdict, so a
-    # report fails the run even when every test passed.
+    # Each process writes its reports to reports/tsan.PID and keeps running (a servo
+    # exits with 66 where a test may expect 0); the report files are the verdict, so
+    # a report fails the run even when every test passed.
+    export TSAN_OPTIONS="log_path=$reports/tsan halt_on_error=0 exitcode=66 second_deadlock_stack=1"
     status=0
+    build/tsan/server/hapticut_servo_tests --gtest_brief=1 || status=$?
     HAPTICUT_SERVO="$PWD/build/tsan/server/hapticut-servo" \
-      TSAN_OPTIONS="log_path=$reports/tsan halt_on_error=0 exitcode=66 second_deadlock_stack=1" \
       python3 -m pytest -q -p no:cacheprovider "${tests[@]}" || status=$?
     shopt -s nullglob
     found=("$reports"/tsan.*)
     if [ ${#found[@]} -gt 0 ]; then
       cat "${found[@]}"
-      echo "tsan: ${#found[@]} servo process(es) reported (above; in $reports)" >&2
+      echo "tsan: ${#found[@]} process(es) reported (above; in $reports)" >&2
       exit 1
     fi
     exit "$status"
