@@ -6,12 +6,14 @@
 # Python tests with HAPTICUT_SERVO pointing at the servo, and fails on any report
 # (tests/run_all.sh calls it).
 #
-# The Python tests: every servo test file that runs the loop, control/stream, recorder and
-# housekeeping threads (and the bridge device's receive thread), about a minute under
-# TSan on 2 cores. Left out: test_servo_layout.py (--print-layout, no thread runs) and
-# test_udp_flood_at_the_stream_port, whose assertion is a count of frames the network
-# thread sends in 0.2 s while it reads a flood: throughput that TSan's slowdown of
-# that thread eats into, so there it would measure TSan, not the servo.
+# The Python tests: every servo test file that runs the loop, control/stream, recorder
+# and housekeeping threads (and the bridge device's receive thread), about a minute
+# under TSan on 2 cores; only test_servo_layout.py (--print-layout, no thread runs) is
+# left out. Their waits count what the clock-paced threads do in a stretch of time
+# (ticks at 1 kHz, frames at the subscribed rate); under TSan a tick computes in
+# 50-70 us at p99 (8-9 us without), far inside its 1 ms, with no late tick, so the
+# counts are those of the plain runs (40 frames in 0.2 s after the UDP flood, as
+# without TSan).
 #
 # Real time under TSan: the loop still asks for SCHED_FIFO (as in the plain runs),
 # and TSan makes mlockall a no-op (it cannot lock its shadow memory), so the servo
@@ -32,8 +34,7 @@ case "${1:-run}" in
     tests=(tests/python/test_servo_stream.py tests/python/test_servo_replay.py
       tests/python/test_servo_faults.py tests/python/test_servo_settings.py
       tests/python/test_servo_client_pipelined.py tests/python/test_servo_cli.py
-      tests/python/test_servo_devices.py tests/python/test_servo_stiffness_limit.py
-      --deselect tests/python/test_servo_faults.py::test_udp_flood_at_the_stream_port)
+      tests/python/test_servo_devices.py tests/python/test_servo_stiffness_limit.py)
     reports="$PWD/build/tsan/reports"
     rm -rf "$reports"
     mkdir -p "$reports"
