@@ -46,7 +46,10 @@ void Recorder::start(std::FILE* file, const std::string& path, LoopShared& share
   shared.ring.store(ring_.get(), std::memory_order_release);
   file_ = file;
   path_ = path;
-  error_.clear();
+  {
+    std::lock_guard<std::mutex> lock(error_mutex_);
+    error_.clear();
+  }
   written_.store(0);
   stop_.store(false);
   thread_ = std::thread([this] { run(); });
@@ -66,15 +69,15 @@ void Recorder::stop(LoopShared& shared) {
   drain();
   // The trailer says the file is complete, so a file with a failed write
   // gets none: readers then report it truncated.
-  if (error_.empty()) {
+  if (!has_error()) {
     const std::uint64_t dropped =
         written_.load() == 0 ? 0 : shared.dropped_records.load() - first_dropped_;
     const RecordingTrailer trailer = recording_trailer(written_.load(), dropped);
     if (std::fwrite(&trailer, 1, sizeof(trailer), file_) != sizeof(trailer)) {
-      error_ = std::string("write failed: ") + std::strerror(errno);
+      note_error(std::string("write failed: ") + std::strerror(errno));
     }
   }
-  if (std::fclose(file_) != 0 && error_.empty()) error_ = std::strerror(errno);
+  if (std::fclose(file_) != 0) note_error(std::strerror(errno));
   file_ = nullptr;
 }
 
@@ -89,15 +92,30 @@ void Recorder::drain() {
     }
     // After a failed write the file's records are no longer in step: none
     // is written after it.
-    if (error_.empty()) {
+    if (!has_error()) {
       if (std::fwrite(record, 1, ring_->slot_bytes(), file_) == ring_->slot_bytes()) {
         written_.fetch_add(1, std::memory_order_relaxed);
       } else {
-        error_ = std::string("write failed: ") + std::strerror(errno);
+        note_error(std::string("write failed: ") + std::strerror(errno));
       }
     }
     ring_->pop();
   }
+}
+
+bool Recorder::has_error() const {
+  std::lock_guard<std::mutex> lock(error_mutex_);
+  return !error_.empty();
+}
+
+void Recorder::note_error(const std::string& error) {
+  std::lock_guard<std::mutex> lock(error_mutex_);
+  if (error_.empty()) error_ = error;
+}
+
+std::string Recorder::error() const {
+  std::lock_guard<std::mutex> lock(error_mutex_);
+  return error_;
 }
 
 void Recorder::run() {

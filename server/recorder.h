@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cstdio>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <thread>
 
@@ -37,10 +38,14 @@ class Recorder {
   bool active() const { return file_ != nullptr; }
   const std::string& path() const { return path_; }
   std::uint64_t written() const { return written_.load(); }
-  const std::string& error() const { return error_; }
+  // The first write or close error, or "": the recorder thread may set it while the
+  // control thread asks.
+  std::string error() const;
 
  private:
   void drain();
+  void note_error(const std::string& error);
+  bool has_error() const;
   void run();
 
   RecordingInfo info_;
@@ -48,7 +53,8 @@ class Recorder {
   std::unique_ptr<SpscRing> ring_;  // Kept until the recorder goes (the loop may hold it).
   std::FILE* file_ = nullptr;
   std::string path_;
-  std::string error_;
+  mutable std::mutex error_mutex_;
+  std::string error_;  // Under error_mutex_.
   std::thread thread_;
   std::atomic<bool> stop_{false};
   std::atomic<std::uint64_t> written_{0};

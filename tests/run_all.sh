@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The test command (README.md): setup, lint, the C++ tests (plain and under ASan/UBSan), the
-# scene reader fuzzer, the Python tests.
+# scene reader fuzzer, the Python tests, the servo's tests under TSan.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # Each phase prints its start time and the seconds since the run began (CI has 90 minutes).
@@ -18,6 +18,8 @@ phase "Scene reader fuzzing (libFuzzer, bounded time)"
 bash tests/scripts/fuzz.sh
 phase "Python tests (pytest)"
 python3 -m pytest -q -m "not slow" tests/python --ignore=tests/python/addon
+phase "Servo under ThreadSanitizer (its threads' tests, build/tsan)"
+bash tests/scripts/tsan.sh run
 # bpy in a pytest process of its own (it is not imported beside the other suites' modules).
 phase "Blender add-on tests (bpy 5.0.1)"
 python3 -m pytest -q -p no:cacheprovider tests/python/addon

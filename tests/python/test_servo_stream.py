@@ -105,3 +105,29 @@ def test_record_by_message_while_running(tmp_path):
     assert len(recording) == reply["written"]
     ticks = recording.ticks["tick"]
     assert ticks[0] > 100 and np.array_equal(np.diff(ticks), np.ones(len(ticks) - 1))
+
+
+def test_a_recording_that_cannot_be_written_is_reported_while_running(tmp_path):
+    """Writes that fail (here past a file size limit, SIGXFSZ ignored) are the recorder
+    thread's to note while the control thread reports them: status names the error, the run
+    goes on. Under ThreadSanitizer (tests/scripts/tsan.sh) this is where the two meet."""
+    from hapticut import servo_path
+    from servo_test_support import SPHERE
+
+    record = tmp_path / "limited.rec"
+    # dash counts ulimit -f in 512-byte blocks: 1 MiB, a few hundred records.
+    limited = ["-c", 'trap "" XFSZ; ulimit -f 2048; exec "$0" "$@"', servo_path()]
+    args = [*limited, str(SPHERE), "--device", "sim:press-slide,speed=20", "--engage"]
+    args += ["--record-dir", str(tmp_path)]
+    with ServoProcess(args, executable="/bin/sh") as servo:
+        client = connect(servo)
+        assert client.record(record)["recording"] == str(record)
+        errors = []
+        for _ in range(3000):  # until the limit is reached (well within 30 s)
+            errors.append(client.status()["recording"]["error"])
+            if errors[-1]:
+                break
+            time.sleep(0.01)
+        client.stop_recording()
+        assert client.status()["state"] == "running"
+    assert errors[-1] == "write failed: File too large", errors[-1]

@@ -53,3 +53,6 @@ cmake --build build/tests
 
 echo "setup: building the C++ tests with AddressSanitizer and UndefinedBehaviorSanitizer (build/asan)"
 bash tests/scripts/sanitizers.sh build
+
+echo "setup: building the servo with ThreadSanitizer (build/tsan)"
+bash tests/scripts/tsan.sh build
