@@ -53,7 +53,7 @@ ControlMessage parse_control_message(std::string_view text) {
   if (!body.is_object()) throw MalformedMessage("malformed message: expected an object");
   const auto type = body.find("type");
   if (type == body.end() || !type->is_string()) {
-    throw MalformedMessage("malformed message: expected a string \"type\"");
+    throw MalformedMessage("malformed message: expected an object with a string \"type\"");
   }
   message.type = type->get<std::string>();
   if (message.type.empty() || message.type.size() > kMaxTypeBytes) {

@@ -34,7 +34,8 @@ case "${1:-run}" in
     tests=(tests/python/test_servo_stream.py tests/python/test_servo_replay.py
       tests/python/test_servo_faults.py tests/python/test_servo_settings.py
       tests/python/test_servo_client_pipelined.py tests/python/test_servo_cli.py
-      tests/python/test_servo_devices.py tests/python/test_servo_stiffness_limit.py)
+      tests/python/test_servo_devices.py tests/python/test_servo_stiffness_limit.py
+      tests/python/test_servo_hostile_client.py tests/python/test_servo_recording_end.py)
     reports="$PWD/build/tsan/reports"
     rm -rf "$reports"
     mkdir -p "$reports"
