@@ -177,6 +177,19 @@ LeastDistanceStatus solve_least_distance(int unknowns, std::span<const LeastDist
     return LeastDistanceStatus::Infeasible;
   }
   for (int i = 0; i < unknowns; ++i) y[i] = -r[i] / r[unknowns];
+  // Rounding can leave a residual short of zero on a problem with no
+  // solution: an answer that misses a row is none.
+  for (std::size_t j = 0; j < rows.size(); ++j) {
+    double s = 0.0;
+    double size = 0.0;
+    for (int i = 0; i < unknowns; ++i) {
+      s += rows[j].a[i] * y[i];
+      size += std::abs(rows[j].a[i] * y[i]);
+    }
+    if (s < bounds[j] - 1e-9 * (1.0 + size + std::abs(bounds[j]))) {
+      return LeastDistanceStatus::Infeasible;
+    }
+  }
   return finished ? LeastDistanceStatus::Solved : LeastDistanceStatus::IterationLimit;
 }
 
