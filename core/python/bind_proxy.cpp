@@ -138,6 +138,10 @@ nb::dict tick_dict(const BladeTick& t) {
   d["max_transitions"] = t.max_transitions;
   d["transitions"] = t.transitions;
   d["rejected"] = t.rejected;
+  d["rigid_rounds"] = t.rigid_rounds;
+  d["contacts"] = t.contacts;
+  d["unresolved"] = t.unresolved;
+  d["unseated"] = t.unseated;
   return d;
 }
 
@@ -151,7 +155,24 @@ nb::dict blade_counters_dict(const BladeCounters& c) {
   d["deferred_points"] = c.deferred_points;
   d["total_transitions"] = c.total_transitions;
   d["max_transitions_in_tick"] = c.max_transitions_in_tick;
+  d["rigid_rounds"] = c.rigid_rounds;
+  d["max_rigid_rounds_in_tick"] = c.max_rigid_rounds_in_tick;
+  d["unresolved_ticks"] = c.unresolved_ticks;
+  d["unseated_ticks"] = c.unseated_ticks;
   return d;
+}
+
+BladeCoupling coupling_from(const std::string& name) {
+  if (name == "rigid") return BladeCoupling::Rigid;
+  if (name == "independent") return BladeCoupling::Independent;
+  throw std::invalid_argument("coupling must be \"rigid\" or \"independent\", got \"" + name +
+                              "\"");
+}
+
+BladeOrientation orientation_from(const std::string& name) {
+  if (name == "free") return BladeOrientation::Free;
+  if (name == "locked") return BladeOrientation::Locked;
+  throw std::invalid_argument("orientation must be \"free\" or \"locked\", got \"" + name + "\"");
 }
 
 template <class T, class Get>
@@ -403,7 +424,8 @@ void bind_proxy(nb::module_& m) {
       .def(
           "__init__",
           [](PyBlade* self, std::shared_ptr<const Space> space, const std::vector<double>& start_mm,
-             const std::vector<double>& end_mm, std::int64_t points) {
+             const std::vector<double>& end_mm, std::int64_t points, const std::string& coupling,
+             const std::string& orientation) {
             if (start_mm.size() != 3 || end_mm.size() != 3) {
               throw std::invalid_argument("start_mm and end_mm need 3 coordinates");
             }
@@ -411,12 +433,55 @@ void bind_proxy(nb::module_& m) {
               throw std::invalid_argument("a blade has 1.." + std::to_string(Blade::kMaxPoints) +
                                           " points, got " + std::to_string(points));
             }
-            new (self) PyBlade(std::move(space), {"blade",
-                                                  {start_mm[0], start_mm[1], start_mm[2]},
-                                                  {end_mm[0], end_mm[1], end_mm[2]},
-                                                  static_cast<int>(points)});
+            BladeSpec spec{"blade",
+                           {start_mm[0], start_mm[1], start_mm[2]},
+                           {end_mm[0], end_mm[1], end_mm[2]},
+                           static_cast<int>(points)};
+            spec.coupling = coupling_from(coupling);
+            spec.orientation = orientation_from(orientation);
+            new (self) PyBlade(std::move(space), spec);
           },
-          nb::arg("space"), nb::arg("start_mm"), nb::arg("end_mm"), nb::arg("points") = 50)
+          nb::arg("space"), nb::arg("start_mm"), nb::arg("end_mm"), nb::arg("points") = 50,
+          nb::arg("coupling") = "independent", nb::arg("orientation") = "free",
+          "coupling: \"independent\" (the paper's points, each on its own) or \"rigid\" "
+          "(one ideal pose for the whole edge); orientation of a rigid blade: \"free\" or "
+          "\"locked\" to the device's.")
+      .def_prop_ro("coupling",
+                   [](const PyBlade& b) {
+                     return std::string(b.blade.coupling() == BladeCoupling::Rigid ? "rigid"
+                                                                                   : "independent");
+                   })
+      .def_prop_rw(
+          "orientation",
+          [](const PyBlade& b) {
+            const auto busy = claim(b);
+            return std::string(b.blade.orientation() == BladeOrientation::Locked ? "locked"
+                                                                                 : "free");
+          },
+          [](PyBlade& b, const std::string& orientation) {
+            const auto busy = claim(b);
+            b.blade.set_orientation(orientation_from(orientation));
+          },
+          "A rigid blade's orientation, \"free\" or \"locked\"; from the next step on.")
+      .def_prop_ro(
+          "ideal_pose",
+          [](const PyBlade& b) {
+            const auto busy = claim(b);
+            const Pose& pose = b.blade.ideal_pose();
+            auto out = new_array<double>({7});
+            double* d = out.data();
+            d[0] = pose.position_mm.x;
+            d[1] = pose.position_mm.y;
+            d[2] = pose.position_mm.z;
+            d[3] = pose.rotation.w;
+            d[4] = pose.rotation.x;
+            d[5] = pose.rotation.y;
+            d[6] = pose.rotation.z;
+            return out;
+          },
+          "(x, y, z, qw, qx, qy, qz) of the rigid blade's ideal tool pose (its points are q); "
+          "for independent points, the last device pose.",
+          nb::rv_policy::move)
       .def_prop_ro(
           "point_count",
           [](const PyBlade& b) {

@@ -88,6 +88,19 @@ Blade::Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
   world_points_ = tool_points_;
   proxies_.assign(tool_points_.size(), Proxy(space_));
   point_ticks_.assign(tool_points_.size(), TickResult{});
+  coupling_ = spec.coupling;
+  orientation_ = spec.orientation;
+  length_mm_ = norm(tool_span_);
+  tool_direction_ = length_mm_ > 0.0 ? tool_span_ / length_mm_ : Vec3{1.0, 0.0, 0.0};
+  if (coupling_ == BladeCoupling::Rigid) {
+    const std::size_t n = tool_points_.size();
+    ideal_points_.assign(n, Vec3{});
+    ideal_tets_.assign(n, kNoTet);
+    trial_points_.assign(n, Vec3{});
+    trial_tets_.assign(n, kNoTet);
+    targets_.assign(n, Vec3{});
+    point_forces_.assign(n, Vec3{});
+  }
 }
 
 // Checks the pose and places the points; on a refused pose the proxies are
@@ -98,6 +111,7 @@ PoseCheck Blade::place_checked(const Pose& pose) {
   const PoseCheck check = check_rotation(pose);
   if (check != PoseCheck::Fine) return check;
   const Quaternion r = pose.rotation.normalized();
+  device_pose_ = {pose.position_mm, r};
   world_lever_ = r.rotate(tool_start_);
   world_span_ = r.rotate(tool_span_);
   const Vec3 a = pose.position_mm + world_lever_;
@@ -124,6 +138,20 @@ void Blade::reset(const Pose& pose) {
   first_ = 0;
   tick_index_ = 0;
   last_tick_ = {};
+  ideal_pose_ = device_pose_;
+  if (coupling_ == BladeCoupling::Rigid) {
+    std::fill(point_forces_.begin(), point_forces_.end(), Vec3{});
+    seated_ = seat_at(device_edge());
+    if (seated_) place_proxies_on_ideal(space_->runtime_settings());
+  }
+}
+
+Vec3 Blade::ideal_point(int i) const {
+  return coupling_ == BladeCoupling::Rigid ? ideal_points_[i] : proxies_[i].q();
+}
+
+Vec3 Blade::point_force(int i) const {
+  return coupling_ == BladeCoupling::Rigid ? point_forces_[i] : proxies_[i].force_N();
 }
 
 void Blade::clear_counters() {
@@ -163,6 +191,14 @@ BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& sett
   if (!settings.valid()) return reject(false);
   const PoseCheck check = place_checked(pose);
   if (check != PoseCheck::Fine) return reject(check == PoseCheck::OutOfWorkspace);
+  if (coupling_ == BladeCoupling::Rigid) return step_rigid(pose, dt_s, settings);
+  ideal_pose_ = device_pose_;
+  const BladeTick tick = step_points(dt_s, settings);
+  count(tick);
+  return tick;
+}
+
+BladeTick Blade::step_points(double dt_s, const RuntimeSettings& settings) {
   const std::size_t n = proxies_.size();
   int remaining = settings.blade_budget(static_cast<int>(n));
   const int cap = settings.max_transitions_per_tick;
@@ -247,20 +283,29 @@ BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& sett
       }
     }
   }
+  return tick;
+}
+
+void Blade::count(const BladeTick& tick) {
   counters_.unfinished_ticks += tick.capped_points > 0 ? 1 : 0;
   counters_.capped_points += static_cast<std::uint64_t>(tick.capped_points);
   counters_.deferred_points += static_cast<std::uint64_t>(tick.deferred_points);
   counters_.total_transitions += static_cast<std::uint64_t>(tick.transitions);
   counters_.max_transitions_in_tick =
       std::max(counters_.max_transitions_in_tick, static_cast<std::uint32_t>(tick.transitions));
+  counters_.rigid_rounds += static_cast<std::uint64_t>(tick.rigid_rounds);
+  counters_.max_rigid_rounds_in_tick =
+      std::max(counters_.max_rigid_rounds_in_tick, static_cast<std::uint32_t>(tick.rigid_rounds));
+  counters_.unresolved_ticks += tick.unresolved ? 1 : 0;
+  counters_.unseated_ticks += tick.unseated ? 1 : 0;
   last_tick_ = tick;
-  return tick;
 }
 
 std::size_t Blade::snapshot(BladeSnapshotHeader& header, std::span<ProxySnapshot> points) const {
   const std::size_t count = std::min(points.size(), proxies_.size());
   for (std::size_t i = 0; i < count; ++i) {
-    points[i] = {proxies_[i].place(), world_points_[i], proxies_[i].force_N(), point_ticks_[i]};
+    points[i] = {proxies_[i].place(), world_points_[i], point_force(static_cast<int>(i)),
+                 point_ticks_[i]};
   }
   header.tick_index = tick_index_;
   header.tick = last_tick_;

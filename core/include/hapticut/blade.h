@@ -16,6 +16,7 @@
 #include <span>
 #include <vector>
 
+#include "hapticut/edge_fit.h"
 #include "hapticut/force_shading.h"
 #include "hapticut/proxy.h"
 #include "hapticut/scene.h"
@@ -58,6 +59,15 @@ struct BladeTick {
   // rotation of (near) zero norm, a point outside the Space's workspace, or
   // settings out of range.
   bool rejected = false;
+  // Rigid coupling only (docs/decisions.md, "The rigid blade"): the solve's
+  // rounds (walk, fit, walk again; at most Blade::kMaxRigidRounds), the
+  // contact planes it used, whether it ended short of the constrained optimum
+  // (on its last verified pose), and whether the blade has no valid pose yet
+  // (reset inside rigid material: zero force until the device leaves it).
+  int rigid_rounds = 0;
+  int contacts = 0;
+  bool unresolved = false;
+  bool unseated = false;
 };
 
 struct BladeCounters {
@@ -69,6 +79,10 @@ struct BladeCounters {
   std::uint64_t deferred_points = 0;         // Summed over ticks.
   std::uint64_t total_transitions = 0;
   std::uint32_t max_transitions_in_tick = 0;  // Most in one tick, all points together.
+  std::uint64_t rigid_rounds = 0;             // Rigid coupling: summed over ticks.
+  std::uint32_t max_rigid_rounds_in_tick = 0;
+  std::uint64_t unresolved_ticks = 0;
+  std::uint64_t unseated_ticks = 0;
 };
 
 // One point of a snapshot.
@@ -99,6 +113,10 @@ struct BladeSnapshot {
 class Blade {
  public:
   static constexpr int kMaxPoints = 10000;
+  // Rounds of a rigid tick (walk, fit, walk again), and the halvings of one
+  // conservative advance: bounded work, counted in BladeTick.
+  static constexpr int kMaxRigidRounds = 8;
+  static constexpr int kMaxAdvanceHalvings = 4;
 
   // Throws std::invalid_argument naming the value when spec.points is outside
   // 1..kMaxPoints or an end is not finite. Builds its own ForceShading from
@@ -137,9 +155,41 @@ class Blade {
   const BladeCounters& counters() const { return counters_; }
   void clear_counters();
 
+  BladeCoupling coupling() const { return coupling_; }
+  BladeOrientation orientation() const { return orientation_; }
+  // Takes effect from the next tick; never allocates.
+  void set_orientation(BladeOrientation orientation) { orientation_ = orientation; }
+  // The rigid blade's ideal tool pose (its edge, with the roll about the edge
+  // taken from the device); for independent points, the last device pose.
+  const Pose& ideal_pose() const { return ideal_pose_; }
+  // The rigid blade's points on its ideal pose (independent: the proxies' q).
+  Vec3 ideal_point(int i) const;
+  // The point forces k (x_i - p_i) of the last tick (independent: the proxies').
+  Vec3 point_force(int i) const;
+
  private:
   PoseCheck place_checked(const Pose& pose);
   BladeTick reject(bool out_of_workspace);
+  // Today's per-point tick (the paper's blade): every proxy toward its
+  // device point under the work budget; the summed force and torque.
+  BladeTick step_points(double dt_s, const RuntimeSettings& settings);
+  void count(const BladeTick& tick);
+  // The rigid coupling (blade_rigid.cpp).
+  BladeTick step_rigid(const Pose& pose, double dt_s, const RuntimeSettings& settings);
+  // The device's edge from the last placed pose.
+  EdgePose device_edge() const;
+  // Whether every point and every stretch between neighbours of `edge` lies
+  // outside rigid material; if so, makes it the ideal pose (seated).
+  bool seat_at(const EdgePose& edge);
+  // Walks every point from the ideal pose to `edge` and then the stretches
+  // between neighbours there; true when nothing met rigid material. `advance`
+  // gets the least fraction any point got; contacts found are added when asked.
+  bool probe_motion(const EdgePose& edge, double& advance, bool add_contacts);
+  void add_contact(double fraction, const Plane& plane);
+  // Makes the probed edge (trial_*) the ideal one.
+  void accept_trial(const EdgePose& edge);
+  void update_ideal_pose(const Pose& device);
+  void place_proxies_on_ideal(const RuntimeSettings& settings);
 
   std::shared_ptr<const Space> space_;
   std::shared_ptr<const ForceShading> shading_;
@@ -157,6 +207,26 @@ class Blade {
   std::uint64_t tick_index_ = 0;
   BladeTick last_tick_;
   BladeCounters counters_;
+
+  BladeCoupling coupling_ = BladeCoupling::Independent;
+  BladeOrientation orientation_ = BladeOrientation::Free;
+  double length_mm_ = 0.0;  // |end - start|.
+  Vec3 tool_direction_;     // (end - start) / length, or +x for a zero length.
+  Pose device_pose_;        // The last placed pose.
+  Pose ideal_pose_;
+  EdgePose ideal_edge_;
+  bool seated_ = false;
+  // The rigid solve's storage, sized once: the ideal points and the tets that
+  // hold them (kNoTet outside the mesh), a trial pose's, the targets t_i and
+  // the point forces.
+  std::vector<Vec3> ideal_points_;
+  std::vector<std::int32_t> ideal_tets_;
+  std::vector<Vec3> trial_points_;
+  std::vector<std::int32_t> trial_tets_;
+  std::vector<Vec3> targets_;
+  std::vector<Vec3> point_forces_;
+  std::array<EdgeContact, kMaxEdgeContacts> contacts_{};
+  int contact_count_ = 0;
 };
 
 }  // namespace hapticut

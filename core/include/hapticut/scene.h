@@ -17,11 +17,21 @@ namespace hapticut {
 inline constexpr int kSceneFormatVersion = 1;
 inline constexpr std::string_view kSceneFormatName = "hapticut.scene";
 
+// How a blade's points move together (docs/decisions.md, "The rigid blade"):
+// the paper's independent proxies, or one rigid edge whose pose the point
+// proxies detect contacts for.
+enum class BladeCoupling : std::uint8_t { Independent, Rigid };
+// A rigid blade's orientation: its own (a bone under one end tilts it), or
+// the device's (for devices that render no torque).
+enum class BladeOrientation : std::uint8_t { Free, Locked };
+
 struct BladeSpec {
   std::string name;
   Vec3 start_mm;    // In the tool frame.
   Vec3 end_mm;      // In the tool frame.
   int points = 50;  // Sample points along the edge, ends included (>= 1).
+  BladeCoupling coupling = BladeCoupling::Independent;
+  BladeOrientation orientation = BladeOrientation::Free;
 };
 
 struct SafetyLimits {

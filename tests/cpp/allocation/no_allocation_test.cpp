@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <limits>
 #include <memory>
@@ -158,8 +159,11 @@ TEST(NoAllocation, AMillionProxySteps) {
   for (const Proxy& proxy : proxies) EXPECT_EQ(proxy.check_invariants(), "");
 }
 
-void run_blade(const std::shared_ptr<const Space>& space, const Pose& start, double reach_mm) {
-  Blade blade(space, {"b", {-20, 0, 0}, {20, 0, 0}, 50});
+void run_blade(const std::shared_ptr<const Space>& space, const Pose& start, double reach_mm,
+               BladeCoupling coupling = BladeCoupling::Independent) {
+  BladeSpec spec{"b", {-20, 0, 0}, {20, 0, 0}, 50};
+  spec.coupling = coupling;
+  Blade blade(space, spec);
   blade.reset(start);
   RuntimeSettings plain = space->runtime_settings();
   RuntimeSettings shaded = plain;
@@ -190,6 +194,17 @@ void run_blade(const std::shared_ptr<const Space>& space, const Pose& start, dou
   EXPECT_GT(capped, 0);
   EXPECT_EQ(blade.counters().rejected_ticks, 1u);
   EXPECT_EQ(refused, 1);  // check_pose (no allocation either) refused the same pose.
+  if (coupling == BladeCoupling::Rigid) {
+    // The rigid rounds ran: seated from the start, contacts fitted.
+    std::printf("rigid: %llu rounds in %llu ticks, %u at most, %llu unresolved, %llu unseated\n",
+                static_cast<unsigned long long>(blade.counters().rigid_rounds),
+                static_cast<unsigned long long>(blade.counters().ticks),
+                blade.counters().max_rigid_rounds_in_tick,
+                static_cast<unsigned long long>(blade.counters().unresolved_ticks),
+                static_cast<unsigned long long>(blade.counters().unseated_ticks));
+    EXPECT_EQ(blade.counters().unseated_ticks, 0u);
+    EXPECT_GT(blade.counters().max_rigid_rounds_in_tick, 1u);
+  }
   for (const Proxy& proxy : blade.proxies()) EXPECT_EQ(proxy.check_invariants(), "");
 }
 
@@ -201,6 +216,17 @@ TEST(NoAllocation, TenThousandBladeTicksOnTheRigidSphere) {
   const auto space = Space::from_scene(
       load_scene(std::string(HAPTICUT_EXAMPLES_DIR) + "/sphere80.hapticut.msgpack"));
   run_blade(space, {{0, 0, 40}, {}}, 30.0);
+}
+
+// The rigid coupling's rounds (walks, fits, the least-distance solve) add no allocation.
+TEST(NoAllocation, TenThousandRigidBladeTicksOnTheMixedGrid) {
+  run_blade(mixed_space(), {{20, 15, 32}, {}}, 14.0, BladeCoupling::Rigid);
+}
+
+TEST(NoAllocation, TenThousandRigidBladeTicksOnTheRigidSphere) {
+  const auto space = Space::from_scene(
+      load_scene(std::string(HAPTICUT_EXAMPLES_DIR) + "/sphere80.hapticut.msgpack"));
+  run_blade(space, {{0, 0, 32}, {}}, 30.0, BladeCoupling::Rigid);  // Lower: onto the sphere.
 }
 
 TEST(NoAllocation, TheCounterSeesAnAllocation) {

@@ -1,0 +1,299 @@
+// The rigid coupling of a Blade (docs/decisions.md, "The rigid blade"): one
+// ideal pose for the whole edge, a six degree-of-freedom god-object (Ortega,
+// Redon and Coquillart 2007) with the tet walk as its collision detector.
+//
+// One tick:
+//  1. The point proxies, placed on the last ideal pose, tick toward their
+//     device points as in the paper: where a resisting material (drag,
+//     viscous, membrane) holds one back, its q is the spring's target t_i;
+//     elsewhere t_i is the device point.
+//  2. The edge nearest the targets (fit_edge) is the first trial.
+//  3. Every point walks from the ideal pose to the trial (probe_segment), then
+//     the stretches between neighbours are walked at the trial. All free:
+//     the trial becomes the ideal pose and the tick ends. Else the planes met
+//     are kept as contacts, the pose advances as far as every walk got (a
+//     verified pose, or none), and the fit with the contacts
+//     (fit_edge_constrained) from there is the next trial.
+//  4. After kMaxRigidRounds rounds the tick ends on the last verified pose.
+// Force and torque are today's sums with q_i = x_i(ideal pose).
+#include <algorithm>
+#include <cmath>
+
+#include "hapticut/blade.h"
+#include "hapticut/segment_probe.h"
+
+namespace hapticut {
+
+namespace {
+
+Quaternion multiply(const Quaternion& a, const Quaternion& b) {
+  return {
+      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
+      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
+}
+
+// The least rotation taking unit vector `from` onto unit vector `to`.
+Quaternion rotation_between(const Vec3& from, const Vec3& to) {
+  const double c = dot(from, to);
+  if (c < -1.0 + 1e-12) {
+    Vec3 across1;
+    Vec3 across2;
+    frame_across(from, across1, across2);
+    return {0.0, across1.x, across1.y, across1.z};  // Half a turn about an axis across.
+  }
+  const Vec3 axis = cross(from, to);
+  return Quaternion{1.0 + c, axis.x, axis.y, axis.z}.normalized();
+}
+
+// A pose's advance below this fraction is no advance.
+constexpr double kLeastAdvance = 1e-9;
+// Linearised fits per round at most (free orientation).
+constexpr int kFitPasses = 4;
+
+// The contact for a stretch a -> b of the edge that enters rigid material
+// through plane `in` (at fraction s_in) and leaves it through plane `out` (at
+// s_out), both with normals out of the material. Near their common line the
+// material lies on the rigid side of both, so of every plane through that
+// line whose normal combines theirs with weights >= 0: the one parallel to the
+// edge's direction keeps the whole edge off it when the edge stays on its free
+// side. Its sample is the stretch's deepest one, where both planes are equally
+// far. False when no such combination exists (the edge along the line).
+bool wedge_contact(const Plane& in, const Plane& out, const Vec3& direction, const Vec3& a,
+                   const Vec3& b, double s_in, double s_out, EdgeContact& contact) {
+  double w_in = dot(out.normal, direction);
+  double w_out = -dot(in.normal, direction);
+  if (w_in < 0.0 && w_out < 0.0) {
+    w_in = -w_in;
+    w_out = -w_out;
+  }
+  if (w_in < 0.0 || w_out < 0.0) return false;
+  const Vec3 normal = in.normal * w_in + out.normal * w_out;
+  const double size = norm(normal);
+  if (!(size > 1e-9)) {
+    // Parallel planes (entered and left through one plane): that plane.
+    contact.plane = in;
+  } else {
+    contact.plane = {normal / size, (in.offset * w_in + out.offset * w_out) / size};
+  }
+  const double in_a = in.signed_distance(a);
+  const double out_a = out.signed_distance(a);
+  const double slope = (in.signed_distance(b) - in_a) - (out.signed_distance(b) - out_a);
+  double s = 0.5 * (s_in + s_out);
+  if (std::abs(slope) > 1e-12) s = (out_a - in_a) / slope;
+  contact.fraction = std::clamp(s, std::min(s_in, s_out), std::max(s_in, s_out));
+  return true;
+}
+
+}  // namespace
+
+EdgePose Blade::device_edge() const {
+  return {
+      device_pose_.position_mm + world_lever_,
+      length_mm_ > 0.0 ? world_span_ / length_mm_ : device_pose_.rotation.rotate(tool_direction_)};
+}
+
+void Blade::add_contact(double fraction, const Plane& plane) {
+  for (int j = 0; j < contact_count_; ++j) {
+    const EdgeContact& c = contacts_[j];
+    if (c.fraction == fraction && c.plane.normal == plane.normal &&
+        c.plane.offset == plane.offset) {
+      return;
+    }
+  }
+  // Full: the walks still refuse every pose that enters rigid material; the
+  // fit only lacks this plane.
+  if (contact_count_ == kMaxEdgeContacts) return;
+  contacts_[contact_count_++] = {fraction, plane};
+}
+
+bool Blade::probe_motion(const EdgePose& edge, double& advance, bool add_contacts) {
+  const Space& space = *space_;
+  const std::size_t n = proxies_.size();
+  advance = 1.0;
+  bool free = true;
+  for (std::size_t i = 0; i < n; ++i) {
+    trial_points_[i] = edge.point(fractions_[i], length_mm_);
+    const SegmentProbe probe =
+        probe_segment(space, ideal_tets_[i], ideal_points_[i], trial_points_[i]);
+    if (probe.hit) {
+      free = false;
+      advance = std::min(advance, probe.fraction);
+      if (add_contacts && !probe.exhausted) add_contact(fractions_[i], probe.contact);
+    } else {
+      trial_tets_[i] = probe.end_tet;
+    }
+  }
+  if (!free) return false;
+  // Between neighbours: a stretch that passes through rigid material is
+  // walked from both ends, giving the plane it enters by and the plane it
+  // leaves by; the contact is the plane through their common line that runs
+  // along the edge (wedge_contact), at the stretch's deepest sample.
+  const Vec3 direction = edge.direction;
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    const SegmentProbe ahead =
+        probe_segment(space, trial_tets_[i], trial_points_[i], trial_points_[i + 1]);
+    if (!ahead.hit) continue;
+    free = false;
+    if (!add_contacts) return false;
+    const SegmentProbe back =
+        probe_segment(space, trial_tets_[i + 1], trial_points_[i + 1], trial_points_[i]);
+    if (ahead.exhausted || !back.hit || back.exhausted) continue;
+    const double gap = fractions_[i + 1] - fractions_[i];
+    EdgeContact contact;
+    if (wedge_contact(ahead.contact, back.contact, direction, trial_points_[i],
+                      trial_points_[i + 1], ahead.fraction, 1.0 - back.fraction, contact)) {
+      contact.fraction = fractions_[i] + contact.fraction * gap;
+      add_contact(contact.fraction, contact.plane);
+    }
+  }
+  if (!free) advance = 0.0;  // The points got there; the edge between them did not.
+  return free;
+}
+
+void Blade::accept_trial(const EdgePose& edge) {
+  ideal_edge_ = edge;
+  ideal_points_.swap(trial_points_);
+  ideal_tets_.swap(trial_tets_);
+}
+
+bool Blade::seat_at(const EdgePose& edge) {
+  const Space& space = *space_;
+  const std::size_t n = proxies_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    trial_points_[i] = edge.point(fractions_[i], length_mm_);
+    bool inside_rigid = false;
+    trial_tets_[i] = locate_for_probe(space, trial_points_[i], inside_rigid);
+    if (inside_rigid) return false;
+  }
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    if (probe_segment(space, trial_tets_[i], trial_points_[i], trial_points_[i + 1]).hit) {
+      return false;
+    }
+  }
+  accept_trial(edge);
+  return true;
+}
+
+// The tool pose of the ideal edge: the device's rotation turned (the least
+// turn) from the device's edge direction onto the ideal one, so the roll
+// about the edge is the device's; the origin where that rotation puts the
+// edge's start on the ideal one.
+void Blade::update_ideal_pose(const Pose& device) {
+  const Vec3 device_direction = device.rotation.rotate(tool_direction_);
+  const Quaternion turn = rotation_between(device_direction, ideal_edge_.direction);
+  const Quaternion rotation = multiply(turn, device.rotation).normalized();
+  ideal_pose_ = {ideal_edge_.start_mm - rotation.rotate(tool_start_), rotation};
+}
+
+// Each proxy at its point of the ideal pose, in the tet that holds it (a TET
+// state owned by a non-rigid tet, or OUTSIDE), with the point's force: the
+// next tick's walks start there.
+void Blade::place_proxies_on_ideal(const RuntimeSettings& settings) {
+  const std::size_t n = proxies_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    Proxy& proxy = proxies_[i];
+    const std::int32_t t = ideal_tets_[i];
+    proxy.place_ = {t == kNoTet ? ProxyState::Outside : ProxyState::Tet, t, 0, ideal_points_[i]};
+    const Vec3 force = (ideal_points_[i] - world_points_[i]) * settings.stiffness_N_per_mm;
+    point_forces_[i] = is_finite(force) ? force : Vec3{};
+    proxy.force_N_ = point_forces_[i];
+  }
+}
+
+BladeTick Blade::step_rigid(const Pose& pose, double dt_s, const RuntimeSettings& settings) {
+  (void)pose;
+  const std::size_t n = proxies_.size();
+  const EdgePose device = device_edge();
+  if (!seated_) {
+    seated_ = seat_at(device);
+    if (!seated_) {
+      BladeTick tick;
+      tick.unseated = true;
+      ideal_pose_ = device_pose_;
+      std::fill(point_forces_.begin(), point_forces_.end(), Vec3{});
+      for (std::size_t i = 0; i < n; ++i) proxies_[i].force_N_ = Vec3{};
+      count(tick);
+      return tick;
+    }
+  }
+  // 1. The targets: the paper's tick of every point from the ideal pose.
+  BladeTick tick = step_points(dt_s, settings);
+  for (std::size_t i = 0; i < n; ++i) {
+    const ProxyPlace& place = proxies_[i].place();
+    const TickResult& r = point_ticks_[i];
+    const bool held_by_material =
+        (place.state == ProxyState::Tet || place.state == ProxyState::Outside) && !r.capped &&
+        !r.deferred;
+    targets_[i] = held_by_material ? place.q : world_points_[i];
+  }
+  // 2-4. The pose.
+  const bool lock = orientation_ == BladeOrientation::Locked;
+  const std::span<const double> fractions(fractions_);
+  const std::span<const Vec3> targets(targets_);
+  EdgePose trial = fit_edge(fractions, targets, length_mm_, device.direction, lock);
+  contact_count_ = 0;
+  // The fit keeps contacts this far on their free side: a rounding error of
+  // the pose then never reads as a step into the plane.
+  const double margin = 4.0 * space_->tolerance();
+  bool resolved = false;
+  int rounds = 0;
+  while (rounds < kMaxRigidRounds) {
+    ++rounds;
+    const int known = contact_count_;
+    double advance = 1.0;
+    if (probe_motion(trial, advance, true)) {
+      accept_trial(trial);
+      resolved = true;
+      break;
+    }
+    // As far as every walk got, verified; halved while the edge between the
+    // points (or the arc the turn makes of a chord) still meets rigid material.
+    double fraction = advance;
+    for (int h = 0; h <= kMaxAdvanceHalvings && fraction > kLeastAdvance; ++h, fraction *= 0.5) {
+      const EdgePose part = interpolate_edge(ideal_edge_, trial, fraction);
+      double ignored = 1.0;
+      if (probe_motion(part, ignored, false)) {
+        accept_trial(part);
+        break;
+      }
+    }
+    if (contact_count_ == known && advance <= kLeastAdvance) break;  // Nothing new to fit.
+    // Sequential: each fit linearised about the last one's answer, so a
+    // turn's second-order error (the edge keeps its length) is gone before
+    // the walks judge it.
+    EdgePose base = lock ? EdgePose{ideal_edge_.start_mm, device.direction} : ideal_edge_;
+    const std::span<const EdgeContact> contacts(contacts_.data(), contact_count_);
+    bool feasible = true;
+    for (int pass = 0; pass < (lock ? 1 : kFitPasses); ++pass) {
+      if (fit_edge_constrained(base, fractions, targets, length_mm_, lock, contacts, margin,
+                               trial) == EdgeFitStatus::Infeasible) {
+        feasible = false;
+        break;
+      }
+      const bool settled =
+          squared_norm(trial.start_mm - base.start_mm) +
+              squared_norm(trial.direction - base.direction) * length_mm_ * length_mm_ <=
+          margin * margin;
+      base = trial;
+      if (settled) break;
+    }
+    if (!feasible) break;
+  }
+  update_ideal_pose(device_pose_);
+  place_proxies_on_ideal(settings);
+  Vec3 force;
+  Vec3 weighted_force;
+  for (std::size_t i = 0; i < n; ++i) {
+    force += point_forces_[i];
+    weighted_force += point_forces_[i] * fractions_[i];
+  }
+  tick.force_N = force;
+  tick.torque_N_mm = cross(world_lever_, force) + cross(world_span_, weighted_force);
+  tick.rigid_rounds = rounds;
+  tick.contacts = contact_count_;
+  tick.unresolved = !resolved;
+  count(tick);
+  return tick;
+}
+
+}  // namespace hapticut
