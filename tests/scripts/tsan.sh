@@ -45,8 +45,13 @@ case "${1:-run}" in
     export TSAN_OPTIONS="log_path=$reports/tsan halt_on_error=0 exitcode=66 second_deadlock_stack=1"
     status=0
     build/tsan/server/hapticut_servo_tests --gtest_brief=1 || status=$?
+    # The dropped-records test needs a loop that outpaces the writer; under TSan the loop is
+    # the slower of the two and drops nothing, so it runs only in the plain pytest phase (the
+    # trailer's threads are exercised by the rest of its file here).
     HAPTICUT_SERVO="$PWD/build/tsan/server/hapticut-servo" \
-      python3 -m pytest -q -p no:cacheprovider "${tests[@]}" || status=$?
+      python3 -m pytest -q -p no:cacheprovider "${tests[@]}" \
+      --deselect tests/python/test_servo_recording_end.py::test_the_trailer_counts_the_records_the_loop_dropped \
+      || status=$?
     shopt -s nullglob
     found=("$reports"/tsan.*)
     if [ ${#found[@]} -gt 0 ]; then
