@@ -17,7 +17,7 @@ import numpy as np
 
 from hapticut.scenebuild import BuildError, BuildSettings, Region
 from hapticut.scenebuild.geometry import signed_volume
-from hapticut.scenefile import BladeSpec, Material
+from hapticut.scenefile import BLADE_COUPLINGS, BLADE_ORIENTATIONS, BladeSpec, Material
 from hapticut.scenefile.model import MATERIAL_PARAMETERS
 
 REQUEST_FORMAT = "hapticut.build-request"
@@ -121,7 +121,16 @@ def _blade(data, field: str) -> tuple[BladeSpec, str]:
     )
     device = data.get("device", "")
     _expect(isinstance(device, str), f"{field}/device", "must be a string")
-    return BladeSpec(name, ends[0], ends[1], points), device
+    settings = {}
+    for key, choices in (("coupling", BLADE_COUPLINGS), ("orientation", BLADE_ORIENTATIONS)):
+        value = data.get(key, choices[0])
+        _expect(
+            value in choices,
+            f"{field}/{key}",
+            f"must be one of {', '.join(choices)}, not {value!r} (blade {name!r})",
+        )
+        settings[key] = value
+    return BladeSpec(name, ends[0], ends[1], points, **settings), device
 
 
 def read_request(path: str | os.PathLike) -> BuildRequest:

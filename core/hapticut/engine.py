@@ -62,7 +62,14 @@ def make_blade(
     space: _core.Space, spec: BladeSpec, settings: _core.RuntimeSettings | None = None
 ) -> _core.Blade:
     """A blade of the scene's spec; settings per tick default to the scene's own."""
-    blade = _core.Blade(space, list(spec.start_mm), list(spec.end_mm), spec.points)
+    blade = _core.Blade(
+        space,
+        list(spec.start_mm),
+        list(spec.end_mm),
+        spec.points,
+        coupling=spec.coupling,
+        orientation=spec.orientation,
+    )
     if settings is not None:
         blade.settings = settings
     return blade

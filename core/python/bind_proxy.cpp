@@ -163,15 +163,13 @@ nb::dict blade_counters_dict(const BladeCounters& c) {
 }
 
 BladeCoupling coupling_from(const std::string& name) {
-  if (name == "rigid") return BladeCoupling::Rigid;
-  if (name == "independent") return BladeCoupling::Independent;
+  if (const auto coupling = hapticut::blade_coupling_from_name(name)) return *coupling;
   throw std::invalid_argument("coupling must be \"rigid\" or \"independent\", got \"" + name +
                               "\"");
 }
 
 BladeOrientation orientation_from(const std::string& name) {
-  if (name == "free") return BladeOrientation::Free;
-  if (name == "locked") return BladeOrientation::Locked;
+  if (const auto orientation = hapticut::blade_orientation_from_name(name)) return *orientation;
   throw std::invalid_argument("orientation must be \"free\" or \"locked\", got \"" + name + "\"");
 }
 
@@ -442,21 +440,19 @@ void bind_proxy(nb::module_& m) {
             new (self) PyBlade(std::move(space), spec);
           },
           nb::arg("space"), nb::arg("start_mm"), nb::arg("end_mm"), nb::arg("points") = 50,
-          nb::arg("coupling") = "independent", nb::arg("orientation") = "free",
-          "coupling: \"independent\" (the paper's points, each on its own) or \"rigid\" "
-          "(one ideal pose for the whole edge); orientation of a rigid blade: \"free\" or "
-          "\"locked\" to the device's.")
+          nb::arg("coupling") = "rigid", nb::arg("orientation") = "free",
+          "coupling: \"rigid\" (the default: one ideal pose for the whole edge) or "
+          "\"independent\" (the paper's points, each on its own); orientation of a rigid "
+          "blade: \"free\" (the default) or \"locked\" to the device's.")
       .def_prop_ro("coupling",
                    [](const PyBlade& b) {
-                     return std::string(b.blade.coupling() == BladeCoupling::Rigid ? "rigid"
-                                                                                   : "independent");
+                     return std::string(hapticut::blade_coupling_name(b.blade.coupling()));
                    })
       .def_prop_rw(
           "orientation",
           [](const PyBlade& b) {
             const auto busy = claim(b);
-            return std::string(b.blade.orientation() == BladeOrientation::Locked ? "locked"
-                                                                                 : "free");
+            return std::string(hapticut::blade_orientation_name(b.blade.orientation()));
           },
           [](PyBlade& b, const std::string& orientation) {
             const auto busy = claim(b);

@@ -136,6 +136,8 @@ nb::dict document_to_dict(const SceneDocument& document) {
     item["start_mm"] = point_tuple(blade.start_mm);
     item["end_mm"] = point_tuple(blade.end_mm);
     item["points"] = blade.points;
+    item["coupling"] = hapticut::blade_coupling_name(blade.coupling);
+    item["orientation"] = hapticut::blade_orientation_name(blade.orientation);
     blades.append(item);
   }
   nb::dict safety;
@@ -287,6 +289,16 @@ SceneDocument document_from_dict(const nb::dict& scene_dict) {
       blade.start_mm = read_point(item["start_mm"], field + "/start_mm");
       blade.end_mm = read_point(item["end_mm"], field + "/end_mm");
       blade.points = get_or(item, "points", blade.points, field);
+      if (item.contains("coupling")) {
+        blade.coupling =
+            hapticut::blade_coupling_at(cast_at<std::string>(item["coupling"], field + "/coupling"),
+                                        blade.name, field + "/coupling");
+      }
+      if (item.contains("orientation")) {
+        blade.orientation = hapticut::blade_orientation_at(
+            cast_at<std::string>(item["orientation"], field + "/orientation"), blade.name,
+            field + "/orientation");
+      }
       scene.blades.push_back(blade);
     }
   }

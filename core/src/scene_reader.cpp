@@ -251,7 +251,18 @@ BladeSpec read_blade(const Json& object, const Path& path, NameRegistry& names) 
   if (const Json* points = find(object, "points")) {
     blade.points = read_int_between(*points, Path(path, "points"), 1, kMaxInt32);
   }
-  reject_unknown_fields(object, path, {"name", "start_mm", "end_mm", "points"});
+  if (const Json* coupling = find(object, "coupling")) {
+    const Path coupling_path(path, "coupling");
+    blade.coupling = blade_coupling_at(read_string(*coupling, coupling_path), blade.name,
+                                       coupling_path.pointer());
+  }
+  if (const Json* orientation = find(object, "orientation")) {
+    const Path orientation_path(path, "orientation");
+    blade.orientation = blade_orientation_at(read_string(*orientation, orientation_path),
+                                             blade.name, orientation_path.pointer());
+  }
+  reject_unknown_fields(object, path,
+                        {"name", "start_mm", "end_mm", "points", "coupling", "orientation"});
   return blade;
 }
 
@@ -298,6 +309,26 @@ SceneDocument read_scene_tree(const SceneTree& root, const ReadOptions& options)
                         {"format", "version", "units", "coupling", "tolerance_mm", "safety",
                          "materials", "mesh", "blades", "metadata"});
   return document;
+}
+
+BladeCoupling blade_coupling_at(std::string_view name, std::string_view blade,
+                                const std::string& field) {
+  const auto coupling = blade_coupling_from_name(name);
+  if (!coupling) {
+    throw SceneError(field, "unknown coupling " + in_quotes(name) + " of blade " +
+                                in_quotes(blade) + " (expected rigid, independent)");
+  }
+  return *coupling;
+}
+
+BladeOrientation blade_orientation_at(std::string_view name, std::string_view blade,
+                                      const std::string& field) {
+  const auto orientation = blade_orientation_from_name(name);
+  if (!orientation) {
+    throw SceneError(field, "unknown orientation " + in_quotes(name) + " of blade " +
+                                in_quotes(blade) + " (expected free, locked)");
+  }
+  return *orientation;
 }
 
 std::optional<MaterialModel> material_model_from_name(std::string_view name) {

@@ -89,7 +89,9 @@ Json document_tree(const Scene& scene, const std::string& metadata_json) {
     blades.push_back(Json{{"name", blade.name},
                           {"start_mm", point_tree(blade.start_mm)},
                           {"end_mm", point_tree(blade.end_mm)},
-                          {"points", blade.points}});
+                          {"points", blade.points},
+                          {"coupling", blade_coupling_name(blade.coupling)},
+                          {"orientation", blade_orientation_name(blade.orientation)}});
   }
   tree["blades"] = std::move(blades);
   tree["metadata"] = metadata_tree(metadata_json);

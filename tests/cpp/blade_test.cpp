@@ -28,18 +28,24 @@ TEST(Blade, PointsFollowThePose) {
 TEST(Blade, ForceIsTheSumAndTorqueIsAboutTheToolOrigin) {
   // Bone below z = 0 inside a free box: the blade pressed 2 mm down feels
   // k * 2 mm per point, pushing up; tilted, the torque follows the lever arms.
+  // Independent points rest on the floor exactly; a rigid blade's pose is kept
+  // 4 tolerances on the free side of its contacts (docs/decisions.md, "The
+  // rigid blade"), which each point's spring adds.
   const auto space_owner = testing::bone_floor();
   const Space& space = *space_owner;
-  Blade blade(space, {"b", {0, 0, 0}, {10, 0, 0}, 5});
-  blade.reset({{-5, 0, 5}, {}});
-  BladeTick tick{};
-  for (int i = 0; i <= 20; ++i) tick = blade.step({{-5, 0, 5 - 0.35 * i}, {}}, 0.001);
-  EXPECT_NEAR(tick.force_N.z, 5 * 0.1 * 2.0, 1e-9);
-  EXPECT_NEAR(tick.force_N.x, 0.0, 1e-9);
-  // Points at x = 0, 2.5, ..., 10 from the origin, each pushed up by 0.2 N: torque about y.
-  EXPECT_NEAR(tick.torque_N_mm.y, -(0 + 2.5 + 5 + 7.5 + 10) * 0.2, 1e-9);
-  EXPECT_EQ(tick.capped_points, 0);
-  for (const Proxy& p : blade.proxies()) EXPECT_EQ(p.check_invariants(), "");
+  for (const BladeCoupling coupling : {BladeCoupling::Independent, BladeCoupling::Rigid}) {
+    Blade blade(space, {"b", {0, 0, 0}, {10, 0, 0}, 5, coupling});
+    const double margin_N = coupling == BladeCoupling::Rigid ? 0.1 * 4.0 * space.tolerance() : 0.0;
+    blade.reset({{-5, 0, 5}, {}});
+    BladeTick tick{};
+    for (int i = 0; i <= 20; ++i) tick = blade.step({{-5, 0, 5 - 0.35 * i}, {}}, 0.001);
+    EXPECT_NEAR(tick.force_N.z, 5 * 0.1 * 2.0, 5 * margin_N + 1e-9);
+    EXPECT_NEAR(tick.force_N.x, 0.0, 1e-9);
+    // Points at x = 0, 2.5, ..., 10 from the origin, each pushed up by 0.2 N: torque about y.
+    EXPECT_NEAR(tick.torque_N_mm.y, -(0 + 2.5 + 5 + 7.5 + 10) * 0.2, 25 * margin_N + 1e-9);
+    EXPECT_EQ(tick.capped_points, 0);
+    for (const Proxy& p : blade.proxies()) EXPECT_EQ(p.check_invariants(), "");
+  }
 }
 
 // The points are placed as a + s_i b and the torque summed as

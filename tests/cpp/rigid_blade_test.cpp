@@ -122,6 +122,18 @@ TEST(RigidBlade, TheWholeEdgeStopsAtABoneUnderItsMiddle) {
   EXPECT_LT(loose.force_N.z, 10.0);
 }
 
+TEST(RigidBlade, ABladeOfDefaultSpecIsRigidWithItsOwnOrientation) {
+  const BladeSpec spec{"knife", {-50, 0, 0}, {50, 0, 0}, 50};
+  EXPECT_EQ(spec.coupling, BladeCoupling::Rigid);
+  EXPECT_EQ(spec.orientation, BladeOrientation::Free);
+  const auto space = grid_space(middle_bone);
+  Blade blade(space, spec);
+  EXPECT_EQ(blade.coupling(), BladeCoupling::Rigid);
+  const BladeTick held = press(blade, 0.0, 2.0, -10.0);
+  EXPECT_EQ(points_below(blade, 0.0), 0);
+  EXPECT_GE(held.force_N.z, 0.95 * 50 * kK * 10.0);
+}
+
 TEST(RigidBlade, ABoneUnderOneEndTiltsAFreeBladeAndNotALockedOne) {
   // The bone under the last 6 mm of the edge.
   const auto space = grid_space([](const Vec3& c) {

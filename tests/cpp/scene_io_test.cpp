@@ -74,6 +74,8 @@ void expect_same_scene(const Scene& a, const Scene& b) {
     EXPECT_EQ(a.blades[i].start_mm, b.blades[i].start_mm);
     EXPECT_EQ(a.blades[i].end_mm, b.blades[i].end_mm);
     EXPECT_EQ(a.blades[i].points, b.blades[i].points);
+    EXPECT_EQ(a.blades[i].coupling, b.blades[i].coupling);
+    EXPECT_EQ(a.blades[i].orientation, b.blades[i].orientation);
   }
   EXPECT_EQ(a.stiffness_N_per_mm, b.stiffness_N_per_mm);
   EXPECT_EQ(a.servo_rate_Hz, b.servo_rate_Hz);
@@ -87,7 +89,7 @@ void expect_same_scene(const Scene& a, const Scene& b) {
 
 // A fresh, empty directory for one test's files.
 fs::path scratch_directory(const std::string& name) {
-  const fs::path directory = fs::temp_directory_path() / ("hapticut_scene_io_test_" + name);
+  fs::path directory = fs::temp_directory_path() / ("hapticut_scene_io_test_" + name);
   fs::remove_all(directory);
   fs::create_directories(directory);
   return directory;
@@ -118,6 +120,9 @@ TEST(SceneIo, ExampleFileReadsWithEveryField) {
   ASSERT_EQ(scene.blades.size(), 1u);
   EXPECT_EQ(scene.blades[0].end_mm, Vec3(100, 0, 0));
   EXPECT_EQ(scene.blades[0].points, 50);
+  // The file names neither: a rigid blade with its own orientation, the defaults.
+  EXPECT_EQ(scene.blades[0].coupling, BladeCoupling::Rigid);
+  EXPECT_EQ(scene.blades[0].orientation, BladeOrientation::Free);
   EXPECT_EQ(scene.stiffness_N_per_mm, 0.1);
   EXPECT_EQ(scene.servo_rate_Hz, 1000.0);
   EXPECT_EQ(document.reoriented_tets, 0);
@@ -156,6 +161,35 @@ TEST(SceneIo, ModelNamesRoundTrip) {
     EXPECT_EQ(material_model_from_name(material_model_name(model)), model);
   }
   EXPECT_FALSE(material_model_from_name("jelly").has_value());
+}
+
+TEST(SceneIo, BladeSettingNamesRoundTrip) {
+  for (BladeCoupling coupling : {BladeCoupling::Rigid, BladeCoupling::Independent}) {
+    EXPECT_EQ(blade_coupling_from_name(blade_coupling_name(coupling)), coupling);
+  }
+  for (BladeOrientation orientation : {BladeOrientation::Free, BladeOrientation::Locked}) {
+    EXPECT_EQ(blade_orientation_from_name(blade_orientation_name(orientation)), orientation);
+  }
+  EXPECT_FALSE(blade_coupling_from_name("Rigid").has_value());
+  EXPECT_FALSE(blade_orientation_from_name("").has_value());
+}
+
+TEST(SceneIo, BladeCouplingAndOrientationRoundTripInBothEncodings) {
+  Scene scene = load_scene(kExamplePath);
+  scene.blades[0].coupling = BladeCoupling::Independent;
+  scene.blades.push_back({"chisel", {0, 0, 0}, {0, 0, 20}, 9});
+  scene.blades[1].orientation = BladeOrientation::Locked;
+  for (SceneEncoding encoding : {SceneEncoding::Json, SceneEncoding::MessagePack}) {
+    const Scene again = parse_scene(serialize_scene(scene, encoding), encoding);
+    expect_same_scene(again, scene);
+    EXPECT_EQ(again.blades[0].coupling, BladeCoupling::Independent);
+    EXPECT_EQ(again.blades[1].coupling, BladeCoupling::Rigid);
+    EXPECT_EQ(again.blades[1].orientation, BladeOrientation::Locked);
+  }
+  const auto json = serialize_scene(scene, SceneEncoding::Json);
+  const std::string text(json.begin(), json.end());
+  EXPECT_NE(text.find(R"("coupling": "independent")"), std::string::npos);
+  EXPECT_NE(text.find(R"("orientation": "locked")"), std::string::npos);
 }
 
 TEST(SceneIo, EncodingFollowsTheFileName) {

@@ -164,8 +164,9 @@ std::shared_ptr<const Space> sphere80() {
 TEST(BladeShading, ShadingIsAppliedWhenTheSettingsAskForIt) {
   // Two equal blades pressed into the rigid sphere off its facets' centres:
   // the shaded one feels what ForceShading makes of the plain one's force.
+  // Shading acts per point: on the paper's independent points.
   const auto space = sphere80();
-  const BladeSpec spec{"b", {-6, 0, 0}, {6, 0, 0}, 7};
+  const BladeSpec spec{"b", {-6, 0, 0}, {6, 0, 0}, 7, BladeCoupling::Independent};
   Blade plain(space, spec);
   Blade shaded(space, spec);
   RuntimeSettings on = space->runtime_settings();
@@ -199,7 +200,8 @@ TEST(Snapshot, IsTriviallyCopyableAndFilledWithoutAllocation) {
   static_assert(std::is_trivially_copyable_v<BladeSnapshotHeader>);
   static_assert(std::is_trivially_copyable_v<BladeSnapshot<64>>);
   const auto space = bone_floor();
-  Blade blade(space, {"b", {0, 0, 0}, {10, 0, 0}, 5});
+  // Independent points: each proxy's own state and exact force in the snapshot.
+  Blade blade(space, {"b", {0, 0, 0}, {10, 0, 0}, 5, BladeCoupling::Independent});
   blade.reset({{-5, 0, 5}, {}});
   for (int i = 0; i <= 20; ++i) blade.step({{-5, 0, 5 - 0.35 * i}, {}}, kDt);
   BladeSnapshot<8> snapshot;
@@ -234,7 +236,8 @@ TEST(Ownership, SpaceIsNeitherCopyableNorMovable) {
 
 TEST(Ownership, LoadingANewSceneWhileProxiesOfTheOldExistCannotDangle) {
   std::shared_ptr<const Space> scene = bone_floor();
-  Blade blade(scene, {"b", {0, 0, 0}, {10, 0, 0}, 5});
+  // Independent points: the exact force of five points on the floor.
+  Blade blade(scene, {"b", {0, 0, 0}, {10, 0, 0}, 5, BladeCoupling::Independent});
   Proxy proxy(*scene);  // From a reference: still shares ownership.
   const ForceShading shading(*scene);
   blade.reset({{-5, 0, 5}, {}});

@@ -24,6 +24,18 @@ EXAMPLE_SCENES = sorted(EXAMPLES.glob("*.hapticut.msgpack"))
 SPHERE = EXAMPLES / "sphere320.hapticut.msgpack"
 
 
+def independent_copy(scene_path: Path, folder: Path) -> Path:
+    """The scene with every blade's points independent (the paper's blade), written in folder:
+    for tests of a device path that needs each point's own force, such as a scripted hand that
+    starts with the edge inside the sphere (a rigid blade there has no valid pose and no force)
+    or force shading (applied to independent points only)."""
+    scene = load_scene(scene_path)
+    scene.blades = [dataclasses.replace(b, coupling="independent") for b in scene.blades]
+    path = Path(folder) / scene_path.name
+    save_scene(scene, path)
+    return path
+
+
 def run_servo(*args: str, timeout_s: float = 120.0) -> subprocess.CompletedProcess:
     """The servo to its end (no control channel): exit code, stdout, stderr."""
     return subprocess.run(

@@ -63,6 +63,7 @@ def test_build_request_streams_progress_and_writes_the_build_whole(tmp_path):
     scene = load_scene(out / "scene.hapticut.msgpack")
     assert [m.name for m in scene.materials] == ["air", "flesh", "bone"]
     assert scene.blades[0].name == "Knife" and scene.blades[0].points == 8
+    assert (scene.blades[0].coupling, scene.blades[0].orientation) == ("rigid", "free")
     assert scene.metadata["blade_devices"] == {"Knife": "sim"}
     report = json.loads((out / "report.json").read_text())
     assert report["tets"] == len(scene.tets) and set(report["deviation_mm"]) == {"Flesh", "Bone"}
@@ -121,6 +122,10 @@ def test_check_lists_open_self_intersecting_and_flat_regions(tmp_path):
         ({"blades": [{"name": "k", "start_mm": [0, 0], "end_mm": [1, 0, 0]}]}, "blades/0/start_mm"),
         ({"blades": [{"name": "k", "start_mm": [0, 0, 0], "end_mm": [1, 0, float("nan")]}]},
          "blades/0/end_mm"),
+        ({"blades": [{"name": "k", "start_mm": [0, 0, 0], "end_mm": [1, 0, 0],
+                      "coupling": "hinged"}]}, "blades/0/coupling"),
+        ({"blades": [{"name": "k", "start_mm": [0, 0, 0], "end_mm": [1, 0, 0],
+                      "orientation": 1}]}, "blades/0/orientation"),
     ],
 )  # fmt: skip
 def test_a_bad_request_names_its_field(tmp_path, change, field):

@@ -103,7 +103,8 @@ def test_non_finite_device_points_are_rejected_with_zero_force():
 
 def test_blade_stroke_sums_forces_and_torques():
     space = grid_space(lambda c: np.where(c[:, 2] < 10, 2, 0), jitter=0.0)
-    blade = _core.Blade(space, [0, 0, 0], [10, 0, 0], 5)
+    # The paper's points: each its own exact spring k (q - p).
+    blade = _core.Blade(space, [0, 0, 0], [10, 0, 0], 5, coupling="independent")
     poses = engine.straight_stroke([10, 15, 14], [10, 15, 8], speed_mm_per_s=100)
     blade.reset(poses[0])
     result = blade.run(poses, 0.001)

@@ -167,7 +167,8 @@ def test_python_objects_keep_their_space_alive():
     """Loading a new scene while proxies of the old one exist cannot dangle."""
     space = bone_floor_space()
     proxies = _core.ProxySet(space, 1)
-    blade = _core.Blade(space, [0, 0, 0], [10, 0, 0], 5)
+    # Independent points: their exact force k (q - p), the same as the ProxySet's, per point.
+    blade = _core.Blade(space, [0, 0, 0], [10, 0, 0], 5, coupling="independent")
     proxies.reset(np.array([[15.0, 15, 15]]))
     blade.reset(np.array([10, 15, 15, 1, 0, 0, 0.0]))
     space = bone_floor_space()  # "A new scene": the old Space has no Python name left.

@@ -28,7 +28,7 @@ def press(blade, depth_mm):
 
 def test_a_rigid_blade_rests_on_the_bone_and_pushes_with_every_point():
     space = bone_space()
-    rigid = _core.Blade(space, [-20, 0, 0], [20, 0, 0], 20, coupling="rigid")
+    rigid = _core.Blade(space, [-20, 0, 0], [20, 0, 0], 20)  # Rigid and free: the defaults.
     assert rigid.coupling == "rigid" and rigid.orientation == "free"
     tick = press(rigid, 4.0)
     assert (rigid.q[:, 2] >= 16 - 1e-6).all()
@@ -42,7 +42,7 @@ def test_a_rigid_blade_rests_on_the_bone_and_pushes_with_every_point():
     np.testing.assert_allclose(rigid.force_N, K * (rigid.q - rigid.p), atol=1e-12)
     assert rigid.blade_counters["rigid_rounds"] >= rigid.blade_counters["ticks"] - 1
 
-    independent = _core.Blade(space, [-20, 0, 0], [20, 0, 0], 20)
+    independent = _core.Blade(space, [-20, 0, 0], [20, 0, 0], 20, coupling="independent")
     assert independent.coupling == "independent"
     loose = press(independent, 4.0)
     assert (independent.q[:, 2] < 16 - 1e-6).sum() >= 14  # Only the points over the bone held.

@@ -44,7 +44,8 @@ def rich_scene():
     scene.tet_materials = (np.arange(len(scene.tets)) % 5).astype(np.int32)
     scene.blades = [
         BladeSpec("scalpel", (0.0, 0.0, 0.0), (100.0, 0.0, 0.0), 50),
-        BladeSpec("needle", (0.1, 0.2, 0.3), (1e-7, -2e20, 1.0 / 3.0), 1),
+        BladeSpec("needle", (0.1, 0.2, 0.3), (1e-7, -2e20, 1.0 / 3.0), 1, coupling="independent"),
+        BladeSpec("chisel", (0.0, 0.0, 0.0), (0.0, 0.0, 20.0), 9, orientation="locked"),
     ]
     scene.stiffness_N_per_mm = 0.25
     scene.tolerance_mm = 1e-6
@@ -76,6 +77,27 @@ def test_cpp_writes_python_reads(tmp_path, encoding):
     _core.write_scene_file(scene_to_dict(scene), str(path))
     assert load_scene(path) == scene
     assert [p.name for p in tmp_path.iterdir()] == [path.name]  # No temporary left behind.
+
+
+@pytest.mark.parametrize("encoding", ENCODINGS)
+def test_blade_settings_cross_languages_and_reach_the_engine(tmp_path, encoding):
+    """What a file says of a blade's coupling and orientation is what C++ reads, and the engine's
+    blade (engine.make_blade) is built with it."""
+    from hapticut import engine
+
+    scene = rich_scene()
+    path = tmp_path / f"scene{SUFFIX[encoding]}"
+    save_scene(scene, path)
+    from_cpp = _core.read_scene_file(str(path))
+    settings = [(b["name"], b["coupling"], b["orientation"]) for b in from_cpp["blades"]]
+    assert settings == [
+        ("scalpel", "rigid", "free"),
+        ("needle", "independent", "free"),
+        ("chisel", "rigid", "locked"),
+    ]
+    space = engine.space_from_scene(scene)
+    blades = [engine.make_blade(space, spec) for spec in load_scene(path).blades]
+    assert [(b.coupling, b.orientation) for b in blades] == [s[1:] for s in settings]
 
 
 def test_both_writers_write_the_same_json():

@@ -63,6 +63,8 @@ def test_example_file_reads_with_every_field(example: Scene):
     assert example.tets.dtype == np.int32 and example.tets.tolist() == [[0, 1, 2, 3], [1, 2, 3, 4]]
     assert example.tet_materials.dtype == np.int32 and example.tet_materials.tolist() == [1, 0]
     assert example.blades == [BladeSpec("scalpel", (0.0, 0.0, 0.0), (100.0, 0.0, 0.0), 50)]
+    # The file names neither: a rigid blade with its own orientation, the defaults.
+    assert (example.blades[0].coupling, example.blades[0].orientation) == ("rigid", "free")
     assert (example.stiffness_N_per_mm, example.servo_rate_Hz, example.tolerance_mm) == (
         0.1,
         1000.0,
@@ -206,6 +208,50 @@ def test_round_trip_keeps_exact_doubles_and_metadata():
         assert again.vertices.tobytes() == scene.vertices.tobytes()
 
 
+@pytest.mark.parametrize("encoding", [JSON, MSGPACK])
+def test_blade_coupling_and_orientation_are_written_and_read(encoding):
+    scene = grid_scene(2)
+    scene.blades = [
+        BladeSpec("knife", (-50.0, 0.0, 0.0), (50.0, 0.0, 0.0), 50),
+        BladeSpec("brush", (0.0, 0.0, 0.0), (10.0, 0.0, 0.0), 5, coupling="independent"),
+        BladeSpec("probe", (0.0, 0.0, 0.0), (0.0, 5.0, 0.0), 3, orientation="locked"),
+    ]
+    data = serialize_scene(scene, encoding)
+    tree = json.loads(data) if encoding == JSON else msgpack.unpackb(data)
+    assert [(b["coupling"], b["orientation"]) for b in tree["blades"]] == [
+        ("rigid", "free"),
+        ("independent", "free"),
+        ("rigid", "locked"),
+    ]
+    assert parse_scene(data, encoding) == scene
+    # A blade that names neither takes the defaults; one that names them keeps them.
+    tree["blades"][0].pop("coupling")
+    tree["blades"][0].pop("orientation")
+    again = parse_scene(json.dumps(tree).encode())
+    assert again.blades == scene.blades
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "error"),
+    [
+        ("coupling", "hinged", "unknown coupling 'hinged' of blade 'knife' (expected rigid, "
+         "independent)"),
+        ("orientation", "fixed", "unknown orientation 'fixed' of blade 'knife' (expected free, "
+         "locked)"),
+        ("coupling", 1, "expected a string, got int"),
+    ],
+)  # fmt: skip
+def test_writer_names_the_blade_and_field_of_a_bad_setting(field, value, error):
+    scene = grid_scene(2)
+    scene.blades = [
+        BladeSpec("ok", (0.0, 0.0, 0.0), (1.0, 0.0, 0.0), 2),
+        BladeSpec("knife", (0.0, 0.0, 0.0), (1.0, 0.0, 0.0), 2, **{field: value}),
+    ]
+    with pytest.raises(SceneError) as caught:
+        serialize_scene(scene)
+    assert (caught.value.field, caught.value.reason) == (f"/blades/1/{field}", error)
+
+
 def test_writer_checks_the_scene_like_the_reader(example: Scene):
     example.vertices = example.vertices.copy()
     example.vertices[0, 0] = math.nan
@@ -296,6 +342,9 @@ SCHEMA_CASES = [
     "fractional_vertex_index",
     "repeated_vertex",
     "blade_with_no_points",
+    "blade_unknown_coupling",
+    "blade_coupling_not_a_string",
+    "blade_unknown_orientation",
     "misspelt_root_field",
 ]
 

@@ -96,13 +96,17 @@ def test_neighbouring_tets_end_up_near_each_other_in_memory():
     assert after < 8, (before, after)
 
 
+@pytest.mark.parametrize("coupling", ["independent", "rigid"])
 @pytest.mark.parametrize("name", ["sphere80", "sphere320", "mouse", "finger"])
-def test_a_reordered_example_gives_the_same_blade_stroke(name):
-    """The same scene in another order is felt the same: the blade's force along the bench's
-    stroke agrees within 1e-9 N (the planes are the same up to rounding). The stroke is moved
-    off the mesh's planes of symmetry: on them (the bench's own stroke through a sphere's
-    centre) a point sliding over an edge finds two faces equally good, takes the first of the
-    fan, and the fan's order is the tets' order."""
+def test_a_reordered_example_gives_the_same_blade_stroke(name, coupling):
+    """The same scene in another order is felt the same: the independent points' force along
+    the bench's stroke agrees within 1e-9 N (the planes are the same up to rounding). The
+    stroke is moved off the mesh's planes of symmetry: on them (the bench's own stroke through
+    a sphere's centre) a point sliding over an edge finds two faces equally good, takes the
+    first of the fan, and the fan's order is the tets' order. A rigid blade held by the bone
+    while the device goes on through it (hundreds of N) meets its contacts in tet order; the
+    rounding of its constrained fit carries from tick to tick, as a god-object's path does, so
+    it agrees within 1e-4 of the peak force (measured: 1e-5 on the bunny, 0 elsewhere)."""
     scene = load_scene(EXAMPLES / f"{name}.hapticut.msgpack")
     shuffled = _shuffled_scene(scene, 6)
     forces = []
@@ -110,12 +114,14 @@ def test_a_reordered_example_gives_the_same_blade_stroke(name):
         space = engine.space_from_scene(version)
         poses = stroke_poses(space).copy()
         poses[:, :3] += [0.137, 0.0, 0.291]
-        blade = _core.Blade(space, [-50.0, 0, 0], [50.0, 0, 0], 50)
+        blade = _core.Blade(space, [-50.0, 0, 0], [50.0, 0, 0], 50, coupling=coupling)
         blade.reset(poses[0])
         forces.append(blade.run(np.ascontiguousarray(poses), 0.001)["force_N"])
-    assert np.abs(forces[0]).max() > 0.1  # The stroke is felt.
-    np.testing.assert_allclose(forces[1], forces[0], rtol=0, atol=1e-9)
-    np.testing.assert_allclose(forces[2], forces[0], rtol=0, atol=1e-9)
+    peak = np.abs(forces[0]).max()
+    assert peak > 0.1  # The stroke is felt.
+    atol = 1e-9 if coupling == "independent" else 1e-4 * peak
+    np.testing.assert_allclose(forces[1], forces[0], rtol=0, atol=atol)
+    np.testing.assert_allclose(forces[2], forces[0], rtol=0, atol=atol)
 
 
 def test_convert_locality_order_writes_the_same_scene_renumbered(tmp_path):

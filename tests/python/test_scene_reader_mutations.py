@@ -35,6 +35,7 @@ COUNT = int(os.environ.get("HAPTICUT_MUTATIONS", "750"))
 BAD_VALUES = [
     None, True, False, 0, -1, 1, 2, 3, 2.5, -0.5, 1e-300, 1e6, 1e9, 1e20, 1e308, 2**31, 2**63,
     2**64 - 1, -(2**63), math.nan, math.inf, -math.inf, "", "x", "free", "rigid", "drag", "1",
+    "independent", "locked", "Rigid",
     [], [0], [0, 1], [0, 1, 2], [0, 1, 2, 3], [[0, 0, 0]], {}, {"a": 1}, b"\x00\xff",
 ]  # fmt: skip
 
@@ -46,6 +47,7 @@ def seeds() -> list[dict]:
     viscous["materials"].append({"name": "skin", "model": "membrane", "break_force_N": 1.5})
     viscous["mesh"]["tet_materials"] = [2, 3]
     viscous["safety"] = {"max_force_N": 5.0, "max_transitions_per_tick": 64, "ramp_time_s": 0.5}
+    viscous["blades"][0].update(coupling="independent", orientation="locked")
     return [example, viscous]
 
 
@@ -70,7 +72,8 @@ def mutate_tree(tree, rng: random.Random):
         elif op < 0.75 and isinstance(container, dict):
             del container[key]
         elif op < 0.85 and isinstance(container, dict):
-            container[rng.choice(["extra", "model", "name", "tolerance_mm", "points"])] = 1
+            key = rng.choice(["extra", "model", "name", "tolerance_mm", "points", "coupling"])
+            container[key] = 1
         elif op < 0.95:
             value = container[key]
             for _ in range(rng.choice((1, 10, 61, 62, 63, 64, 70))):

@@ -21,6 +21,7 @@ from servo_test_support import (
     SPHERE,
     ServoProcess,
     connect,
+    independent_copy,
     offline_check,
     read_recording,
     run_servo,
@@ -57,8 +58,8 @@ def bridge_summary(bridge: subprocess.Popen, timeout_s: float = 30.0) -> dict:
     return json.loads(out.strip().splitlines()[-1])
 
 
-def servo_args(port: int, record=None, device_options: str = "") -> list[str]:
-    args = [str(SPHERE), "--device", f"scalpel=bridge:port={port}{device_options}"]
+def servo_args(port: int, record=None, device_options: str = "", scene=SPHERE) -> list[str]:
+    args = [str(scene), "--device", f"scalpel=bridge:port={port}{device_options}"]
     args += ["--engage", "--ramp", "0.05"]
     if record is not None:
         args += ["--record", str(record)]
@@ -78,7 +79,8 @@ def test_bridge_drives_the_servo(tmp_path):
     bridge's limits, and the recorded proxies equal an offline engine run of those poses."""
     port = free_udp_port()
     record = tmp_path / "bridge.rec"
-    with ServoProcess(servo_args(port, record, ",max_force=0.5")) as servo:
+    scene = independent_copy(SPHERE, tmp_path)  # The hand starts with the edge in the sphere.
+    with ServoProcess(servo_args(port, record, ",max_force=0.5", scene)) as servo:
         client = connect(servo, ["scalpel"])
         client.subscribe(rate_Hz=200)
         bridge = start_bridge(port, "--duration", "2.0")
@@ -110,7 +112,7 @@ def test_bridge_drives_the_servo(tmp_path):
     assert rendered.max() <= 0.5 + 1e-9
     assert engine.max() > 0.5, "the engine never asked for more than the clamp: proves nothing"
     assert np.any(block["safety_flags"] & flag_bit("force_clamped"))
-    assert offline_check(SPHERE, recording, "scalpel") > 500
+    assert offline_check(scene, recording, "scalpel") > 500
 
 
 def test_bridge_silent_is_lost_then_ramps_back(tmp_path):
@@ -118,7 +120,8 @@ def test_bridge_silent_is_lost_then_ramps_back(tmp_path):
     lost, reported; a bridge that speaks again (a restarted one) is taken back, ramped in."""
     port = free_udp_port()
     record = tmp_path / "silent.rec"
-    with ServoProcess(servo_args(port, record, ",timeout_ms=100")) as servo:
+    scene = independent_copy(SPHERE, tmp_path)  # The hand starts with the edge in the sphere.
+    with ServoProcess(servo_args(port, record, ",timeout_ms=100", scene)) as servo:
         client = connect(servo, ["scalpel"])
         first = start_bridge(port, "--duration", "1.6", "--silent-after", "0.9")
         first_summary = bridge_summary(first)

@@ -15,6 +15,7 @@ from servo_test_support import (
     SPHERE,
     ServoProcess,
     connect,
+    independent_copy,
     offline_check,
     read_recording,
     run_servo,
@@ -33,7 +34,8 @@ def test_bridge_stiffness_limit_lowers_the_scene_and_refuses_a_set_above(tmp_pat
     port = free_udp_port()
     device = f"scalpel=bridge:port={port},max_stiffness={LIMIT}"
     record = tmp_path / "limit.rec"
-    args = [str(SPHERE), "--device", device, "--engage", "--ramp", "0.05", "--record", str(record)]
+    scene = independent_copy(SPHERE, tmp_path)  # The hand starts with the edge in the sphere.
+    args = [str(scene), "--device", device, "--engage", "--ramp", "0.05", "--record", str(record)]
     with ServoProcess(args) as servo:
         client = connect(servo, ["scalpel"])
         client.subscribe(rate_Hz=200)
@@ -90,7 +92,7 @@ def test_bridge_stiffness_limit_lowers_the_scene_and_refuses_a_set_above(tmp_pat
     assert switched > 0 and np.all(k[:switched] == LIMIT) and np.all(k[switched:] == 0.04)
     assert np.linalg.norm(block["engine_force_N"][:switched], axis=1).max() > 0.02
     # The engine stepped with the recorded (lowered) stiffness, bit for bit.
-    assert offline_check(SPHERE, recording, "scalpel") > 500
+    assert offline_check(scene, recording, "scalpel") > 500
 
 
 def test_sim_stiffness_limit_scales_with_a_slower_rate(tmp_path):

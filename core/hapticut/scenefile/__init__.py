@@ -12,6 +12,8 @@ from .format import (
     serialize_scene,
 )
 from .model import (
+    BLADE_COUPLINGS,
+    BLADE_ORIENTATIONS,
     FORMAT_NAME,
     FORMAT_VERSION,
     MATERIAL_MODELS,
@@ -26,6 +28,8 @@ from .model import (
 )
 
 __all__ = [
+    "BLADE_COUPLINGS",
+    "BLADE_ORIENTATIONS",
     "FORMAT_NAME",
     "FORMAT_VERSION",
     "JSON",

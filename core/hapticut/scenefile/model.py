@@ -69,14 +69,25 @@ class Material:
     break_force_N: float = 0.0  # membrane: rigid until k |p' - q| exceeds this.
 
 
+BLADE_COUPLINGS = ("rigid", "independent")
+BLADE_ORIENTATIONS = ("free", "locked")
+
+
 @dataclass(frozen=True)
 class BladeSpec:
-    """A blade edge in the tool frame, sampled by ``points`` proxies (ends included)."""
+    """A blade edge in the tool frame, sampled by ``points`` proxies (ends included).
+
+    coupling: "rigid" (one ideal pose for the whole edge) or "independent" (the paper's points,
+    each on its own); orientation of a rigid blade: "free" or "locked" to the device's
+    (docs/decisions.md, "The rigid blade").
+    """
 
     name: str
     start_mm: tuple[float, float, float]
     end_mm: tuple[float, float, float]
     points: int = 50
+    coupling: str = "rigid"  # One of BLADE_COUPLINGS.
+    orientation: str = "free"  # One of BLADE_ORIENTATIONS.
 
 
 @dataclass(frozen=True)

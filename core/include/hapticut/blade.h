@@ -208,7 +208,7 @@ class Blade {
   BladeTick last_tick_;
   BladeCounters counters_;
 
-  BladeCoupling coupling_ = BladeCoupling::Independent;
+  BladeCoupling coupling_ = BladeCoupling::Rigid;
   BladeOrientation orientation_ = BladeOrientation::Free;
   double length_mm_ = 0.0;  // |end - start|.
   Vec3 tool_direction_;     // (end - start) / length, or +x for a zero length.

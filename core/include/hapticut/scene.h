@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -19,10 +20,11 @@ inline constexpr std::string_view kSceneFormatName = "hapticut.scene";
 
 // How a blade's points move together (docs/decisions.md, "The rigid blade"):
 // the paper's independent proxies, or one rigid edge whose pose the point
-// proxies detect contacts for.
+// proxies detect contacts for. Rigid is the default: a knife is one body.
 enum class BladeCoupling : std::uint8_t { Independent, Rigid };
 // A rigid blade's orientation: its own (a bone under one end tilts it), or
-// the device's (for devices that render no torque).
+// the device's (for devices that render no torque). Free is the default
+// (docs/decisions.md, "The rigid blade").
 enum class BladeOrientation : std::uint8_t { Free, Locked };
 
 struct BladeSpec {
@@ -30,7 +32,7 @@ struct BladeSpec {
   Vec3 start_mm;    // In the tool frame.
   Vec3 end_mm;      // In the tool frame.
   int points = 50;  // Sample points along the edge, ends included (>= 1).
-  BladeCoupling coupling = BladeCoupling::Independent;
+  BladeCoupling coupling = BladeCoupling::Rigid;
   BladeOrientation orientation = BladeOrientation::Free;
 };
 
@@ -56,5 +58,11 @@ struct Scene {
 };
 
 const char* material_model_name(MaterialModel model);
+// The names scene files and Python use ("rigid", "independent"; "free",
+// "locked"), and back; nullopt for a name that is none of them.
+const char* blade_coupling_name(BladeCoupling coupling);
+const char* blade_orientation_name(BladeOrientation orientation);
+std::optional<BladeCoupling> blade_coupling_from_name(std::string_view name);
+std::optional<BladeOrientation> blade_orientation_from_name(std::string_view name);
 
 }  // namespace hapticut

@@ -45,6 +45,14 @@ struct SceneDocument {
 // "free", "drag", ... -> the model; std::nullopt for any other name.
 std::optional<MaterialModel> material_model_from_name(std::string_view name);
 
+// A blade's "coupling" or "orientation" by name, for the blade named `blade`;
+// any other name throws SceneError(field, "unknown coupling 'x' of blade 'b'
+// (expected rigid, independent)"), as the reader says it.
+BladeCoupling blade_coupling_at(std::string_view name, std::string_view blade,
+                                const std::string& field);
+BladeOrientation blade_orientation_at(std::string_view name, std::string_view blade,
+                                      const std::string& field);
+
 // Encoding chosen from the file name: ".msgpack" -> MessagePack, else JSON.
 SceneEncoding encoding_for_path(const std::string& path);
 
