@@ -2,6 +2,7 @@
 // They return raw figures; the Python side prints the tables.
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/shared_ptr.h>
+#include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 
 #include <algorithm>
@@ -119,14 +120,20 @@ void bind_benchmarks(nb::module_& m) {
       [](std::shared_ptr<const Space> space, const std::vector<double>& start_mm,
          const std::vector<double>& end_mm, int points,
          const nb::ndarray<const double, nb::shape<-1, 7>, nb::c_contig, nb::device::cpu>& poses,
-         double dt_s, std::optional<RuntimeSettings> settings_in) {
+         double dt_s, std::optional<RuntimeSettings> settings_in, const std::string& coupling) {
         if (poses.shape(0) < 1) throw std::invalid_argument("time_blade needs at least one pose");
+        const auto parsed_coupling = blade_coupling_from_name(coupling);
+        if (!parsed_coupling) {
+          throw std::invalid_argument("coupling must be \"rigid\" or \"independent\", got \"" +
+                                      coupling + "\"");
+        }
         const RuntimeSettings settings = settings_in ? *settings_in : space->runtime_settings();
         settings.validate();
         Blade blade(space, {"bench",
                             {start_mm.at(0), start_mm.at(1), start_mm.at(2)},
                             {end_mm.at(0), end_mm.at(1), end_mm.at(2)},
-                            points});
+                            points,
+                            *parsed_coupling});
         const std::size_t n = poses.shape(0);
         auto pose_at = [&](std::size_t k) {
           return Pose{{poses(k, 0), poses(k, 1), poses(k, 2)},
@@ -138,6 +145,7 @@ void bind_benchmarks(nb::module_& m) {
         auto tick_transitions = new_array<std::int32_t>({n});
         auto capped = new_array<std::int32_t>({n});
         auto deferred = new_array<std::int32_t>({n});
+        auto rounds = new_array<std::int32_t>({n});
         {
           const nb::gil_scoped_release released;
           for (std::size_t k = 0; k < n; ++k) {
@@ -148,6 +156,7 @@ void bind_benchmarks(nb::module_& m) {
             tick_transitions.data()[k] = t.transitions;
             capped.data()[k] = t.capped_points;
             deferred.data()[k] = t.deferred_points;
+            rounds.data()[k] = t.rigid_rounds;
           }
         }
         nb::dict d;
@@ -156,6 +165,7 @@ void bind_benchmarks(nb::module_& m) {
         d["tick_transitions"] = tick_transitions;
         d["capped_points"] = capped;
         d["deferred_points"] = deferred;
+        d["rigid_rounds"] = rounds;
         d["counters"] = nb::none();
         d["total_transitions"] = blade.counters().total_transitions;
         d["unfinished_ticks"] = blade.counters().unfinished_ticks;
@@ -163,9 +173,10 @@ void bind_benchmarks(nb::module_& m) {
         return d;
       },
       nb::arg("space"), nb::arg("start_mm"), nb::arg("end_mm"), nb::arg("points"), nb::arg("poses"),
-      nb::arg("dt_s") = 0.001, nb::arg("settings") = nb::none(),
+      nb::arg("dt_s") = 0.001, nb::arg("settings") = nb::none(), nb::arg("coupling") = "rigid",
       "Run a blade along (M, 7) poses; wall-clock ns of every tick (GIL released). "
-      "settings: a RuntimeSettings, default the Space's own.");
+      "settings: a RuntimeSettings, default the Space's own; coupling: \"rigid\" (the "
+      "default) or \"independent\".");
 }
 
 }  // namespace hapticut::python
