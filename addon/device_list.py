@@ -249,14 +249,27 @@ CHECKED = (
 )
 
 
-def settings_problems(settings: dict, limits: dict, rate_Hz: float) -> list[str]:
+def blade_springs(points: int, coupling: str) -> int:
+    """The point springs a blade renders together in contact: all its points for a rigid blade
+    (one pose: they act in parallel, n k whatever length of edge touches), one for independent
+    points. The toolkit's rule (hapticut/stiffness.py) and the servo's; the add-on does not
+    import the toolkit, hence stated here."""
+    return max(1, int(points)) if coupling.upper() == "RIGID" else 1
+
+
+def settings_problems(settings: dict, limits: dict, rate_Hz: float, springs: int = 1) -> list[str]:
     """What of the settings (as sent to the servo's ``set``) lies above the device's limits,
     from a listing read at the loop rate rate_Hz. Only known limits count: a force limit
     where the device renders force, the stiffness limit the servo gives at that rate
-    (STIFFNESS_AT_RATE; 0 or absent: none known here)."""
+    (STIFFNESS_AT_RATE; 0 or absent: none known here). The stiffness is the point stiffness
+    k; the limit bounds what the blade renders, ``springs`` x k (blade_springs)."""
     problems = []
     for setting, limit, name, unit in CHECKED:
         value, bound = settings.get(setting, 0.0), limits.get(limit, 0.0)
+        asked = ""
+        if setting == "stiffness_N_per_mm" and springs > 1:
+            asked = f" ({value:g} {unit} x {springs} points of a rigid blade)"
+            value *= springs
         if setting != "stiffness_N_per_mm" and not limits.get("has_force_output"):
             continue
         if value > 0 and bound > 0 and value > bound:
@@ -270,6 +283,6 @@ def settings_problems(settings: dict, limits: dict, rate_Hz: float) -> list[str]
             else:
                 at_rate = ""
             problems.append(
-                f"{name} {value:g} {unit} is above the device's {bound:g} {unit}{at_rate}"
+                f"{name} {value:g} {unit}{asked} is above the device's {bound:g} {unit}{at_rate}"
             )
     return problems

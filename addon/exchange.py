@@ -185,6 +185,8 @@ def write_request(scene, depsgraph, table: dict, folder: str) -> tuple[str, str]
                 "start_mm": start,
                 "end_mm": end,
                 "points": obj.hapticut.blade_points,
+                "coupling": obj.hapticut.blade_coupling.lower(),
+                "orientation": obj.hapticut.blade_orientation.lower(),
                 "device": obj.hapticut.device,
             }
         )

@@ -111,6 +111,15 @@ def devices(scene) -> list[str]:
     return [f"{obj.name}={chosen or obj.hapticut.device}" for obj in scene_objects(scene, "BLADE")]
 
 
+def blade_springs(scene, name: str = "") -> int:
+    """The point springs the blade called name renders together (device_list.blade_springs);
+    without a name, the most of any blade of the scene (one device choice binds them all)."""
+    blades = [o for o in scene_objects(scene, "BLADE") if not name or o.name == name]
+    settings = [o.hapticut for o in blades]
+    springs = [device_list.blade_springs(s.blade_points, s.blade_coupling) for s in settings]
+    return max(springs, default=1)
+
+
 def check_limits(context, bindings: list[str], settings: dict, rate_Hz: float = 1000.0) -> None:
     """Refuse settings above a bound device's limits at the servo's rate (SessionError naming
     blade, device and limit); the listing is read first if it was not yet, or again if the
@@ -124,7 +133,8 @@ def check_limits(context, bindings: list[str], settings: dict, rate_Hz: float = 
     for text in bindings:
         name, _, device = text.partition("=")
         limits = device_list.limits_for(listing, device)
-        found = device_list.settings_problems(settings, limits, rate_Hz)
+        springs = blade_springs(context.scene, name)
+        found = device_list.settings_problems(settings, limits, rate_Hz, springs)
         problems += [f"{name} ({device}): {problem}" for problem in found]
     if problems:
         raise live_session.SessionError("; ".join(problems) + " (lower it in the panel)")

@@ -26,6 +26,16 @@ EDGE_MODES = (
     ("AXIS", "Axis", "A segment along a local axis, centred on the origin"),
 )
 AXES = (("X", "X", ""), ("Y", "Y", ""), ("Z", "Z", ""))
+# A blade's coupling and orientation, as the scene file names them in lower case
+# (docs/scene-format.md, "Blades").
+COUPLINGS = (
+    ("RIGID", "Rigid", "One knife: the whole edge stops at rigid material; renders points x k"),
+    ("INDEPENDENT", "Independent points", "The paper's blade: each point on its own"),
+)
+ORIENTATIONS = (
+    ("FREE", "Free", "A rigid blade turns where it is held (a bone under one end tilts it)"),
+    ("LOCKED", "Locked", "A rigid blade keeps the device's orientation (no torque rendered)"),
+)
 CUSTOM = "custom"
 
 
@@ -62,6 +72,8 @@ class HAPTICUT_PG_object(bpy.types.PropertyGroup):
     custom_parameters: CollectionProperty(type=HAPTICUT_PG_parameter)
     # Blade.
     blade_points: IntProperty(name="Points", default=50, min=2, max=1000)
+    blade_coupling: EnumProperty(name="Coupling", items=COUPLINGS, default="RIGID")
+    blade_orientation: EnumProperty(name="Orientation", items=ORIENTATIONS, default="FREE")
     edge_mode: EnumProperty(name="Cutting edge", items=EDGE_MODES, default="VERTICES")
     edge_vertex_a: IntProperty(name="Edge start vertex", default=-1, min=-1)
     edge_vertex_b: IntProperty(name="Edge end vertex", default=-1, min=-1)

@@ -65,6 +65,9 @@ class HAPTICUT_PT_object(SidebarSubpanel, bpy.types.Panel):
             self.draw_region(layout, settings)
         elif settings.role == "BLADE":
             layout.prop(settings, "blade_points")
+            layout.prop(settings, "blade_coupling")
+            if settings.blade_coupling == "RIGID":
+                layout.prop(settings, "blade_orientation")
             layout.prop(settings, "edge_mode")
             if settings.edge_mode == "VERTICES":
                 row = layout.row()

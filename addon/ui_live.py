@@ -101,7 +101,8 @@ def draw_device(layout, settings) -> None:
             f"{settings.rate_Hz:g} Hz (Go Live reads it)",
             icon="INFO",
         )
-    for problem in device_list.settings_problems(requested, limits, listed_Hz):
+    springs = live.blade_springs(settings.id_data)  # The scene the settings belong to.
+    for problem in device_list.settings_problems(requested, limits, listed_Hz, springs):
         layout.label(text=f"{problem}: Go Live refuses it", icon="ERROR")
 
 

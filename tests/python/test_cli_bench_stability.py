@@ -58,3 +58,33 @@ def test_bench_stability_prints_the_servos_grid_and_the_stress_test():
     plain, controlled = summary(stress_text, 36)
     assert controlled < plain
     assert "Within the servo's limit at their rate (24 of 36 cases)" in stress_text
+
+
+def test_stability_runs_the_stiffness_a_rigid_blade_renders():
+    """A rigid blade's n point springs act together: the bench runs n k and marks it against
+    the device's limit (the test profile's 2 N/mm at 1 kHz), the last column gives k back.
+    Independent points render one k each."""
+    from hapticut.bench import stability
+
+    per_point = [0.01, 0.05]
+    fast = ["--rates", "1000", "--delays", "0"]
+    rigid = table_rows(stability.run(fast, points=50, point_stiffness=per_point))
+    assert [float(row[2]) for row in rigid] == [0.5, 2.5]  # 50 x k
+    assert [row[8].strip() for row in rigid] == ["no", "yes"]  # 2.5 N/mm is above 2 N/mm.
+    assert [float(row[9]) for row in rigid] == per_point
+    alone = table_rows(
+        stability.run(fast, points=50, coupling="independent", point_stiffness=per_point)
+    )
+    assert [float(row[2]) for row in alone] == per_point
+    assert [row[8].strip() for row in alone] == ["no", "no"]
+    assert [float(row[9]) for row in alone] == per_point
+
+
+def test_the_cli_takes_the_blade_and_refuses_a_bad_stiffness():
+    result = subprocess.run(
+        [sys.executable, "-m", "hapticut.cli", "bench", "stability", "--stiffness", "0,1"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert result.returncode == 2 and "stiffnesses must be > 0 N/mm" in result.stderr

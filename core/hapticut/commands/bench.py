@@ -34,11 +34,43 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--no-max-points", action="store_true", help="blade: skip the points-in-100-µs search"
     )
     parser.add_argument(
+        "--points",
+        type=int,
+        default=50,
+        help="stability: the blade's points (default 50, the example scenes' scalpel)",
+    )
+    parser.add_argument(
+        "--coupling",
+        choices=["rigid", "independent"],
+        default="rigid",
+        help="stability: the blade's coupling; a rigid blade renders points x k in contact",
+    )
+    parser.add_argument(
+        "--stiffness",
+        type=_stiffness_list,
+        default=None,
+        help="stability: point stiffnesses k, N/mm, comma-separated (as in a scene file); "
+        "only the second table, at what the blade renders with them",
+    )
+    parser.add_argument(
+        "--profile", type=Path, default=None, help="stability: a device profile's limits"
+    )
+    parser.add_argument(
         "--scenes",
         type=Path,
         default=None,
         help="blade, servo: directory of scenes (default: the examples shipped in the package)",
     )
+
+
+def _stiffness_list(text: str) -> list[float]:
+    try:
+        values = [float(item) for item in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a comma-separated list") from None
+    if any(not value > 0 for value in values):
+        raise argparse.ArgumentTypeError(f"stiffnesses must be > 0 N/mm, got {text!r}")
+    return values
 
 
 def _rounds(args: argparse.Namespace, default: int) -> int:
@@ -61,7 +93,18 @@ def run(args: argparse.Namespace) -> int:
     elif args.which == "stability":
         from hapticut.bench import stability
 
-        print(stability.run())
+        if args.points < 1:
+            print("hapticut bench stability: --points must be >= 1", file=sys.stderr)
+            return 2
+        extra = ["--profile", str(args.profile)] if args.profile else []
+        print(
+            stability.run(
+                extra,
+                points=args.points,
+                coupling=args.coupling,
+                point_stiffness=args.stiffness,
+            )
+        )
     else:
         from hapticut.bench import blade
 

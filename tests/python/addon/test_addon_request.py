@@ -45,6 +45,7 @@ def test_metres_in_blender_are_mm_for_the_toolkit(addon, tmp_path):
     assert blade["start_mm"] == pytest.approx([-10.0, 0, 0])  # 40 mm long, scaled by 0.5.
     assert blade["end_mm"] == pytest.approx([10.0, 0, 0])
     assert blade["points"] == 20
+    assert (blade["coupling"], blade["orientation"]) == ("rigid", "free")  # The defaults.
 
 
 def test_materials_come_from_the_toolkit_table(addon, tmp_path):

@@ -118,6 +118,10 @@ def test_settings_above_the_devices_limits_are_refused(scene):
     bridge = next(k for k in listing["kinds"] if k["kind"] == "bridge")["limits"]
     sim = next(k for k in listing["kinds"] if k["kind"] == "sim")["limits"]
     assert bridge["max_stiffness_N_per_mm"] > 0 and sim["max_force_N"] > 0
+    # The limit and the rate against one point's spring: the paper's independent points (a
+    # rigid blade's sum of springs: test_a_rigid_blades_stiffness_is_its_points_springs).
+    knife = bpy.data.objects["Knife"]
+    knife.hapticut.blade_coupling = "INDEPENDENT"
 
     settings.device_mode = "BRIDGE"
     settings.stiffness_N_per_mm = 2 * bridge["max_stiffness_N_per_mm"]
@@ -185,6 +189,37 @@ def test_settings_above_the_devices_limits_are_refused(scene):
     assert not listing["profiles"][0]["limits"]["has_force_output"]
     live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
     settings.max_force_N = 0.0
+
+
+def test_a_rigid_blades_stiffness_is_its_points_springs(scene):
+    """A rigid blade renders n k in contact (its n point springs act together): the device's
+    stiffness limit bounds that sum, so a point stiffness within the limit is refused for a
+    rigid 20-point blade, and one under limit / 20 is taken."""
+    from addon import device_list, live
+
+    settings = scene.hapticut_live
+    assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
+    bridge = next(k for k in device_list.cached()["kinds"] if k["kind"] == "bridge")["limits"]
+    limit = bridge["max_stiffness_N_per_mm_at_rate"]
+    knife = bpy.data.objects["Knife"]
+    assert (knife.hapticut.blade_coupling, knife.hapticut.blade_points) == ("RIGID", 20)
+    assert live.blade_springs(scene, "Knife") == live.blade_springs(scene) == 20
+    settings.device_mode = "BRIDGE"
+    settings.stiffness_N_per_mm = 0.5 * limit
+    with pytest.raises(live.live_session.SessionError) as refused:
+        live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
+    assert f"stiffness {10 * limit:g} N/mm ({0.5 * limit:g} N/mm x 20 points of a rigid blade)" in (
+        str(refused.value)
+    )
+    assert any("Go Live refuses it" in text for text in panel_texts())
+    settings.stiffness_N_per_mm = 0.9 * limit / 20
+    live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
+    assert not any("Go Live refuses it" in text for text in panel_texts())
+    knife.hapticut.blade_coupling = "INDEPENDENT"
+    assert live.blade_springs(scene) == 1
+    settings.stiffness_N_per_mm = 0.5 * limit
+    live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
+    settings.stiffness_N_per_mm = 0.0
 
 
 def test_a_servo_that_fails_to_list_is_said_so_in_the_panel(scene, tmp_path, monkeypatch):
