@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 import subprocess
 import sys
@@ -65,6 +66,18 @@ def test_info_prints_table3_beside_the_paper_for_the_spheres():
     assert "394" in result.stdout and "234" in result.stdout
     result = run_cli("info", EXAMPLES / "sphere320.hapticut.msgpack", "--json")
     assert result.returncode == 0 and '"tets_per_material"' in result.stdout
+
+
+def test_info_names_each_blades_coupling_and_the_stiffness_it_renders():
+    result = run_cli("info", EXAMPLES / "sphere80.hapticut.msgpack")
+    assert result.returncode == 0, result.stderr
+    # The example's 50-point scalpel at 0.1 N/mm: rigid, so its springs act together.
+    assert "50 points" in result.stdout
+    assert "rigid, orientation free; renders 5 N/mm in contact" in result.stdout
+    as_json = run_cli("info", EXAMPLES / "sphere80.hapticut.msgpack", "--json")
+    (blade,) = json.loads(as_json.stdout)["blades"]
+    assert (blade["coupling"], blade["orientation"]) == ("rigid", "free")
+    assert blade["rendered_stiffness_N_per_mm"] == pytest.approx(5.0)
 
 
 def test_info_and_mesh_report_bad_arguments(tmp_path):

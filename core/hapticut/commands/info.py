@@ -33,6 +33,7 @@ def material_text(material) -> str:
 def scene_summary(scene) -> dict:
     """Everything ``info`` prints, as plain values."""
     from hapticut.scenebuild.quality import mesh_report
+    from hapticut.stiffness import rendered_stiffness_N_per_mm
 
     report = mesh_report(
         scene.vertices, scene.tets, scene.tet_materials, [m.name for m in scene.materials]
@@ -41,7 +42,17 @@ def scene_summary(scene) -> dict:
         {"name": m.name, "model": m.model, "description": material_text(m)} for m in scene.materials
     ]
     report["blades"] = [
-        {"name": b.name, "start_mm": list(b.start_mm), "end_mm": list(b.end_mm), "points": b.points}
+        {
+            "name": b.name,
+            "start_mm": list(b.start_mm),
+            "end_mm": list(b.end_mm),
+            "points": b.points,
+            "coupling": b.coupling,
+            "orientation": b.orientation,
+            "rendered_stiffness_N_per_mm": rendered_stiffness_N_per_mm(
+                scene.stiffness_N_per_mm, b.points, b.coupling
+            ),
+        }
         for b in scene.blades
     ]
     report["build_report"] = scene.metadata.get("build_report")
@@ -92,9 +103,13 @@ def format_summary(summary: dict) -> str:
         f"{valence['max_tets_per_vertex']}, mean {valence['mean_tets_per_vertex']:.2f}"
     )
     for blade in summary["blades"]:
+        setting = blade["coupling"]
+        if setting == "rigid":
+            setting += f", orientation {blade['orientation']}"
         lines.append(
             f"Blade {blade['name']}: {blade['points']} points from {blade['start_mm']} to "
-            f"{blade['end_mm']} mm (tool frame)"
+            f"{blade['end_mm']} mm (tool frame), {setting}; renders "
+            f"{blade['rendered_stiffness_N_per_mm']:g} N/mm in contact"
         )
     build = summary.get("build_report")
     if build:
