@@ -48,7 +48,8 @@ sources_hash() {
   shift
   {
     echo "$words"
-    git ls-files -z --cached --others --exclude-standard -- "$@" |
+    # Sorted: git lists tracked files before untracked ones, and a commit must not count.
+    git ls-files -z --cached --others --exclude-standard -- "$@" | sort -zu |
       xargs -0 -r sha1sum 2>/dev/null
   } | sha1sum | cut -d' ' -f1
 }
