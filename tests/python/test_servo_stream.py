@@ -158,6 +158,23 @@ def test_a_client_of_the_old_protocol_is_refused_and_told_to_update():
     assert (reply["version"], reply["frame_version"], reply["record_version"]) == (2, 3, 4)
 
 
+def test_a_client_of_other_layouts_refuses_the_servo(monkeypatch):
+    """The same protocol version with another frame layout would be misread frame by frame:
+    the client says so at hello rather than parse frames it cannot read."""
+    servo_writes = layout.FRAME_VERSION
+    monkeypatch.setattr(layout, "FRAME_VERSION", servo_writes - 1)  # the client's layouts
+    with ServoProcess([str(SPHERE), "--device", "scalpel=sim", "--wait"]) as servo:
+        client = ServoClient(port=servo.port)
+        with pytest.raises(ServoError) as refused:
+            client.hello()
+        client.close()
+        assert servo.stop() == 0
+    assert str(refused.value) == (
+        f"the servo writes frame version {servo_writes}, this client reads version "
+        f"{servo_writes - 1}: use the hapticut toolkit of the servo's release"
+    )
+
+
 def test_a_frame_carries_the_ideal_pose():
     """A viewport pose in, the engine's ideal pose out: independent points report the device's
     pose (normalised), a rigid blade its own (the layout's field, and Frame.ideal_pose)."""
