@@ -4,10 +4,12 @@ Builds a .blend with the finger (skin, flesh, three bones) and a knife with a ke
 stroke, tetrahedralizes it through the add-on, runs the stroke through the servo (Simulate
 stroke: as fast as possible, recorded), bakes it (the ideal blade, the force arrow, the cut
 surface opening frame by frame) and renders PNG frames with Cycles on the CPU plus one
-contact sheet. Runs in Python with the ``bpy`` module (background mode); the README's demo
-command (examples/blender_demo.sh) installs what it needs first.
+contact sheet, then prints each stage's time and a summary of the stroke (forces, the points'
+states) read from the servo's recording. Runs in Python with the ``bpy`` module (background
+mode); the README's demo command (examples/demo.sh) installs what it needs first.
 
-    python3 examples/blender_demo.py [--out build/blender-demo] [--sheet docs/blender_demo.png]
+    python3 examples/blender_demo.py [--quick | --no-render] [--out build/blender-demo]
+                                     [--sheet docs/blender_demo.png]
 """
 
 from __future__ import annotations
@@ -31,9 +33,7 @@ def toolkit_executable() -> str:
     beside = Path(sys.executable).with_name("hapticut")
     found = str(beside) if beside.exists() else shutil.which("hapticut")
     if not found:
-        sys.exit(
-            "blender_demo: the hapticut toolkit is not installed (bash examples/blender_demo.sh)"
-        )
+        sys.exit("blender_demo: the hapticut toolkit is not installed (bash examples/demo.sh)")
     return found
 
 
@@ -249,6 +249,32 @@ def contact_sheet(paths: list[Path], target: Path, columns: int = 3) -> None:
     out.save()
 
 
+def stroke_summary(recording_path: str) -> list[str]:
+    """The stroke as the servo recorded it: the force on the hand and where the points were."""
+    from hapticut import engine
+    from hapticut.recording import read_recording
+
+    recording = read_recording(recording_path)
+    name = recording.blade_names[0]
+    block = recording.blade(name)["block"]
+    force = np.linalg.norm(block["force_N"], axis=1)
+    peak = int(np.argmax(force))
+    states = block["state_counts"].astype(int)  # (T, 5) in engine.STATE_NAMES order
+    on_surface = [engine.STATE_NAMES.index(s) for s in ("FACE", "EDGE", "VERTEX")]
+    held = states[:, on_surface].sum(axis=1)
+    points = int(block["point_count"][0])
+    time_s = recording.ticks["time_s"]
+    counts = ", ".join(f"{s} {c}" for s, c in zip(engine.STATE_NAMES, states[peak], strict=True))
+    return [
+        f"stroke: {len(recording)} ticks ({time_s[-1] - time_s[0]:.2f} s at 1 kHz), "
+        f"blade {name!r} with {points} points; recording {recording_path}",
+        f"force on the hand: peak {force[peak]:.2f} N at {time_s[peak] - time_s[0]:.2f} s, "
+        f"mean {force.mean():.2f} N; in contact (over 0.1 N) {np.mean(force > 0.1):.0%} "
+        "of the ticks",
+        f"points held on a surface: at most {held.max()} of {points}; at the peak force: {counts}",
+    ]
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", default=str(REPO / "build" / "blender-demo"))
@@ -256,33 +282,55 @@ def main() -> int:
     parser.add_argument("--stroke-seconds", type=float, default=2.5)
     parser.add_argument("--frames", type=int, default=6, help="how many frames to render")
     parser.add_argument("--samples", type=int, default=24)
-    parser.add_argument("--no-render", action="store_true", help="build, simulate, bake only")
+    looks = parser.add_mutually_exclusive_group()
+    looks.add_argument("--quick", action="store_true", help="render 3 frames at 8 samples")
+    looks.add_argument("--no-render", action="store_true", help="build, simulate, bake only")
     args = parser.parse_args()
+    if args.quick:
+        args.frames, args.samples = 3, 8
     out = Path(args.out).resolve()
     out.mkdir(parents=True, exist_ok=True)
+    stages: list[tuple[str, float]] = []
+    began = time.perf_counter()
     enable_addon()
     scene = build_scene(out / "work", args.stroke_seconds)
-    print(f"blender_demo: tetrahedralize {tetrahedralize(scene):.1f} s")
+    stages.append(("scene (add-on, finger, knife, keyed stroke)", time.perf_counter() - began))
+    seconds = tetrahedralize(scene)
+    stages.append(("tetrahedralize (repair, fTetWild, labels)", seconds))
+    print(f"blender_demo: tetrahedralize {seconds:.1f} s", flush=True)
     figures = simulate_and_bake(scene)
-    print(f"blender_demo: Simulate stroke to a baked animation {figures['seconds']:.2f} s for a "
-          f"{args.stroke_seconds:g} s stroke ({figures['ticks']} ticks at 1 kHz; servo "
-          f"{figures['servo_s']:.2f} s, bake {figures.get('bake_s', 0):.2f} s)")  # fmt: skip
+    stages.append(("simulate stroke through the servo, bake", figures["seconds"]))
+    print(
+        f"blender_demo: Simulate stroke to a baked animation {figures['seconds']:.2f} s for a "
+        f"{args.stroke_seconds:g} s stroke ({figures['ticks']} ticks at 1 kHz; servo "
+        f"{figures['servo_s']:.2f} s, bake {figures.get('bake_s', 0):.2f} s)",
+        flush=True,
+    )
+    began = time.perf_counter()
     stage(scene)
     blend = out / "blender_demo.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend))
-    print(f"blender_demo: saved {blend}")
-    if args.no_render:
-        return 0
-    first, last = scene.frame_start, scene.frame_end
-    frames = np.linspace(first + (last - first) / 4, last, args.frames).round().astype(int).tolist()
-    began = time.perf_counter()
-    paths = render(scene, out / "frames", frames, samples=args.samples)
-    sheet = Path(args.sheet).resolve() if args.sheet else out / "contact_sheet.png"
-    contact_sheet(paths, sheet)
-    print(
-        f"blender_demo: rendered {len(paths)} frames ({time.perf_counter() - began:.0f} s) "
-        f"into {out / 'frames'}; contact sheet {sheet}"
-    )
+    stages.append(("stage and save the .blend", time.perf_counter() - began))
+    summary = stroke_summary(scene.hapticut_live.recording_path)
+    sheet = None
+    if not args.no_render:
+        first, last = scene.frame_start, scene.frame_end
+        frames = np.linspace(first + (last - first) / 4, last, args.frames)
+        began = time.perf_counter()
+        paths = render(scene, out / "frames", frames.round().astype(int).tolist(),
+                       samples=args.samples)  # fmt: skip
+        sheet = Path(args.sheet).resolve() if args.sheet else out / "contact_sheet.png"
+        contact_sheet(paths, sheet)
+        stages.append((f"render {len(paths)} frames ({args.samples} samples, Cycles on the CPU)",
+                       time.perf_counter() - began))  # fmt: skip
+    print("\nblender_demo: stages")
+    for name, seconds in stages:
+        print(f"  {seconds:7.1f} s  {name}")
+    print("\n".join(["", *summary, ""]))
+    print(f"the .blend: {blend}")
+    if sheet is not None:
+        print(f"the frames: {out / 'frames'}")
+        print(f"the contact sheet: {sheet}")
     return 0
 
 

@@ -1,7 +1,7 @@
 // BladeFrame: what the servo publishes and records of one blade after a tick:
 // the engine's own snapshot (Blade::snapshot: per point the proxy place, the
 // device point p and the force; the tick with its work budget; the blade's
-// counters) and the proxies per state. Sized once for the blade's points;
+// counters), the blade's ideal pose and the proxies per state. Sized once for the blade's points;
 // filling it never allocates.
 #pragma once
 
@@ -21,6 +21,9 @@ struct BladeFrame {
   BladeSnapshotHeader header;  // header.tick: the last step; header.counters: since the run began.
   std::vector<ProxySnapshot> points;
   std::array<std::uint16_t, kProxyStateCount> state_counts{};
+  // Blade::ideal_pose after the last step: the rigid blade's solved tool pose,
+  // or the last device pose for independent points (what the viewport draws).
+  Pose ideal_pose;
 };
 
 // Copies the blade's state after its last step into `frame` (sized for it).

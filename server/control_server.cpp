@@ -325,9 +325,17 @@ nlohmann::json ControlServer::hello(Client& client, const ControlJson& message) 
       integer_field(message, "version", 0, std::numeric_limits<std::int64_t>::max());
   if (version != kProtocolVersion) {
     ++counters_.unauthenticated;
+    // An older client would misread the frames (their blade blocks grew):
+    // tell it what to do rather than only that it failed.
     throw CommandError("protocol version " + std::to_string(version) +
                        " not supported (this servo speaks version " +
-                       std::to_string(kProtocolVersion) + ")");
+                       std::to_string(kProtocolVersion) +
+                       (version < kProtocolVersion
+                            ? ", whose frames and recordings carry each blade's ideal pose; "
+                              "update the client: the hapticut toolkit and the add-on of this "
+                              "servo's release"
+                            : "; this servo is older than the client") +
+                       ")");
   }
   if (!options_.token.empty()) {
     const double now_s = monotonic_now_s();

@@ -18,8 +18,8 @@
 
 namespace hapticut::servo {
 
-inline constexpr std::uint16_t kFrameVersion = 2;
-inline constexpr std::uint16_t kRecordVersion = 3;
+inline constexpr std::uint16_t kFrameVersion = 3;
+inline constexpr std::uint16_t kRecordVersion = 4;
 inline constexpr char kFrameMagic[4] = {'H', 'C', 'F', 'R'};
 inline constexpr char kRecordingEndMarker[8] = {'H', 'C', 'R', 'E', 'C', 'E', 'N', 'D'};
 // The largest UDP payload over IPv4; a scene whose frame is larger is refused.
@@ -58,30 +58,31 @@ inline constexpr std::size_t kMaxFrameBytes = 65507;
   F(std::uint32_t, servo_flags)                                                  \
   F(std::uint32_t, blade_count)
 
-#define HAPTICUT_BLADE_BLOCK_FIELDS(F, A)                                              \
-  A(double, pose, 7)           /* Device pose: x, y, z mm, qw, qx, qy, qz. */          \
-  A(double, engine_force_N, 3) /* The blade's force before safety. */                  \
-  A(double, engine_torque_N_mm, 3)                                                     \
-  A(double, force_N, 3) /* Written to the device (after safety). */                    \
-  A(double, torque_N_mm, 3)                                                            \
-  F(double, ramp)      /* Safety ramp factor, 0..1. */                                 \
-  F(double, step_dt_s) /* dt the engine stepped with (0: no step). */                  \
-  F(std::uint32_t, point_count)                                                        \
-  F(std::uint32_t, buttons)                                                            \
-  F(std::uint32_t, safety_flags)    /* SafetyFlag bits, the state this tick. */        \
-  F(std::uint32_t, events)          /* SafetyFlag bits that started this tick. */      \
-  A(std::uint16_t, state_counts, 5) /* Proxies in TET, FACE, EDGE, VERTEX, OUTSIDE. */ \
-  F(std::uint16_t, capped_points)                                                      \
-  F(std::uint8_t, device_status) /* DeviceStatus: 0 fresh, 1 stale, 2 lost. */         \
-  F(std::uint8_t, step_kind)     /* StepKind: 0 none, 1 step, 2 reset + step. */       \
-  F(std::uint16_t, max_transitions)                                                    \
-  F(double, stiffness_N_per_mm)    /* k stepped with (limited to the device). */       \
-  F(std::uint64_t, rejected_ticks) /* Engine counters of the run. */                   \
-  F(std::uint64_t, out_of_workspace_ticks)                                             \
-  F(std::uint64_t, unfinished_ticks)                                                   \
-  F(std::uint32_t, transitions) /* This tick, all points. */                           \
-  F(std::uint16_t, deferred_points)                                                    \
-  F(std::uint8_t, engine_rejected) /* 1: the engine refused the sample. */             \
+#define HAPTICUT_BLADE_BLOCK_FIELDS(F, A)                                                    \
+  A(double, pose, 7)           /* Device pose: x, y, z mm, qw, qx, qy, qz. */                \
+  A(double, ideal_pose, 7)     /* Blade::ideal_pose, as pose (independent: the device's). */ \
+  A(double, engine_force_N, 3) /* The blade's force before safety. */                        \
+  A(double, engine_torque_N_mm, 3)                                                           \
+  A(double, force_N, 3) /* Written to the device (after safety). */                          \
+  A(double, torque_N_mm, 3)                                                                  \
+  F(double, ramp)      /* Safety ramp factor, 0..1. */                                       \
+  F(double, step_dt_s) /* dt the engine stepped with (0: no step). */                        \
+  F(std::uint32_t, point_count)                                                              \
+  F(std::uint32_t, buttons)                                                                  \
+  F(std::uint32_t, safety_flags)    /* SafetyFlag bits, the state this tick. */              \
+  F(std::uint32_t, events)          /* SafetyFlag bits that started this tick. */            \
+  A(std::uint16_t, state_counts, 5) /* Proxies in TET, FACE, EDGE, VERTEX, OUTSIDE. */       \
+  F(std::uint16_t, capped_points)                                                            \
+  F(std::uint8_t, device_status) /* DeviceStatus: 0 fresh, 1 stale, 2 lost. */               \
+  F(std::uint8_t, step_kind)     /* StepKind: 0 none, 1 step, 2 reset + step. */             \
+  F(std::uint16_t, max_transitions)                                                          \
+  F(double, stiffness_N_per_mm)    /* k stepped with (limited to the device). */             \
+  F(std::uint64_t, rejected_ticks) /* Engine counters of the run. */                         \
+  F(std::uint64_t, out_of_workspace_ticks)                                                   \
+  F(std::uint64_t, unfinished_ticks)                                                         \
+  F(std::uint32_t, transitions) /* This tick, all points. */                                 \
+  F(std::uint16_t, deferred_points)                                                          \
+  F(std::uint8_t, engine_rejected) /* 1: the engine refused the sample. */                   \
   F(std::uint8_t, force_shading)   /* 1: this tick's settings shade. */
 
 // Written once, after the last record, when a recording is closed cleanly:

@@ -86,6 +86,22 @@ inline double stiffness_in_force(double requested_N_per_mm, double limit_N_per_m
                                                                      : requested_N_per_mm;
 }
 
+// The coupling springs a blade renders in parallel at its tool: a rigid
+// blade's points all hold one pose, so pressed on a wall it pushes back with
+// the sum of its springs, n k, whatever length of edge touches; independent
+// points each carry their own spring, so one point's k is what a device's
+// limit (stated for one spring, f = k (q - p)) is about.
+inline int rendered_springs(BladeCoupling coupling, int points) {
+  return coupling == BladeCoupling::Rigid ? std::max(points, 1) : 1;
+}
+
+// The limit on a blade's coupling stiffness k (each point's spring): the
+// device's limit on what the blade renders (stiffness_limit) shared among its
+// rendered springs, so that springs x k stays within it. 0: none known.
+inline double point_stiffness_limit(double device_limit_N_per_mm, int springs) {
+  return device_limit_N_per_mm > 0.0 ? device_limit_N_per_mm / std::max(springs, 1) : 0.0;
+}
+
 struct SafetyOutput {
   Vec3 force_N;
   Vec3 torque_N_mm;

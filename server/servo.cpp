@@ -54,16 +54,21 @@ std::string newtons_per_mm(double k) {
 }
 
 // A binding's stiffness limit for messages: "0.2 N/mm", or at a rate below
-// 1 kHz "0.1 N/mm at 500 Hz (0.2 N/mm at 1 kHz)".
+// 1 kHz "0.1 N/mm at 500 Hz (0.2 N/mm at 1 kHz)"; for a rigid blade the limit
+// on each point's k and where it comes from, "0.004 N/mm per point (a rigid
+// blade of 50 points renders 50 k: the device's 0.2 N/mm over 50)".
 std::string stiffness_limit_text(const Binding& b, double rate_Hz) {
-  std::string text = newtons_per_mm(b.max_stiffness_N_per_mm);
+  std::string device_limit = newtons_per_mm(b.device_max_stiffness_N_per_mm);
   if (rate_Hz < kStiffnessLimitRate_Hz) {
     char rate[32];
     std::snprintf(rate, sizeof(rate), "%g Hz", rate_Hz);
-    text += std::string(" at ") + rate + " (" +
-            newtons_per_mm(b.device->limits().max_stiffness_N_per_mm) + " at 1 kHz)";
+    device_limit += std::string(" at ") + rate + " (" +
+                    newtons_per_mm(b.device->limits().max_stiffness_N_per_mm) + " at 1 kHz)";
   }
-  return text;
+  if (b.springs == 1) return device_limit;
+  const std::string n = std::to_string(b.springs);
+  return newtons_per_mm(b.max_stiffness_N_per_mm) + " per point (a rigid blade of " + n +
+         " points renders " + n + " k: the device's " + device_limit + " over " + n + ")";
 }
 
 }  // namespace
@@ -137,8 +142,8 @@ void Servo::load(const SessionConfig& config) {
     std::printf("hapticut-servo: loaded %s: %zu blade(s) at %g Hz\n",
                 session_->scene_label().c_str(), session_->bindings().size(), session_->rate_Hz());
     for (const Binding& b : session_->bindings()) {
-      std::printf("  blade '%s' (%zu points) <- %s\n", b.blade_name.c_str(), b.frame.point_count(),
-                  b.device_text.c_str());
+      std::printf("  blade '%s' (%zu points, %s) <- %s\n", b.blade_name.c_str(),
+                  b.frame.point_count(), coupling_name(b.blade->coupling()), b.device_text.c_str());
     }
     std::fflush(stdout);
   }
@@ -260,6 +265,9 @@ nlohmann::json Servo::stats_locked() const {
       }
       nlohmann::json device_counters = nlohmann::json::object();
       for (const auto& [name, count] : b.device->status_counters()) device_counters[name] = count;
+      const double k_in_force =
+          has_settings ? stiffness_in_force(settings.stiffness_N_per_mm, b.max_stiffness_N_per_mm)
+                       : 0.0;
       out["blades"].push_back(
           {{"name", b.blade_name},
            {"device", b.device_text},
@@ -267,10 +275,11 @@ nlohmann::json Servo::stats_locked() const {
            {"device_counters", device_counters},
            {"device_error", b.device->last_error()},
            {"passivity", b.passivity},
-           {"stiffness_N_per_mm",
-            has_settings ? stiffness_in_force(settings.stiffness_N_per_mm, b.max_stiffness_N_per_mm)
-                         : 0.0},
+           {"coupling", coupling_name(b.blade->coupling())},
+           {"stiffness_N_per_mm", k_in_force},
            {"max_stiffness_N_per_mm", b.max_stiffness_N_per_mm},
+           {"rendered_stiffness_N_per_mm", b.springs * k_in_force},
+           {"device_max_stiffness_N_per_mm", b.device_max_stiffness_N_per_mm},
            {"device_status", has ? status_name(report.device_status) : "none"},
            {"flags", flag_names(report.flags)},
            {"faults", report.faults},
@@ -486,7 +495,9 @@ nlohmann::json Servo::load_command(const ControlJson& message) {
                       {"points", b.frame.point_count()},
                       {"device", b.device_text},
                       {"kind", b.device->kind()},
-                      {"max_stiffness_N_per_mm", b.max_stiffness_N_per_mm}});
+                      {"coupling", coupling_name(b.blade->coupling())},
+                      {"max_stiffness_N_per_mm", b.max_stiffness_N_per_mm},
+                      {"device_max_stiffness_N_per_mm", b.device_max_stiffness_N_per_mm}});
   }
   return {{"blades", blades},
           {"rate_Hz", session_->rate_Hz()},

@@ -15,6 +15,7 @@ namespace hapticut::servo {
 namespace {
 
 Scene read_scene_source(const SessionConfig& config) {
+  if (config.scene) return *config.scene;
   if (!config.scene_json.empty()) {
     const std::vector<std::uint8_t> bytes(config.scene_json.begin(), config.scene_json.end());
     return parse_scene(bytes, SceneEncoding::Json);
@@ -43,7 +44,9 @@ void bounds(const Scene& scene, Vec3& lo, Vec3& hi) {
 
 Session::Session(const SessionConfig& config) {
   scene_ = read_scene_source(config);
-  scene_label_ = config.scene_json.empty() ? config.scene_path : std::string("(inline)");
+  scene_label_ = config.scene                ? std::string("(in memory)")
+                 : config.scene_json.empty() ? config.scene_path
+                                             : std::string("(inline)");
   if (scene_.blades.empty()) throw SceneError("/blades", "the scene has no blade to drive");
   rate_Hz_ = config.rate_Hz > 0.0 ? config.rate_Hz : scene_.servo_rate_Hz;
   if (!(rate_Hz_ >= 1.0 && rate_Hz_ <= kMaxRate_Hz)) {
@@ -117,7 +120,10 @@ Session::Session(const SessionConfig& config) {
     binding.blade = std::make_unique<Blade>(space_, blade_spec, shading_);
     binding.requested = request;
     binding.safety = std::make_unique<SafetyChannel>(request, binding.device->limits());
-    binding.max_stiffness_N_per_mm = stiffness_limit(binding.device->limits(), rate_Hz_);
+    binding.device_max_stiffness_N_per_mm = stiffness_limit(binding.device->limits(), rate_Hz_);
+    binding.springs = rendered_springs(binding.blade->coupling(), binding.blade->point_count());
+    binding.max_stiffness_N_per_mm =
+        point_stiffness_limit(binding.device_max_stiffness_N_per_mm, binding.springs);
 #ifdef HAPTICUT_WITH_DEVICES
     // Passivity for every device that renders force (docs/stability.md).
     if (config.passivity && binding.device->limits().has_force_output) {
@@ -138,8 +144,9 @@ Session::Session(const SessionConfig& config) {
   recording_info_.as_fast_as_possible = as_fast_as_possible_;
   recording_info_.scene = scene_label_;
   for (const Binding& b : bindings_) {
-    recording_info_.blades.push_back(
-        {b.blade_name, b.device_text, static_cast<std::uint32_t>(b.frame.point_count()), 0});
+    recording_info_.blades.push_back({b.blade_name, b.device_text,
+                                      static_cast<std::uint32_t>(b.frame.point_count()), 0,
+                                      coupling_name(b.blade->coupling())});
   }
   lay_out_record(recording_info_);
 }

@@ -23,8 +23,9 @@ namespace hapticut::servo {
 class ViewportDevice;
 
 struct SessionConfig {
-  std::string scene_path;                                 // Either a path ...
-  std::string scene_json;                                 // ... or the scene itself (JSON text).
+  std::string scene_path;              // Either a path ...
+  std::string scene_json;              // ... or the scene itself (JSON text),
+  std::shared_ptr<const Scene> scene;  // ... or one already read (built in code).
   std::uint64_t max_scene_bytes = kDefaultMaxSceneBytes;  // A larger file is refused.
   std::vector<std::string> devices;                       // --device texts.
   double rate_Hz = 0.0;                                   // 0: the scene's servo_rate_Hz.
@@ -46,7 +47,11 @@ struct Binding {
   std::unique_ptr<SafetyChannel> safety;
   SafetySettings requested;  // Before the device's limits.
   // The device's stiffness limit at the session's rate (stiffness_limit, safety.h;
-  // 0: none known): the blade steps with the settings' stiffness lowered to it.
+  // 0: none known), on what the blade renders at its tool: springs x k.
+  double device_max_stiffness_N_per_mm = 0.0;
+  int springs = 1;  // rendered_springs: the blade's point count when rigid, else 1.
+  // The limit on k for this blade (point_stiffness_limit: the device's over
+  // springs; 0: none): the blade steps with the settings' stiffness lowered to it.
   double max_stiffness_N_per_mm = 0.0;
   BladeFrame frame;
   // The blade stepped since `frame` was last filled: the snapshot is taken
@@ -92,5 +97,10 @@ class Session {
 };
 
 inline constexpr double kMaxRate_Hz = 10000.0;
+
+// As the protocol and the recording's header name a blade's coupling.
+inline const char* coupling_name(BladeCoupling coupling) {
+  return coupling == BladeCoupling::Rigid ? "rigid" : "independent";
+}
 
 }  // namespace hapticut::servo

@@ -12,19 +12,22 @@ void put(double* out, const Vec3& v) {
   out[2] = v.z;
 }
 
+// x, y, z (mm), then the quaternion w, x, y, z: the layout's f64[7] pose.
+void put_pose(double* out, const Pose& pose) {
+  put(out, pose.position_mm);
+  out[3] = pose.rotation.w;
+  out[4] = pose.rotation.x;
+  out[5] = pose.rotation.y;
+  out[6] = pose.rotation.z;
+}
+
 }  // namespace
 
 std::size_t write_blade_block(const BladeTickResult& result, const BladeFrame& frame,
                               unsigned char* out) {
   BladeBlock block;
-  const Pose& pose = result.sample.pose;
-  block.pose[0] = pose.position_mm.x;
-  block.pose[1] = pose.position_mm.y;
-  block.pose[2] = pose.position_mm.z;
-  block.pose[3] = pose.rotation.w;
-  block.pose[4] = pose.rotation.x;
-  block.pose[5] = pose.rotation.y;
-  block.pose[6] = pose.rotation.z;
+  put_pose(block.pose, result.sample.pose);
+  put_pose(block.ideal_pose, frame.ideal_pose);
   put(block.engine_force_N, result.engine_force_N);
   put(block.engine_torque_N_mm, result.engine_torque_N_mm);
   put(block.force_N, result.safety.force_N);

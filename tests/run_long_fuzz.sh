@@ -7,6 +7,6 @@
 # same p changes nothing (tests/cpp/invariants_fuzz_test.cpp).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-[ -x build/tests/tests/cpp/hapticut_tests ] || bash tests/scripts/setup.sh
+[ -x build/main/tests/cpp/hapticut_tests ] || bash tests/scripts/setup.sh
 HAPTICUT_FUZZ_STEPS="${HAPTICUT_FUZZ_STEPS:-10000000}" \
-  build/tests/tests/cpp/hapticut_tests --gtest_filter='Invariants.*'
+  build/main/tests/cpp/hapticut_tests --gtest_filter='Invariants.*'

@@ -19,6 +19,7 @@ COMMAND_MODULES = (
     "convert",
     "serve",
     "paths",
+    "demo_stroke",
 )
 
 

@@ -5,6 +5,7 @@
     rec.ticks["time_s"]                          # (T,) per-tick fields (RECORD_HEADER)
     rec.blade("scalpel")["q"]                    # (T, N, 3) proxies, mm
     rec.blade("scalpel")["block"]["force_N"]     # (T, 3) force written to the device
+    rec.ideal_pose("scalpel")                    # (T, 7) the ideal tool pose: x, y, z, qw..qz
     rec.truncated, rec.problem                   # cut short (no trailer): why, in words
 
 The file is a magic, a JSON header, fixed-size records and a trailer (docs/servo.md);
@@ -67,6 +68,16 @@ class Recording:
                 f"recording has no blade {name!r} (it has: {', '.join(self.blade_names)})"
             )
         return self.records[name]
+
+    def ideal_pose(self, name: str) -> np.ndarray:
+        """(T, 7): the blade's ideal tool pose per tick, x, y, z (mm), qw, qx, qy, qz; a rigid
+        blade's solved pose, independent points' the device's (``coupling``)."""
+        return layout.ideal_pose(self.blade(name))
+
+    def coupling(self, name: str) -> str:
+        """``"rigid"`` or ``"independent"``: what the blade's ideal pose is."""
+        self.blade(name)  # KeyError naming the blades for an unknown one.
+        return next(b["coupling"] for b in self.header["blades"] if b["name"] == name)
 
     def __len__(self) -> int:
         return len(self.records)

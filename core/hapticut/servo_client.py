@@ -30,7 +30,7 @@ import numpy as np
 
 from hapticut import servo_layout as layout
 
-PROTOCOL_VERSION = 1
+PROTOCOL_VERSION = 2
 MAX_MESSAGE_BYTES = 16 << 20
 
 
@@ -58,6 +58,11 @@ class Frame:
     def order(self) -> tuple[int, int]:
         """Newer frames are larger, across runs too (the sequence restarts at each start)."""
         return (self.session, self.sequence)
+
+    def ideal_pose(self, blade: str) -> np.ndarray:
+        """The blade's ideal tool pose (7,): x, y, z (mm), qw, qx, qy, qz
+        (``servo_layout.ideal_pose``)."""
+        return layout.ideal_pose(self.blades[blade])
 
     @property
     def age_s(self) -> float:
@@ -245,6 +250,14 @@ class ServoClient:
         if self.token is not None:
             fields["token"] = self.token
         reply = self.request("hello", **fields)
+        # The same protocol with other layouts would be misread frame by frame: say so once.
+        for name, mine in (("frame", layout.FRAME_VERSION), ("record", layout.RECORD_VERSION)):
+            theirs = reply.get(f"{name}_version")
+            if theirs != mine:
+                raise ServoError(
+                    f"the servo writes {name} version {theirs}, this client reads version "
+                    f"{mine}: use the hapticut toolkit of the servo's release"
+                )
         self._learn_stream_source(reply)
         return reply
 

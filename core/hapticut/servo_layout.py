@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
-FRAME_VERSION = 2
-RECORD_VERSION = 3
+FRAME_VERSION = 3
+RECORD_VERSION = 4
 FRAME_MAGIC = b"HCFR"
 RECORDING_MAGIC = b"HCREC001"
 RECORDING_END_MARKER = b"HCRECEND"
@@ -63,7 +63,8 @@ RECORD_HEADER = np.dtype(
 
 BLADE_BLOCK = np.dtype(
     [
-        ("pose", "<f8", (7,)),
+        ("pose", "<f8", (7,)),  # The device's: x, y, z (mm), qw, qx, qy, qz.
+        ("ideal_pose", "<f8", (7,)),  # The engine's (Blade::ideal_pose), as pose.
         ("engine_force_N", "<f8", (3,)),
         ("engine_torque_N_mm", "<f8", (3,)),
         ("force_N", "<f8", (3,)),
@@ -139,6 +140,14 @@ def flag_bit(name: str) -> int:
 
 
 FAULT_MASK = sum(flag_bit(name) for name in FAULT_FLAGS)
+
+
+def ideal_pose(blade: np.void | np.ndarray) -> np.ndarray:
+    """The blade's ideal tool pose, x, y, z (mm), qw, qx, qy, qz: (7,) from a frame's blade,
+    (T, 7) from a recording's. A rigid blade's solved pose (its knife rests on the bone);
+    for independent points, the device's pose (``"coupling"`` in the recording's header
+    and the ``load`` reply says which)."""
+    return np.asarray(blade["block"]["ideal_pose"])
 
 
 def points_block_bytes(points: int) -> int:

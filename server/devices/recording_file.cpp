@@ -33,8 +33,11 @@ std::vector<unsigned char> recording_preamble(const RecordingInfo& info) {
   header["record_bytes"] = info.record_bytes;
   header["blades"] = nlohmann::json::array();
   for (const RecordingBlade& b : info.blades) {
-    header["blades"].push_back(
-        {{"name", b.name}, {"device", b.device}, {"points", b.points}, {"offset", b.offset}});
+    header["blades"].push_back({{"name", b.name},
+                                {"device", b.device},
+                                {"points", b.points},
+                                {"offset", b.offset},
+                                {"coupling", b.coupling}});
   }
   header["layout"] = nlohmann::json::parse(layout_json());
   std::string text = header.dump();
@@ -96,7 +99,7 @@ RecordingContents read_recording(const std::string& path) {
     out.info.scene = header.value("scene", "");
     for (const auto& b : header.at("blades")) {
       out.info.blades.push_back({b.at("name").get<std::string>(), b.value("device", ""),
-                                 b.at("points").get<std::uint32_t>(), 0});
+                                 b.at("points").get<std::uint32_t>(), 0, b.value("coupling", "")});
     }
     lay_out_record(out.info);
     if (out.info.record_bytes != header.at("record_bytes").get<std::size_t>()) {

@@ -26,6 +26,7 @@ struct RecordingBlade {
   std::string device;  // The --device text it was bound to.
   std::uint32_t points = 0;
   std::size_t offset = 0;  // Of its BladeBlock within a record.
+  std::string coupling;    // "rigid" or "independent": what its ideal pose means.
 };
 
 struct RecordingInfo {

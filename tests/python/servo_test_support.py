@@ -9,10 +9,14 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import functools
+import json
 import subprocess
+import tempfile
 from pathlib import Path
 
 import numpy as np
+import pytest
 from hapticut import _core, engine, servo_path
 from hapticut.recording import Recording, read_recording
 from hapticut.scenefile import BladeSpec, load_scene, save_scene
@@ -22,18 +26,6 @@ ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "examples"
 EXAMPLE_SCENES = sorted(EXAMPLES.glob("*.hapticut.msgpack"))
 SPHERE = EXAMPLES / "sphere320.hapticut.msgpack"
-
-
-def independent_copy(scene_path: Path, folder: Path) -> Path:
-    """The scene with every blade's points independent (the paper's blade), written in folder:
-    for tests of a device path that needs each point's own force, such as a scripted hand that
-    starts with the edge inside the sphere (a rigid blade there has no valid pose and no force)
-    or force shading (applied to independent points only)."""
-    scene = load_scene(scene_path)
-    scene.blades = [dataclasses.replace(b, coupling="independent") for b in scene.blades]
-    path = Path(folder) / scene_path.name
-    save_scene(scene, path)
-    return path
 
 
 def run_servo(*args: str, timeout_s: float = 120.0) -> subprocess.CompletedProcess:
@@ -77,19 +69,67 @@ def two_blade_scene(path: Path) -> Path:
     return path
 
 
+def _write_with_coupling(path: Path, coupling: str, source: Path) -> Path:
+    save_scene(load_scene(source), path)
+    document = json.loads(path.read_text())
+    for blade in document["blades"]:
+        blade["coupling"] = coupling
+    path.write_text(json.dumps(document))
+    return path
+
+
+@functools.cache
+def _coupling_refusal() -> str:
+    """Why this toolkit's scene reader refuses a blade's `coupling` ("" when it reads it:
+    the setting came with the rigid blade's scene format)."""
+    with tempfile.TemporaryDirectory() as directory:
+        path = _write_with_coupling(Path(directory) / "probe.hapticut.json", "rigid", SPHERE)
+        try:
+            load_scene(path)
+        except Exception as error:  # noqa: BLE001 - only the reader's refusal of the field
+            if "coupling" not in str(error):
+                raise
+            return str(error)
+    return ""
+
+
+def scene_with_coupling(path: Path, coupling: str, source: Path = SPHERE) -> Path:
+    """`source` with every blade's scene-file `coupling` set ("rigid" or "independent"),
+    written as JSON at `path`. Skips the test when this toolkit's scene reader does not read
+    a blade's coupling."""
+    refusal = _coupling_refusal()
+    if refusal:
+        pytest.skip(f"the scene reader does not read a blade's coupling yet ({refusal})")
+    return _write_with_coupling(path, coupling, source)
+
+
+def independent_scene(path: Path, source: Path = SPHERE) -> Path:
+    """`source` with independent points: a copy saying so where the reader reads a blade's
+    coupling, else `source` itself (independent points are then the only blade)."""
+    return source if _coupling_refusal() else _write_with_coupling(path, "independent", source)
+
+
 def offline_check(
     scene_path: Path, recording: Recording, blade_name: str, settings: dict | None = None
 ) -> int:
     """Steps the engine offline through the recorded device poses and dts, with each tick's
     recorded stiffness and shading over the scene's settings per tick (fields in `settings`
-    replaced); asserts every recorded q, p, engine force, transitions and rejection equals it
-    bit for bit. Returns the ticks stepped."""
+    replaced), the blade of the recording's coupling; asserts every recorded q, p, ideal
+    pose, engine force, transitions and rejection equals it bit for bit. Returns the ticks
+    stepped."""
     scene, space = engine.load_space(scene_path)
     spec = next(b for b in scene.blades if b.name == blade_name)
     base = _core.runtime_settings(space)
     for name, value in (settings or {}).items():
         setattr(base, name, value)
-    blade = engine.make_blade(space, spec, base)
+    coupling = recording.coupling(blade_name)
+    # The scene's orientation where its model has one (a rigid blade's; "free" by default).
+    orientation = getattr(spec, "orientation", "free")
+    blade = _core.Blade(
+        space, list(spec.start_mm), list(spec.end_mm), spec.points, coupling, orientation
+    )
+    assert blade.coupling == coupling
+    blade.settings = base
     records = recording.blade(blade_name)
     block = records["block"]
     stepped = 0
@@ -111,6 +151,9 @@ def offline_check(
         stepped += 1
         assert np.array_equal(blade.q, records["q"][k]), f"{blade_name}: q differs at tick {k}"
         assert np.array_equal(blade.p, records["p"][k]), f"{blade_name}: p differs at tick {k}"
+        assert np.array_equal(blade.ideal_pose, block["ideal_pose"][k]), (
+            f"{blade_name}: ideal pose differs at tick {k}"
+        )
         assert np.array_equal(tick["force_N"], block["engine_force_N"][k]), (
             f"{blade_name}: force differs at tick {k}"
         )
@@ -126,6 +169,7 @@ def offline_check(
 __all__ = [
     "EXAMPLES",
     "EXAMPLE_SCENES",
+    "independent_scene",
     "SPHERE",
     "ServoClient",
     "ServoProcess",
@@ -134,6 +178,7 @@ __all__ = [
     "offline_check",
     "read_recording",
     "run_servo",
+    "scene_with_coupling",
     "stats_of",
     "two_blade_scene",
 ]

@@ -21,7 +21,7 @@ from servo_test_support import (
     SPHERE,
     ServoProcess,
     connect,
-    independent_copy,
+    independent_scene,
     offline_check,
     read_recording,
     run_servo,
@@ -79,7 +79,8 @@ def test_bridge_drives_the_servo(tmp_path):
     bridge's limits, and the recorded proxies equal an offline engine run of those poses."""
     port = free_udp_port()
     record = tmp_path / "bridge.rec"
-    scene = independent_copy(SPHERE, tmp_path)  # The hand starts with the edge in the sphere.
+    # The hand starts with the edge in the sphere: a rigid blade there has no pose, no force.
+    scene = independent_scene(tmp_path / "sphere.hapticut.json")
     with ServoProcess(servo_args(port, record, ",max_force=0.5", scene)) as servo:
         client = connect(servo, ["scalpel"])
         client.subscribe(rate_Hz=200)
@@ -120,7 +121,8 @@ def test_bridge_silent_is_lost_then_ramps_back(tmp_path):
     lost, reported; a bridge that speaks again (a restarted one) is taken back, ramped in."""
     port = free_udp_port()
     record = tmp_path / "silent.rec"
-    scene = independent_copy(SPHERE, tmp_path)  # The hand starts with the edge in the sphere.
+    # The hand starts with the edge in the sphere: a rigid blade there has no pose, no force.
+    scene = independent_scene(tmp_path / "sphere.hapticut.json")
     with ServoProcess(servo_args(port, record, ",timeout_ms=100", scene)) as servo:
         client = connect(servo, ["scalpel"])
         first = start_bridge(port, "--duration", "1.6", "--silent-after", "0.9")

@@ -15,7 +15,7 @@ import threading
 import time
 
 import pytest
-from hapticut.servo_client import ServoClient, ServoError
+from hapticut.servo_client import PROTOCOL_VERSION, ServoClient, ServoError
 from servo_test_support import SPHERE, ServoProcess, connect
 
 LIVE = [str(SPHERE), "--device", "sim:press-slide,speed=20", "--engage"]
@@ -50,7 +50,7 @@ def ask(sock: socket.socket, text: bytes) -> dict:
 
 
 def hello(sock: socket.socket) -> None:
-    assert ask(sock, b'{"type":"hello","version":1}')["ok"]
+    assert ask(sock, b'{"type":"hello","version":%d}' % PROTOCOL_VERSION)["ok"]
 
 
 def test_a_deeply_nested_id_is_refused_and_the_servo_runs_on():

@@ -1,5 +1,5 @@
-"""Replay and several blades: a recording replayed gives bit-identical proxies and forces;
-two blades on two devices are stepped in the same tick and both in the stream."""
+"""Replay and several blades: a recording replayed gives bit-identical proxies, ideal poses
+and forces; two blades on two devices are stepped in the same tick and both in the stream."""
 
 from __future__ import annotations
 
@@ -13,15 +13,27 @@ from servo_test_support import (
     connect,
     offline_check,
     read_recording,
+    scene_with_coupling,
     two_blade_scene,
 )
 
+REPLAYED_BLOCK_FIELDS = (
+    "pose",
+    "ideal_pose",
+    "engine_force_N",
+    "engine_torque_N_mm",
+    "step_kind",
+    "step_dt_s",
+)
 
-def test_replay_is_bit_identical(tmp_path):
+
+def replay_and_compare(scene, tmp_path) -> tuple:
+    """A press-slide stroke with a NaN sample, baked and replayed; asserts the replay's
+    proxies, ideal poses and engine forces are the original's bit for bit."""
     original = tmp_path / "original.rec"
-    bake(SPHERE, original, "scalpel=sim:press-slide,nan_at_s=0.3")
+    bake(scene, original, "scalpel=sim:press-slide,nan_at_s=0.3")
     replayed = tmp_path / "replayed.rec"
-    stats = bake(SPHERE, replayed, f"scalpel=replay:{original}")
+    stats = bake(scene, replayed, f"scalpel=replay:{original}")
     a = read_recording(original)
     b = read_recording(replayed)
     n = len(a)
@@ -29,11 +41,33 @@ def test_replay_is_bit_identical(tmp_path):
     ra, rb = a.blade("scalpel"), b.blade("scalpel")
     for name in ("q", "p", "state"):
         assert np.array_equal(ra[name], rb[name][:n]), name
-    for name in ("pose", "engine_force_N", "engine_torque_N_mm", "step_kind", "step_dt_s"):
+    for name in REPLAYED_BLOCK_FIELDS:
         assert np.array_equal(ra["block"][name], rb["block"][name][:n], equal_nan=True), name
     # The NaN sample is replayed too, and refused again.
     assert (rb["block"]["events"][:n] & (1 << 6)).any()
-    assert offline_check(SPHERE, b, "scalpel") > 0
+    assert offline_check(scene, b, "scalpel") > 0
+    return a, b
+
+
+def test_replay_is_bit_identical(tmp_path):
+    a, _ = replay_and_compare(SPHERE, tmp_path)
+    stepped = a.blade("scalpel")["block"]["step_kind"] != 0
+    assert stepped.any()
+    if a.coupling("scalpel") == "independent":  # No common pose: the device's.
+        ideal = a.ideal_pose("scalpel")[stepped]
+        assert np.array_equal(ideal[:, :3], a.blade("scalpel")["block"]["pose"][stepped, :3])
+
+
+def test_a_rigid_blades_replay_is_bit_identical(tmp_path):
+    """The rigid blade's ideal pose is recorded and replayed bit for bit; pressed onto the
+    ball it rests above the device, on it."""
+    scene = scene_with_coupling(tmp_path / "rigid.hapticut.json", "rigid")
+    a, _ = replay_and_compare(scene, tmp_path)
+    assert a.coupling("scalpel") == "rigid"
+    block = a.blade("scalpel")["block"]
+    stepped = block["step_kind"] != 0
+    lift = a.ideal_pose("scalpel")[stepped, 2] - block["pose"][stepped, 2]
+    assert lift.max() > 1.0 and lift.min() > -1e-9
 
 
 def test_replay_of_a_missing_blade_is_named(tmp_path):

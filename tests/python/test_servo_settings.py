@@ -15,7 +15,7 @@ from servo_test_support import (
     ServoProcess,
     bake,
     connect,
-    independent_copy,
+    independent_scene,
     offline_check,
     read_recording,
 )
@@ -95,7 +95,8 @@ def test_stiffness_set_mid_stroke(tmp_path):
 
 def test_shading_and_work_budget_equal_an_offline_blade(tmp_path):
     record = tmp_path / "shaded.rec"
-    scene = independent_copy(RIGID_SCENE, tmp_path)  # Shading acts on independent points.
+    # Force shading acts on independent points.
+    scene = independent_scene(tmp_path / "sphere.hapticut.json", RIGID_SCENE)
     args = [str(scene), "--wait", "--engage", "--ramp", "0.05", "--exit-when-done"]
     args += ["--as-fast-as-possible", "--device", "scalpel=sim:press-slide,speed=40"]
     args += ["--record", str(record)]

@@ -2,7 +2,9 @@
 bridge behind `bridge:...,max_stiffness=K` and a sim stroke with `max_stiffness_N_per_mm`.
 A scene stiffness above the limit is lowered to it (one stderr line at load), a `set` above
 it is refused naming the limit, one below it is taken; the status, the stream and the
-recording show the stiffness in force, and the engine stepped with it (offline check)."""
+recording show the stiffness in force, and the engine stepped with it (offline check).
+A rigid blade renders the sum of its points' springs, n k: the limit applies to that sum,
+for independent points to one point's k."""
 
 from __future__ import annotations
 
@@ -15,10 +17,11 @@ from servo_test_support import (
     SPHERE,
     ServoProcess,
     connect,
-    independent_copy,
+    independent_scene,
     offline_check,
     read_recording,
     run_servo,
+    scene_with_coupling,
 )
 from test_servo_devices import bridge_summary, free_udp_port, start_bridge
 
@@ -34,7 +37,7 @@ def test_bridge_stiffness_limit_lowers_the_scene_and_refuses_a_set_above(tmp_pat
     port = free_udp_port()
     device = f"scalpel=bridge:port={port},max_stiffness={LIMIT}"
     record = tmp_path / "limit.rec"
-    scene = independent_copy(SPHERE, tmp_path)  # The hand starts with the edge in the sphere.
+    scene = independent_scene(tmp_path / "sphere.hapticut.json")
     args = [str(scene), "--device", device, "--engage", "--ramp", "0.05", "--record", str(record)]
     with ServoProcess(args) as servo:
         client = connect(servo, ["scalpel"])
@@ -99,8 +102,9 @@ def test_sim_stiffness_limit_scales_with_a_slower_rate(tmp_path):
     """At 500 Hz the 1 kHz limit is halved: a baked stroke runs at 0.025 N/mm throughout."""
     record = tmp_path / "sim.rec"
     device = f"scalpel=sim:press-slide,max_stiffness_N_per_mm={LIMIT}"
+    scene = independent_scene(tmp_path / "sphere.hapticut.json")
     result = run_servo(
-        str(SPHERE), "--device", device, "--rate", "500", "--as-fast-as-possible",
+        str(scene), "--device", device, "--rate", "500", "--as-fast-as-possible",
         "--exit-when-done", "--engage", "--record", str(record),
     )  # fmt: skip
     assert result.returncode == 0, result.stderr
@@ -112,7 +116,7 @@ def test_sim_stiffness_limit_scales_with_a_slower_rate(tmp_path):
     block = recording.blade("scalpel")["block"]
     assert np.all(block["stiffness_N_per_mm"] == 0.025)
     assert np.linalg.norm(block["engine_force_N"], axis=1).max() > 0.02
-    assert offline_check(SPHERE, recording, "scalpel") == len(recording)
+    assert offline_check(scene, recording, "scalpel") == len(recording)
 
 
 def test_no_stiffness_limit_keeps_the_scene_stiffness(tmp_path):
@@ -126,3 +130,76 @@ def test_no_stiffness_limit_keeps_the_scene_stiffness(tmp_path):
         client.close()
         assert servo.stop() == 0
     assert not [line for line in servo.stderr_lines if "stiffness" in line]
+
+
+STIFF_LIMIT = 0.5  # N/mm at the device: the scene's 0.1 N/mm is fine for one point ...
+POINTS = 50  # ... but the sphere's rigid blade of 50 points would render 5 N/mm.
+
+
+def test_a_rigid_blade_is_lowered_to_the_limit_over_its_points(tmp_path):
+    scene = scene_with_coupling(tmp_path / "rigid.hapticut.json", "rigid")
+    record = tmp_path / "rigid.rec"
+    device = f"scalpel=sim:press,max_stiffness_N_per_mm={STIFF_LIMIT}"
+    result = run_servo(
+        str(scene), "--device", device, "--as-fast-as-possible", "--exit-when-done",
+        "--engage", "--record", str(record),
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert (
+        f"blade 'scalpel': the scene's stiffness {SCENE_K:g} N/mm is above device '{device}''s "
+        f"limit of 0.01 N/mm per point (a rigid blade of {POINTS} points renders {POINTS} k: "
+        f"the device's {STIFF_LIMIT:g} N/mm over {POINTS}); lowered to 0.01 N/mm"
+    ) in result.stderr
+    recording = read_recording(record)
+    assert recording.coupling("scalpel") == "rigid"
+    block = recording.blade("scalpel")["block"]
+    assert np.all(block["stiffness_N_per_mm"] == STIFF_LIMIT / POINTS)
+    # Pressed on the ball, the whole edge pushes back: n k, not one point's k, per mm.
+    assert np.linalg.norm(block["engine_force_N"], axis=1).max() > 0.02
+    assert offline_check(scene, recording, "scalpel") == len(recording)
+
+
+def test_a_rigid_blade_set_within_the_limit_per_point_but_over_it_in_sum_is_refused(tmp_path):
+    scene = scene_with_coupling(tmp_path / "rigid.hapticut.json", "rigid")
+    device = f"scalpel=sim:max_stiffness_N_per_mm={STIFF_LIMIT}"
+    with ServoProcess([str(scene), "--device", device, "--wait"]) as servo:
+        client = connect(servo, ["scalpel"])
+        blade = client.status()["blades"][0]
+        # 0.02 N/mm is 1/25 of the device's limit, but 50 rigid points render 1 N/mm.
+        with pytest.raises(
+            ServoError,
+            match=r"0\.02 N/mm is above the limit of 0\.01 N/mm per point \(a rigid blade of "
+            r"50 points renders 50 k: the device's 0\.5 N/mm over 50\) of blade 'scalpel'",
+        ):
+            client.set_parameters(stiffness_N_per_mm=0.02)
+        refused = client.status()
+        client.set_parameters(stiffness_N_per_mm=0.008)
+        taken = client.status()["blades"][0]
+        client.close()
+        assert servo.stop() == 0
+    assert blade["coupling"] == "rigid"
+    assert blade["max_stiffness_N_per_mm"] == STIFF_LIMIT / POINTS
+    assert blade["device_max_stiffness_N_per_mm"] == STIFF_LIMIT
+    assert blade["rendered_stiffness_N_per_mm"] == pytest.approx(STIFF_LIMIT)
+    assert refused["settings"]["stiffness_N_per_mm"] == SCENE_K  # nothing applied
+    assert taken["stiffness_N_per_mm"] == 0.008
+    assert taken["rendered_stiffness_N_per_mm"] == pytest.approx(POINTS * 0.008)
+
+
+def test_independent_points_are_held_to_one_points_k(tmp_path):
+    """The same device and sphere with independent points: one point's k is within the
+    limit, so the scene's is kept, and a set up to the limit is taken."""
+    scene = independent_scene(tmp_path / "independent.hapticut.json")
+    device = f"scalpel=sim:max_stiffness_N_per_mm={STIFF_LIMIT}"
+    with ServoProcess([str(scene), "--device", device, "--wait"]) as servo:
+        client = connect(servo, ["scalpel"])
+        loaded = client.status()["blades"][0]
+        client.set_parameters(stiffness_N_per_mm=0.4)
+        taken = client.status()["blades"][0]
+        client.close()
+        assert servo.stop() == 0
+    assert not [line for line in servo.stderr_lines if "stiffness" in line]
+    assert loaded["coupling"] == "independent"
+    assert loaded["max_stiffness_N_per_mm"] == STIFF_LIMIT
+    assert loaded["stiffness_N_per_mm"] == SCENE_K
+    assert taken["stiffness_N_per_mm"] == taken["rendered_stiffness_N_per_mm"] == 0.4

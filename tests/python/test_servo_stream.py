@@ -1,5 +1,6 @@
 """The servo over loopback: each example scene, a sim stroke in real time, frames received,
-and the proxies in the frames and in the recording equal an offline engine run."""
+and the proxies and ideal poses in the frames and in the recording equal an offline engine
+run; a client of the old protocol is refused and told why."""
 
 from __future__ import annotations
 
@@ -8,8 +9,10 @@ import time
 import numpy as np
 import pytest
 from hapticut import servo_layout as layout
+from hapticut.servo_client import PROTOCOL_VERSION, ServoClient, ServoError
 from servo_test_support import (
     EXAMPLE_SCENES,
+    SPHERE,
     ServoProcess,
     connect,
     offline_check,
@@ -59,6 +62,7 @@ def test_stream_and_recording_equal_offline_engine(scene, tmp_path):
         k = int(frame.header["tick"])
         assert np.array_equal(blade["q"], q[k])
         assert np.array_equal(blade["p"], p[k])
+        assert np.array_equal(frame.ideal_pose("scalpel"), recording.ideal_pose("scalpel")[k])
         assert int(blade["block"]["point_count"]) == 50
         assert int(blade["block"]["state_counts"].sum()) == 50
     last = frames[-1].header
@@ -131,3 +135,68 @@ def test_a_recording_that_cannot_be_written_is_reported_while_running(tmp_path):
         client.stop_recording()
         assert client.status()["state"] == "running"
     assert errors[-1] == "write failed: File too large", errors[-1]
+
+
+def test_a_client_of_the_old_protocol_is_refused_and_told_to_update():
+    """Version 1 clients read blade blocks without the ideal pose: they would misread every
+    frame, so hello refuses them, and the connection then works with the current version."""
+    assert PROTOCOL_VERSION == 2 and layout.FRAME_VERSION == 3 and layout.RECORD_VERSION == 4
+    with ServoProcess([str(SPHERE), "--device", "scalpel=sim", "--wait"]) as servo:
+        old = ServoClient(port=servo.port).connect()
+        with pytest.raises(ServoError) as refused:
+            old.request("hello", version=1)
+        with pytest.raises(ServoError, match='before "hello"'):
+            old.subscribe(rate_Hz=100)
+        reply = old.hello()
+        old.close()
+        assert servo.stop() == 0
+    assert str(refused.value).endswith(
+        "protocol version 1 not supported (this servo speaks version 2, whose frames and "
+        "recordings carry each blade's ideal pose; update the client: the hapticut toolkit and "
+        "the add-on of this servo's release)"
+    )
+    assert (reply["version"], reply["frame_version"], reply["record_version"]) == (2, 3, 4)
+
+
+def test_a_client_of_other_layouts_refuses_the_servo(monkeypatch):
+    """The same protocol version with another frame layout would be misread frame by frame:
+    the client says so at hello rather than parse frames it cannot read."""
+    servo_writes = layout.FRAME_VERSION
+    monkeypatch.setattr(layout, "FRAME_VERSION", servo_writes - 1)  # the client's layouts
+    with ServoProcess([str(SPHERE), "--device", "scalpel=sim", "--wait"]) as servo:
+        client = ServoClient(port=servo.port)
+        with pytest.raises(ServoError) as refused:
+            client.hello()
+        client.close()
+        assert servo.stop() == 0
+    assert str(refused.value) == (
+        f"the servo writes frame version {servo_writes}, this client reads version "
+        f"{servo_writes - 1}: use the hapticut toolkit of the servo's release"
+    )
+
+
+def test_a_frame_carries_the_ideal_pose():
+    """A viewport pose in, the engine's ideal pose out: independent points report the device's
+    pose (normalised), a rigid blade its own (the layout's field, and Frame.ideal_pose)."""
+    with ServoProcess([str(SPHERE), "--device", "scalpel=viewport"]) as servo:
+        client = connect(servo, ["scalpel"])
+        client.subscribe(rate_Hz=200)
+        pose = [1.0, 2.0, 60.0, 2.0, 0.0, 0.0, 0.0]  # above the ball; a quaternion of norm 2
+        frame = None
+        deadline = time.monotonic() + 20
+        while time.monotonic() < deadline:
+            client.send_pose("scalpel", pose)
+            newest = client.poll()
+            if newest is not None and int(newest.blades["scalpel"]["block"]["step_kind"]):
+                frame = newest
+                break
+            time.sleep(0.01)
+        coupling = client.status()["blades"][0]["coupling"]
+        client.close()
+    assert frame is not None, "no frame of a stepped tick"
+    ideal = frame.ideal_pose("scalpel")
+    assert np.array_equal(ideal, layout.ideal_pose(frame.blades["scalpel"]))
+    assert ideal.shape == (7,)
+    # In the air both couplings put the ideal pose on the device's, normalised.
+    assert np.allclose(ideal, [1.0, 2.0, 60.0, 1.0, 0.0, 0.0, 0.0]), (coupling, ideal)
+    assert np.array_equal(frame.blades["scalpel"]["block"]["pose"], pose)

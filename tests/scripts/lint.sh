@@ -1,5 +1,8 @@
 #!/usr/bin/env bash
-# Formatters and linters: clang-format and clang-tidy on the C++, ruff on the Python.
+# Formatters and linters on what the repository holds: clang-format and clang-tidy on the C++,
+# ruff on the Python. clang-tidy runs one file per process, as many at a time as there are
+# cores, and remembers a file that passed (build/lint/: keyed by the file, every header of the
+# repository, the checks and clang-tidy's version), so a second run checks only what changed.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 
@@ -7,14 +10,39 @@ mapfile -t cpp_files < <(git ls-files '*.cpp' '*.h')
 echo "lint: clang-format (${#cpp_files[@]} files)"
 clang-format --dry-run --Werror "${cpp_files[@]}"
 
-echo "lint: clang-tidy (core/src, server, tools/evaluation/src)"
-mapfile -t tidy_files < <(git ls-files 'core/src/*.cpp' 'core/src/**/*.cpp' 'server/*.cpp' 'server/**/*.cpp' \
-  'tools/evaluation/src/*.cpp')
-tidy_output=$(clang-tidy -p build/tests --quiet "${tidy_files[@]}" 2>&1 || true)
-if grep -qE '(warning|error):' <<<"$tidy_output"; then
-  grep -vE '^[0-9]+ warnings? generated\.$' <<<"$tidy_output" >&2
-  echo "lint: clang-tidy found problems (above)" >&2
-  exit 1
+mapfile -t tidy_files < <(git ls-files 'core/src/*.cpp' 'core/src/**/*.cpp' 'server/*.cpp' \
+  'server/**/*.cpp' 'tools/evaluation/src/*.cpp')
+passed=build/lint/clang-tidy-passed
+mkdir -p "$passed"
+shared_key=$({
+  clang-tidy --version
+  cat .clang-tidy
+  git ls-files -z '*.h' | xargs -0 sha1sum
+} | sha1sum | cut -d' ' -f1)
+todo=()
+for file in "${tidy_files[@]}"; do
+  key=$( (echo "$shared_key" && sha1sum "$file") | sha1sum | cut -d' ' -f1)
+  [ -f "$passed/$key" ] || todo+=("$file" "$key")
+done
+echo "lint: clang-tidy ($((${#todo[@]} / 2)) of ${#tidy_files[@]} files changed since they passed)"
+# One file: its findings on stderr (then a failure), or its pass remembered.
+tidy_one() {
+  local output
+  output=$(clang-tidy -p build/main --quiet "$1" 2>&1 || true)
+  if grep -qE '(warning|error):' <<<"$output"; then
+    grep -vE '^[0-9]+ warnings? generated\.$' <<<"$output" >&2
+    return 1
+  fi
+  touch "$2"
+}
+export -f tidy_one
+if [ ${#todo[@]} -gt 0 ]; then
+  for ((i = 0; i < ${#todo[@]}; i += 2)); do
+    printf '%s\0%s\0' "${todo[i]}" "$passed/${todo[i + 1]}"
+  done | xargs -0 -n 2 -P "$(nproc)" bash -c 'tidy_one "$0" "$1"' || {
+    echo "lint: clang-tidy found problems (above)" >&2
+    exit 1
+  }
 fi
 
 echo "lint: ruff"

@@ -1,29 +1,57 @@
-"""A 50-point blade stroke through the paper's 320-face sphere, printing forces and states.
+"""``hapticut demo-stroke``: a 50-point blade stroke through an example scene, as text.
 
-python examples/demo_stroke.py [SCENE]
+Down onto the paper's 320-face sphere until 5 mm in, then across it, at 100 mm/s and 1 kHz;
+prints the force and the points' states every 100 ticks and the transitions over the stroke.
+The README's demo (examples/demo.sh) is the Blender one; this is the look without Blender.
 """
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
 import numpy as np
-from hapticut import engine
 
-HERE = Path(__file__).resolve().parent
+from hapticut import engine
+from hapticut.bench.blade import example_scenes
+
+NAME = "demo-stroke"
+HELP = "Run a 50-point blade stroke through an example scene and print forces and states."
+DEFAULT_SCENE = "sphere320"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "scene", nargs="?", help=f"a scene file (default: the {DEFAULT_SCENE} example)"
+    )
 
 
 def default_scene() -> Path:
-    found = sorted(HERE.glob("sphere320*.hapticut.*"))
-    if not found:
-        sys.exit("demo: examples/sphere320*.hapticut.* not found")
-    return found[0]
+    found, where = example_scenes()
+    for path in found:
+        if path.name.startswith(DEFAULT_SCENE + "."):
+            return path
+    raise FileNotFoundError(f"the {DEFAULT_SCENE} example scene was not found ({where})")
 
 
-def main() -> int:
-    path = Path(sys.argv[1]) if len(sys.argv) > 1 else default_scene()
-    scene, space = engine.load_space(path)
+def stroke(space) -> np.ndarray:
+    """Poses (x, y, z, qw, qx, qy, qz) at 1 kHz: down through the top, then across."""
+    lo, hi = space.vertices.min(axis=0), space.vertices.max(axis=0)
+    centre = (lo + hi) / 2
+    reach = 0.45 * (hi - lo)[1]
+    down = engine.straight_stroke(centre + [0, 0, reach], centre + [0, 0, 25], 100)
+    across = engine.straight_stroke(centre + [0, 0, 25], centre + [0, reach, 25], 100)
+    return np.vstack([down, across[1:]])
+
+
+def run(args: argparse.Namespace) -> int:
+    try:
+        path = Path(args.scene) if args.scene else default_scene()
+        scene, space = engine.load_space(path)
+    except (OSError, ValueError) as error:  # Missing, unreadable or malformed: one line.
+        print(f"hapticut demo-stroke: {error}", file=sys.stderr)
+        return 1
     names = [m.name for m in scene.materials]
     counts = np.bincount(space.tet_materials, minlength=len(names))
     print(f"scene {path.name}: {space.tet_count} tets, {space.vertex_count} vertices")
@@ -36,13 +64,7 @@ def main() -> int:
     )
     spec = scene.blades[0] if scene.blades else engine.BladeSpec("blade", (-50, 0, 0), (50, 0, 0))
     blade = engine.make_blade(space, spec)
-    lo, hi = space.vertices.min(axis=0), space.vertices.max(axis=0)
-    centre = (lo + hi) / 2
-    reach = 0.45 * (hi - lo)[1]
-    # Down onto the sphere (radius 30 mm) until 5 mm in, then across it, at 100 mm/s, 1 kHz.
-    down = engine.straight_stroke(centre + [0, 0, reach], centre + [0, 0, 25], 100)
-    across = engine.straight_stroke(centre + [0, 0, 25], centre + [0, reach, 25], 100)
-    poses = np.vstack([down, across[1:]])
+    poses = stroke(space)
     blade.reset(poses[0])
     print(
         f"blade: {blade.point_count} points, k = {space.stiffness_N_per_mm} N/mm, "
@@ -72,7 +94,3 @@ def main() -> int:
         f"most transitions in one tick: {int(counters['max_transitions_in_tick'].max())}"
     )
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
