@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Formatters and linters on what the repository holds: clang-format and clang-tidy on the C++,
 # ruff on the Python. clang-tidy runs one file per process, as many at a time as there are
-# cores, and remembers a file that passed (build/lint/: keyed by the file, every header of the
-# repository, the checks and clang-tidy's version), so a second run checks only what changed.
+# cores, and remembers a file that passed (build/lint/: keyed by the file, the headers it can
+# include, the checks and clang-tidy's version), so a second run checks only what changed.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 
@@ -14,13 +14,25 @@ mapfile -t tidy_files < <(git ls-files 'core/src/*.cpp' 'core/src/**/*.cpp' 'ser
   'server/**/*.cpp' 'tools/evaluation/src/*.cpp')
 passed=build/lint/clang-tidy-passed
 mkdir -p "$passed"
-shared_key=$({
-  clang-tidy --version
-  cat .clang-tidy
-  git ls-files -z '*.h' | xargs -0 sha1sum
-} | sha1sum | cut -d' ' -f1)
+# The headers a file can include: the engine's own, plus the servo's for the servo and the
+# evaluation's for the evaluation (the engine includes neither).
+headers_key() {
+  {
+    clang-tidy --version
+    cat .clang-tidy
+    git ls-files -z 'core/*.h' "$@" | xargs -0 sha1sum
+  } | sha1sum | cut -d' ' -f1
+}
+core_key=$(headers_key)
+server_key=$(headers_key 'server/*.h')
+evaluation_key=$(headers_key 'tools/evaluation/*.h')
 todo=()
 for file in "${tidy_files[@]}"; do
+  case "$file" in
+    server/*) shared_key=$server_key ;;
+    tools/evaluation/*) shared_key=$evaluation_key ;;
+    *) shared_key=$core_key ;;
+  esac
   key=$( (echo "$shared_key" && sha1sum "$file") | sha1sum | cut -d' ' -f1)
   [ -f "$passed/$key" ] || todo+=("$file" "$key")
 done
