@@ -46,8 +46,9 @@ def frame_indices(times: np.ndarray, fps: float, frame_start: int) -> tuple[np.n
 
 
 def ideal_pose(pose, p, q) -> tuple[mathutils.Vector, mathutils.Quaternion]:
-    """The rigid pose (mm) of the ideal blade: the device's rotation turned so the edge lies
-    along the proxies, moved so the edge's centre is the proxies' centre."""
+    """A pose (mm) for independent points, which have none of their own: the device's rotation
+    turned so the edge lies along the proxies, moved so the edge's centre is the proxies'
+    centre. A rigid blade's pose is the servo's (``ideal_poses``)."""
     rotation = mathutils.Quaternion(pose[3:7]).normalized()
     device_edge = mathutils.Vector(p[-1] - p[0])
     ideal_edge = mathutils.Vector(q[-1] - q[0])
@@ -161,6 +162,21 @@ def load_preview_tets(path: str) -> dict:
         ) from None
 
 
+def ideal_poses(recording, name: str, ticks) -> list[tuple[mathutils.Vector, mathutils.Quaternion]]:
+    """The ideal blade's pose (mm) at each of the ticks: a rigid blade's is the one the servo
+    solved and recorded, the whole knife held out of rigid material; independent points are
+    fitted (``ideal_pose``)."""
+    blade = recording.blade(name)
+    if recording.coupling(name) == "rigid":
+        solved = recording.ideal_pose(name)[ticks]
+        return [
+            (mathutils.Vector(pose[:3]), mathutils.Quaternion(pose[3:7]).normalized())
+            for pose in solved
+        ]
+    poses = blade["block"]["pose"]
+    return [ideal_pose(poses[k], blade["p"][k], blade["q"][k]) for k in ticks]
+
+
 def bake(scene, link, recording_path: str, preview_path: str) -> dict:
     """Bake the recording (module doc); its figures for the panel. Clears an earlier bake."""
     began = time.perf_counter()
@@ -193,13 +209,10 @@ def bake(scene, link, recording_path: str, preview_path: str) -> dict:
     for name in recording.blade_names:
         blade = recording.blade(name)
         source = bpy.data.objects.get(name)
-        poses = blade["block"]["pose"]
-        locations, rotations, centres = [], [], []
-        for k in nearest:
-            location, rotation = ideal_pose(poses[k], blade["p"][k], blade["q"][k])
-            locations.append(location / mm)
-            rotations.append(rotation)
-            centres.append(mathutils.Vector(blade["q"][k].mean(axis=0)) / mm)
+        placed = ideal_poses(recording, name, nearest)
+        locations = [location / mm for location, _ in placed]
+        rotations = [rotation for _, rotation in placed]
+        centres = [mathutils.Vector(blade["q"][k].mean(axis=0)) / mm for k in nearest]
         ideal = _new_object(collection, f"Ideal {name}", source.data if source else None)
         ideal["hapticut_blade"] = name
         ideal.rotation_mode = "QUATERNION"

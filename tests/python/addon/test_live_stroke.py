@@ -66,11 +66,11 @@ def test_the_ideal_blade_keyframes_follow_the_recording(baked):
     ideal = bpy.data.objects["Ideal Knife"]
     knife = bpy.data.objects["Knife"]
     assert len(frames) >= baked.frame_end - baked.frame_start + 1
-    for frame, k in zip(frames[::5], nearest[::5], strict=True):
+    placed = baking.ideal_poses(rec, "Knife", nearest)
+    for frame, k, (location, rotation) in zip(frames, nearest, placed, strict=True):
+        if (frame - frames[0]) % 5:
+            continue
         baked.frame_set(int(frame))
-        location, rotation = baking.ideal_pose(
-            blade["block"]["pose"][k], blade["p"][k], blade["q"][k]
-        )
         assert np.allclose(ideal.matrix_world.translation, location, atol=1e-4)
         assert abs(ideal.matrix_world.to_quaternion().rotation_difference(rotation).angle) < 1e-4
         # The device followed the keyframed knife (no simulated hand), to within the nearest
@@ -85,6 +85,36 @@ def test_the_ideal_blade_keyframes_follow_the_recording(baked):
     arrow = bpy.data.objects["Force Knife"]
     up = arrow.matrix_world.to_quaternion() @ mathutils.Vector((0, 0, 1))
     assert up.z > 0.8 and arrow.matrix_world.to_scale().z > 1.0
+
+
+def test_the_baked_knife_rests_on_the_bone_and_never_enters_it(baked):
+    """The default blade is rigid: the servo's ideal pose places the whole knife, and its
+    cutting edge, sampled at ten times the blade's point density, is never in bone."""
+    from addon import building
+    from addon.units import mm_per_unit
+
+    rec = recording(baked)
+    assert rec.coupling("Knife") == "rigid"
+    ideal = bpy.data.objects["Ideal Knife"]
+    knife = bpy.data.objects["Knife"]
+    edge = [knife.data.vertices[i].co.copy() for i in (0, 1)]
+    samples_per_frame = 10 * knife.hapticut.blade_points
+    mm = mm_per_unit(baked)
+    samples, lowest = [], []
+    for frame in range(baked.frame_start, baked.frame_end + 1):
+        baked.frame_set(frame)
+        a, b = (ideal.matrix_world @ v for v in edge)
+        line = [a.lerp(b, t) for t in np.linspace(0.0, 1.0, samples_per_frame)]
+        samples.extend([list(v * mm) for v in line])
+        lowest.append(min(v.z for v in line) * mm)
+    models = live_support.probe_materials(building.scene_file(baked), samples)
+    inside = [samples[i] for i, m in enumerate(models) if m == "rigid"]
+    assert inside == [], f"{len(inside)} of {len(samples)} edge samples in bone: {inside[:3]}"
+    # Held up by the bone: at the deepest keyed frame the device is 3 mm under the bone's
+    # axis, the baked edge above the bone's top (its radius is about 3.5 mm).
+    baked.frame_set(18)
+    assert knife.matrix_world.translation.z * mm == pytest.approx(live_support.DEEPEST_Z)
+    assert lowest[18 - baked.frame_start] > 0.0
 
 
 def test_the_cut_surface_is_in_cuttable_material_only_and_opens_over_time(baked):
