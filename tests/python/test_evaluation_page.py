@@ -53,6 +53,8 @@ def render(tmp_path: Path, share: dict, *, quick: bool) -> str:
         economy_rows=committed("mesh_economy"),
         example_rows=committed("example_economy"),
         shading_rows=committed("example_shading"),
+        rigid_rows=committed("rigid_blade"),
+        penetration_rows=committed("edge_penetration"),
         quick=quick,
         elapsed_s=12.3,
     )
@@ -71,6 +73,9 @@ def test_the_page_has_a_figure_for_every_placeholder(tmp_path, share):
         if label is None:
             label = first["method"]
         assert f"| {label} |" in page, name
+    assert "## The rigid blade against independent points" in page
+    for row in committed("edge_penetration"):
+        assert f"| {row['scene']} | {row['method']} |" in page
 
 
 def test_every_block_of_the_template_is_used():

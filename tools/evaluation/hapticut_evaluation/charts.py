@@ -1,4 +1,5 @@
-"""The evaluation's charts (PNG): speed against accuracy, transition cost against valence."""
+"""The evaluation's charts (PNG): speed against accuracy, transition cost against valence, the
+rigid blade's stiffness against the length of edge over bone."""
 
 from __future__ import annotations
 
@@ -117,6 +118,35 @@ def valence(rows: list[dict], out: Path) -> None:
     ax.set_title("One EDGE / VERTEX transition against valence")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8, ncol=2)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+
+
+def rigid_stiffness(rows: list[dict], out: Path) -> None:
+    """Stiffness felt against the points over bone: independent points grow with contact, the
+    rigid blade renders every spring at every length."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    n = np.array([r["points_over_bone"] for r in rows], float)
+    for key, label, style in (
+        ("independent_points_N_per_mm", "independent points", "o-"),
+        ("rigid_free_N_per_mm", "rigid, orientation free", "s-"),
+        ("rigid_locked_N_per_mm", "rigid, orientation locked", "x--"),
+    ):
+        ax.plot(n, [r[key] for r in rows], style, label=label)
+    ax.plot(n, [r["n_k_N_per_mm"] for r in rows], ":", color="grey", label="n k")
+    ax.set_xscale("log")
+    ax.set_xticks(n, [f"{int(v)}" for v in n])
+    ax.set_xlabel("points of the 50-point blade over the bone")
+    ax.set_ylabel("stiffness felt (N/mm)")
+    ax.set_title("A bone under part of a blade")
+    ax.grid(True, alpha=0.3)
+    ax.legend()
     fig.tight_layout()
     fig.savefig(out, dpi=110)
     plt.close(fig)

@@ -602,6 +602,51 @@ def valence_section(b, rows: list[dict], fits: list[dict], share: dict) -> str:
     )
 
 
+def rigid_blade_section(b, stiffness_rows: list[dict], penetration_rows: list[dict]) -> str:
+    """The rigid blade's stiffness against the length of edge over bone, and the ideal edge's
+    penetration into bone, both against the paper's independent points."""
+    if not stiffness_rows:
+        return ""
+    from hapticut_evaluation import rigid_blade
+
+    whole = max(stiffness_rows, key=lambda r: r["points_over_bone"])
+    least = min(stiffness_rows, key=lambda r: r["points_over_bone"])
+    return fill(
+        b,
+        "rigid_blade",
+        points=rigid_blade.POINTS,
+        spacing_mm=f"{rigid_blade.SPACING_MM:g}",
+        k=f"{rigid_blade.K:g}",
+        press_mm=f"{rigid_blade.PRESS_MM:g}",
+        soft=f"{whole['independent_points_N_per_mm'] / least['independent_points_N_per_mm']:.0f}",
+        samples=rigid_blade.SAMPLES_PER_SPACING,
+        on_surface_mm=f"{rigid_blade.ON_SURFACE_MM:g}",
+        stiffness_table=markdown_table(
+            stiffness_rows,
+            [
+                ("points_over_bone", "points over bone"),
+                ("n_k_N_per_mm", "n k N/mm"),
+                ("independent_points_N_per_mm", "independent N/mm"),
+                ("rigid_free_N_per_mm", "rigid, free N/mm"),
+                ("rigid_locked_N_per_mm", "rigid, locked N/mm"),
+            ],
+        ),
+        penetration_table=markdown_table(
+            penetration_rows,
+            [
+                ("scene", "scene"),
+                ("method", "blade"),
+                ("strokes", "strokes"),
+                ("ticks", "ticks"),
+                ("ticks_with_edge_in_bone", "ticks with edge in bone"),
+                ("edge_samples", "edge samples"),
+                ("edge_samples_in_bone", "in bone"),
+                ("deepest_mm", "deepest mm"),
+            ],
+        ),
+    )
+
+
 FILES = (
     "accuracy.csv",
     "drag_lag.csv",
@@ -613,6 +658,9 @@ FILES = (
     "valence.csv",
     "speed_vs_error.png",
     "valence.png",
+    "rigid_blade.csv",
+    "edge_penetration.csv",
+    "rigid_stiffness.png",
 )
 
 
@@ -629,6 +677,8 @@ def write_page(
     economy_rows,
     example_rows=(),
     shading_rows=(),
+    rigid_rows=(),
+    penetration_rows=(),
     quick: bool,
     elapsed_s: float,
 ) -> None:
@@ -730,6 +780,7 @@ def write_page(
         example_shading=example_shading_section(b, shading_rows),
         examples=examples_section(b, example_rows),
         valence=valence_section(b, valence_rows, valence_fit, valence_share),
+        rigid_blade=rigid_blade_section(b, list(rigid_rows), list(penetration_rows)),
         files=", ".join(f"`{name}`" for name in FILES if (out / name).exists()) + ".",
     )
     (out / "README.md").write_text(page + "\n")

@@ -11,6 +11,7 @@ from hapticut_evaluation import (
     economy,
     example_shading,
     report,
+    rigid_blade,
     stability,
     valence,
 )
@@ -54,7 +55,15 @@ def run_all(out: Path, *, quick: bool = False, log=print) -> dict:
     example_rows = economy.example_economy(cache, quick=quick, log=log)
     log("force shading on the example scenes")
     shading_rows = example_shading.run_example_shading(quick=quick, log=log)
+    log("the rigid blade")
+    rigid_rows = rigid_blade.run_stiffness_vs_contact()
+    penetration_rows = rigid_blade.run_edge_penetration(
+        economy.EXAMPLES_DIR / "finger.hapticut.msgpack", quick=quick
+    )
+    charts.rigid_stiffness(rigid_rows, out / "rigid_stiffness.png")
     for name, rows in [
+        ("rigid_blade", rigid_rows),
+        ("edge_penetration", penetration_rows),
         ("accuracy", accuracy_rows),
         ("drag_lag", drag_rows),
         ("stability", stability_rows),
@@ -78,6 +87,8 @@ def run_all(out: Path, *, quick: bool = False, log=print) -> dict:
         economy_rows=economy_rows,
         example_rows=example_rows,
         shading_rows=shading_rows,
+        rigid_rows=rigid_rows,
+        penetration_rows=penetration_rows,
         quick=quick,
         elapsed_s=time.perf_counter() - start,
     )
