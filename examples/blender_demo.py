@@ -264,15 +264,31 @@ def stroke_summary(recording_path: str) -> list[str]:
     held = states[:, on_surface].sum(axis=1)
     points = int(block["point_count"][0])
     time_s = recording.ticks["time_s"]
-    counts = ", ".join(f"{s} {c}" for s, c in zip(engine.STATE_NAMES, states[peak], strict=True))
-    return [
+    lines = [
         f"stroke: {len(recording)} ticks ({time_s[-1] - time_s[0]:.2f} s at 1 kHz), "
-        f"blade {name!r} with {points} points; recording {recording_path}",
+        f"blade {name!r} with {points} points ({recording.coupling(name)}); "
+        f"recording {recording_path}",
         f"force on the hand: peak {force[peak]:.2f} N at {time_s[peak] - time_s[0]:.2f} s, "
         f"mean {force.mean():.2f} N; in contact (over 0.1 N) {np.mean(force > 0.1):.0%} "
         "of the ticks",
-        f"points held on a surface: at most {held.max()} of {points}; at the peak force: {counts}",
     ]
+    if recording.coupling(name) == "rigid":
+        # The whole knife is held: how far its ideal pose stayed from the hand's.
+        held_mm = np.linalg.norm(recording.ideal_pose(name)[:, :3] - block["pose"][:, :3], axis=1)
+        deepest = int(np.argmax(held_mm))
+        lines.append(
+            f"the knife held back by the material: up to {held_mm[deepest]:.2f} mm from the "
+            f"hand's pose (at {time_s[deepest] - time_s[0]:.2f} s)"
+        )
+    else:
+        counts = ", ".join(
+            f"{s} {c}" for s, c in zip(engine.STATE_NAMES, states[peak], strict=True)
+        )
+        lines.append(
+            f"points held on a surface: at most {held.max()} of {points}; "
+            f"at the peak force: {counts}"
+        )
+    return lines
 
 
 def main() -> int:
