@@ -81,7 +81,9 @@ DEFAULT_MARGIN_RATIO = 0.05
 MARGIN_NEAR_EDGES = 2.0
 DEFAULT_AIR_GRADING = 3.0
 AIR_FAR_RATIO = 3.0
-DEFAULT_ACCURACY_RATIO = 0.005
+# 1% of the diagonal (about 1.5 mm on a 100 mm scan): at 0.5% fTetWild took minutes on a
+# 100 mm scan (issue 32); a finer accuracy is one setting away.
+DEFAULT_ACCURACY_RATIO = 0.01
 DEFAULT_FAR_RATIO = 4.0
 # The background grid of the sizing field: at most this many cells along the longest side.
 SIZING_GRID_CELLS = 32
@@ -98,6 +100,9 @@ MESHING_ATTEMPTS = 3
 # than twice the envelope (fTetWild merges surfaces closer than it), is reported, not chased.
 LOST_FEATURE_EDGE_SHARE = 0.5
 LOST_FEATURE_MIN_EDGE_SHARE = 0.25
+# Faces at least this share of the deepest face's distance count as lost when none is beyond
+# the accuracy at its corners and centre.
+LOST_FACE_SHARE = 0.8
 # Lost features named in the report per region, and refine zones per feature.
 LOST_FEATURES_LISTED = 5
 ZONES_PER_LOST_FEATURE = 40
@@ -148,7 +153,7 @@ class RefineZone:
 class BuildSettings:
     """How finely to model the scene; lengths in mm, None: derived from the regions.
 
-    accuracy_mm: how far the scene's surfaces may lie from the input surfaces (default 0.5% of
+    accuracy_mm: how far the scene's surfaces may lie from the input surfaces (default 1% of
     the regions' bounding-box diagonal); held by meshing again (up to MESHING_ATTEMPTS), and
     where it cannot be, reported (or a BuildError with strict_accuracy). 40% of it may go to
     simplifying the input surfaces (``simplify``), 40% is fTetWild's envelope (80% without
@@ -847,8 +852,10 @@ def _lost_features(
     vertex_gap = distance_to_surfaces(boundary.vertices, [meshed], cap)
     centre_gap = distance_to_surfaces(centres, [meshed], cap)
     face_gap = np.maximum(centre_gap, vertex_gap[boundary.faces].max(axis=1))
-    lost = np.flatnonzero(face_gap > accuracy_mm)
-    if len(lost) == 0:
+    # The Hausdorff distance samples the faces densely, these points (corners and centres)
+    # do not: when none of them is beyond the accuracy, the deepest ones still show where.
+    lost = np.flatnonzero(face_gap > min(accuracy_mm, LOST_FACE_SHARE * face_gap.max()))
+    if len(lost) == 0 or face_gap.max() == 0:
         return [], []
     # Lost faces sharing a vertex are one feature.
     corners = boundary.faces[lost].ravel()
@@ -965,12 +972,17 @@ def _keep_best(
 
 
 def _lost_text(miss: _Miss) -> str:
-    """', a feature 1.3 mm thick near (x, y, z) mm was lost' for the deepest lost feature."""
+    """'; a narrow gap 0.01 mm wide, 10 mm long, near (x, y, z) mm was lost' for the deepest
+    lost feature ('' when the surface strayed rather than lost)."""
     if not miss.features or miss.lost_mm < miss.strayed_mm:
         return ""
     feature = miss.features[0]
-    thick = (
-        f" {feature['thickness_mm']:.2g} mm thick" if feature["thickness_mm"] is not None else ""
-    )
+    width = feature["thickness_mm"]
+    size = ""
+    if width is not None:
+        size = f" {width:.2g} mm " + ("wide" if feature["kind"] == "narrow gap" else "thick")
     centre = ", ".join(f"{c:.1f}" for c in feature["centre_mm"])
-    return f"; a feature{thick}, {feature['length_mm']:.2g} mm long, near ({centre}) mm was lost"
+    return (
+        f"; a {feature['kind']}{size}, {feature['length_mm']:.2g} mm long, near ({centre}) mm "
+        "was lost"
+    )
