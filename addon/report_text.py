@@ -6,10 +6,27 @@ from __future__ import annotations
 
 def report_lines(report: dict) -> list[str]:
     lines = [f"{report.get('tets', 0)} tets, {report.get('boundary_faces', 0)} boundary faces"]
+    lines += [f"warning: {warning}" for warning in report.get("warnings", [])]
     for name, count in report.get("tets_per_material", {}).items():
         lines.append(f"  {name}: {count} tets")
+    if "air_share" in report:
+        lines.append(f"  air {100 * report['air_share']:.0f} % of the tets")
     for name, deviation in report.get("deviation_mm", {}).items():
         lines.append(f"  {name}: surface deviation {deviation:.3g} mm")
+    for miss in report.get("accuracy_not_held", []):
+        lines.append(
+            f"  accuracy not held: {miss['region']} up to {miss['deviation_mm']:.3g} mm "
+            f"(accuracy {miss['accuracy_mm']:.3g} mm)"
+        )
+        for feature in miss["lost_features"][:2]:
+            width = feature["thickness_mm"]
+            lines.append(
+                f"    lost a {feature['kind']}"
+                + (f" {width:.2g} mm across" if width is not None else "")
+                + " near ("
+                + ", ".join(f"{c:.0f}" for c in feature["centre_mm"])
+                + ") mm"
+            )
     meshings = len(report.get("meshing_attempts", []))
     if meshings > 1:
         lines.append(f"  meshed {meshings} times to hold the accuracy")

@@ -7,6 +7,7 @@ import re
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 from build_test_support import EXAMPLES, icosphere, materials_at, write_obj
 from hapticut.commands.mesh import parse_material
@@ -112,3 +113,45 @@ def test_info_tells_when_a_build_meshed_again_to_hold_its_accuracy():
     assert not any("meshed" in line for line in format_build_report({"meshing_attempts": once}))
     lines = format_build_report({"meshing_attempts": again})
     assert "  meshed 2 times to hold the accuracy (envelope 0.2 -> 0.1 mm)" in lines
+
+
+def two_blocks_with_a_narrow_gap(gap_mm: float = 0.01):
+    """One region of two 10 mm blocks 0.01 mm apart: no tet mesh within the envelope keeps
+    the gap, so its faces lie mm from the meshed surface (a lost narrow gap)."""
+    from hapticut.scenebuild.geometry import enclosure_surface
+
+    left = enclosure_surface("box", np.zeros(3), np.full(3, 10.0), 0.0)
+    right = enclosure_surface("box", [10.0 + gap_mm, 0, 0], [20.0 + gap_mm, 10, 10], 0.0)
+    return np.vstack([left[0], right[0]]), np.vstack([left[1], right[1] + 8])
+
+
+def test_mesh_keeps_the_best_mesh_and_names_the_lost_feature_unless_strict(tmp_path):
+    blocks = write_obj(tmp_path / "blocks.obj", *two_blocks_with_a_narrow_gap())
+    out = tmp_path / "blocks.hapticut.json"
+    result = run_cli("mesh", blocks, "-o", out, "-q")
+    assert result.returncode == 0, result.stderr
+    assert "accuracy not held: region 'blocks'" in result.stderr
+    assert "lost: a narrow gap near (10.0, 5.0, 5.0) mm, 10 mm long, 0.01 mm wide" in result.stderr
+    report = load_scene(out).metadata["build_report"]
+    (miss,) = report["accuracy_not_held"]
+    assert miss["lost_features"][0]["kind"] == "narrow gap"
+    info = run_cli("info", out)
+    assert "accuracy not held: region 'blocks'" in info.stdout
+    assert "Air share:" in info.stdout
+
+    strict = run_cli("mesh", blocks, "-o", tmp_path / "strict.hapticut.json", "-q",
+                     "--strict-accuracy")  # fmt: skip
+    assert strict.returncode == 1
+    assert "region 'blocks': its meshed surface lies up to" in strict.stderr
+    assert "a narrow gap" in strict.stderr
+    assert not (tmp_path / "strict.hapticut.json").exists()
+
+
+def test_mesh_warns_on_stderr_when_an_input_looks_like_another_unit(tmp_path):
+    tiny = write_obj(tmp_path / "tiny.obj", *icosphere(1.0, 1))
+    result = run_cli("mesh", tiny, "-o", tmp_path / "tiny.hapticut.json", "-q")
+    assert result.returncode == 0, result.stderr
+    assert "warning: region 'tiny' is 2 mm across" in result.stderr
+    assert "--scale" in result.stderr
+    scaled = run_cli("mesh", tiny, "-o", tmp_path / "big.hapticut.json", "-q", "--scale", "50")
+    assert scaled.returncode == 0 and "warning" not in scaled.stderr

@@ -89,6 +89,9 @@ def format_summary(summary: dict) -> str:
     for material in summary["materials"]:
         count = summary["tets_per_material"].get(material["name"], 0)
         lines.append(f"  {material['name']:<14}{count:>9} tets  {material['description']}")
+    if summary["tets"] and summary["materials"]:
+        air = summary["tets_per_material"].get(summary["materials"][0]["name"], 0)
+        lines.append(f"Air share: {100 * air / summary['tets']:.1f} % of the tets")
     quality = summary["quality"]
     lines.append(
         f"Quality: min dihedral {quality['min_dihedral_deg']:.2f} deg, max "
@@ -120,7 +123,9 @@ def format_summary(summary: dict) -> str:
 
 def format_build_report(build: dict) -> list[str]:
     """The parts of a build report that ``info`` does not recompute."""
-    lines = []
+    from hapticut.scenebuild.report import accuracy_lines
+
+    lines = [f"warning: {warning}" for warning in build.get("warnings") or []]
     settings = build.get("settings", {})
     if settings:
         sizing = (
@@ -140,6 +145,7 @@ def format_build_report(build: dict) -> list[str]:
             + " -> ".join(f"{m['envelope_mm']:.3g}" for m in meshings)
             + " mm)"
         )
+    lines.extend("  " + line for line in accuracy_lines(build))
     for region, repairs in (build.get("repairs") or {}).items():
         if repairs:
             text = ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in repairs.items())

@@ -46,12 +46,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--edge-near", type=float, metavar="MM", help="tet edge at the surfaces")
     parser.add_argument("--edge-far", type=float, metavar="MM", help="tet edge far from them")
-    parser.add_argument("--grading", type=float, default=0.5, help="edge growth per mm of distance")
+    parser.add_argument(
+        "--grading", type=float, default=0.5, help="edge growth per mm of distance in the regions"
+    )
+    parser.add_argument(
+        "--air-grading", type=float, default=None, metavar="G",
+        help="edge growth per mm of distance in the air (default 3: the air coarsens fast)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--strict-accuracy", action="store_true",
+        help="fail when a surface cannot be meshed within the accuracy (default: build the best "
+        "mesh and report where the accuracy was not held)",
+    )  # fmt: skip
     parser.add_argument("--uniform", action="store_true", help="edge-near everywhere (no sizing)")
     parser.add_argument(
         "--no-simplify", action="store_true", help="keep every input face (no simplification)"
     )
-    parser.add_argument("--coarsen", action="store_true", help="fTetWild coarsening (fewer tets)")
+    parser.add_argument(
+        "--no-coarsen", dest="coarsen", action="store_false",
+        help="no fTetWild coarsening (more tets, most of them air)",
+    )  # fmt: skip
+    parser.add_argument("--coarsen", action="store_true", help=argparse.SUPPRESS)  # the default
     parser.add_argument("--max-hole-edges", type=int, default=100, help="largest hole closed")
     parser.add_argument("--scale", type=float, default=1.0, help="input units to mm (e.g. 1000)")
     parser.add_argument("--threads", type=int, default=0, help="fTetWild threads (0: all)")
@@ -170,10 +185,12 @@ def run(args: argparse.Namespace) -> int:
         edge_far_mm=args.edge_far,
         grading=args.grading,
         adaptive=not args.uniform,
+        strict_accuracy=args.strict_accuracy,
         simplify=not args.no_simplify,
         coarsen=args.coarsen,
         max_hole_edges=args.max_hole_edges,
         threads=args.threads,
+        **({"air_grading": args.air_grading} if args.air_grading is not None else {}),
         in_subprocess=True,  # Keeps Ctrl-C prompt while fTetWild runs.
     )
     progress = None if args.quiet else ProgressBar()
@@ -200,7 +217,8 @@ def _terminate_as_exit():
 
 
 def _build_and_write(args, materials, names, settings, progress) -> int:
-    from hapticut.scenebuild import BuildError, Region, build
+    from hapticut.scenebuild import BuildError, Region, build, units_warning
+    from hapticut.scenebuild.report import accuracy_lines
     from hapticut.scenebuild.vtu import write_vtu
     from hapticut.scenefile import Material, save_scene
 
@@ -213,12 +231,19 @@ def _build_and_write(args, materials, names, settings, progress) -> int:
             )
             for path, name in zip(args.inputs, names, strict=True)
         ]
+        # Before the build: a wrong scale is the likeliest cause of whatever follows.
+        for region in regions:
+            warning = units_warning(region.name, region.vertices)
+            if warning:
+                print(f"hapticut mesh: warning: {warning}", file=sys.stderr)
         scene = build(regions, settings=settings, progress=progress)
     except BuildError as error:
         if progress is not None and progress.tty:
             sys.stderr.write("\n")
         print(f"hapticut mesh: {error}", file=sys.stderr)
         return 1
+    for line in accuracy_lines(scene.metadata["build_report"]):
+        print(f"hapticut mesh: {line}", file=sys.stderr)
     save_scene(scene, args.output)
     if args.vtu:
         write_vtu(args.vtu, scene)

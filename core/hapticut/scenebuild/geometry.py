@@ -234,3 +234,57 @@ def point_segment_distance(points: np.ndarray, start: np.ndarray, end: np.ndarra
     length2 = float(axis @ axis)
     t = np.zeros(len(points)) if length2 == 0 else np.clip((points - start) @ axis / length2, 0, 1)
     return np.linalg.norm(points - (start + t[:, None] * axis), axis=1)
+
+
+def face_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(f, 3) unit normal of each triangle (right-hand rule; zero for a degenerate one)."""
+    a, b, c = (vertices[faces[:, i]] for i in range(3))
+    normals = np.cross(b - a, c - a)
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    return normals / np.where(length > 0, length, 1.0)
+
+
+# Work per chunk of ray casting: rays x triangles.
+_RAY_CHUNK = 200_000
+
+
+def ray_hit_distances(
+    origins: np.ndarray, directions: np.ndarray, vertices: np.ndarray, faces: np.ndarray
+) -> np.ndarray:
+    """(n,) distance along each unit direction from its origin to the nearest triangle it
+    crosses, inf where it crosses none (Moeller-Trumbore). Hits closer than a millionth of
+    the surface's size are ignored: a ray leaving a surface point does not hit its own face."""
+    origins = np.asarray(origins, dtype=np.float64)
+    directions = np.asarray(directions, dtype=np.float64)
+    out = np.full(len(origins), np.inf)
+    if len(origins) == 0 or len(faces) == 0:
+        return out
+    a = vertices[faces[:, 0]]
+    ab, ac = vertices[faces[:, 1]] - a, vertices[faces[:, 2]] - a
+    near = 1e-6 * float(np.ptp(vertices, axis=0).max())
+    step = max(1, _RAY_CHUNK // len(faces))
+    for start in range(0, len(origins), step):
+        o, d = origins[start : start + step, None], directions[start : start + step, None]
+        p = np.cross(d, ac)  # (k, f, 3)
+        det = np.einsum("kfi,fi->kf", p, ab)
+        usable = np.abs(det) > 1e-12
+        inv = np.where(usable, 1.0 / np.where(usable, det, 1.0), 0.0)
+        s = o - a
+        u = np.einsum("kfi,kfi->kf", s, p) * inv
+        q = np.cross(s, ab)
+        v = np.einsum("kfi,kfi->kf", np.broadcast_to(d, q.shape), q) * inv
+        t = np.einsum("kfi,fi->kf", q, ac) * inv
+        hit = usable & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > near)
+        out[start : start + step] = np.where(hit, t, np.inf).min(axis=1)
+    return out
+
+
+def buried_faces(vertices: np.ndarray, faces: np.ndarray, probe_mm: float) -> np.ndarray:
+    """(f,) bool: faces of a surface that crosses itself lying inside its own volume (the
+    winding number is over a half on both sides of the face's centre, probe_mm away). They
+    are no part of the solid's boundary, so no tet mesh of the solid can follow them."""
+    centres = vertices[faces].mean(axis=1)
+    normals = face_normals(vertices, faces)
+    both = np.concatenate([centres + probe_mm * normals, centres - probe_mm * normals])
+    winding = winding_numbers(both, vertices, faces)
+    return (winding[: len(faces)] > 0.5) & (winding[len(faces) :] > 0.5)

@@ -333,6 +333,21 @@ def hausdorff(meshes, first: int, second: int, samples: int | None = None) -> fl
     return float(max(there["max"], back["max"]))
 
 
+def one_sided_deviation(sampled: Surface, target: Surface) -> float:
+    """How far points of ``sampled`` lie from ``target`` at most, in mm (pymeshlab's
+    Hausdorff distance one way, vertex and face samples as in hausdorff)."""
+    pymeshlab = _meshlab()
+    meshes = pymeshlab.MeshSet()
+    meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=sampled.vertices, face_matrix=sampled.faces))
+    meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=target.vertices, face_matrix=target.faces))
+    samples = max(20_000, 4 * max(len(sampled.faces), len(target.faces)))
+    result = meshes.get_hausdorff_distance(
+        sampledmesh=0, targetmesh=1, samplevert=True, sampleface=True, samplenum=samples,
+        maxdist=pymeshlab.PercentageValue(50),
+    )  # fmt: skip
+    return float(result["max"])
+
+
 def surface_deviation(a: Surface, b: Surface) -> float:
     """Symmetric Hausdorff distance in mm between two surfaces (pymeshlab, sampled)."""
     pymeshlab = _meshlab()

@@ -25,6 +25,8 @@ class BuildReport:
     (docs/scene-building.md lists its entries)."""
 
     tetwild: str  # "pytetwild <version>".
+    # What a user should know: an input whose size suggests other units than mm.
+    warnings: list[str] = field(default_factory=list)
     repairs: dict[str, dict] = field(default_factory=dict)  # Per region (repair_surface).
     surfaces: dict[str, SurfaceReport] = field(default_factory=dict)
     self_intersecting_faces: dict[str, int] = field(default_factory=dict)  # Within one region.
@@ -36,6 +38,13 @@ class BuildReport:
     tets_per_region: dict[str, int] = field(default_factory=dict)  # "(air)" too.
     mesh: dict[str, Any] = field(default_factory=dict)  # quality.mesh_report.
     deviation_mm: dict[str, float] | None = None  # Per region, when measured.
+    # Input faces inside their own region's volume (the surface crosses itself), left out
+    # of the deviation: per region, when there are any.
+    buried_faces: dict[str, int] = field(default_factory=dict)
+    # The regions still beyond accuracy_mm after the last meshing (the best one is kept):
+    # deviation, the meshed surface's stray and the input's loss, and the lost features
+    # (centre, length, thickness, depth, faces). Empty when the accuracy was held.
+    accuracy_not_held: list[dict[str, Any]] = field(default_factory=list)
     # Each meshing's envelope and deviations, when measured (builder.MESHING_ATTEMPTS).
     meshing_attempts: list[dict[str, Any]] = field(default_factory=list)
     timings_s: dict[str, float] = field(default_factory=dict)  # Per step, and "total".
@@ -58,11 +67,53 @@ class BuildReport:
             "tets_per_region": self.tets_per_region,
             **self.mesh,
         }
+        per_material = self.mesh.get("tets_per_material") or {}
+        if self.mesh.get("tets"):
+            # The air is material 0, the first entry (builder._materials).
+            air = next(iter(per_material.values()), 0)
+            out["air_share"] = round(air / self.mesh["tets"], 4)
         if self.deviation_mm is not None:
             out["deviation_mm"] = self.deviation_mm
             out["meshing_attempts"] = self.meshing_attempts
+            out["accuracy_not_held"] = self.accuracy_not_held
+            if self.buried_faces:
+                out["buried_faces"] = self.buried_faces
+        if self.warnings:
+            out["warnings"] = self.warnings
         out["timings_s"] = self.timings_s
         return _plain(out)
+
+
+def accuracy_lines(report: dict) -> list[str]:
+    """Where a build did not hold its accuracy, as lines for people (``hapticut mesh`` and
+    ``hapticut info``; the add-on's panel has its own short copy in addon/report_text.py)."""
+    lines = []
+    for miss in report.get("accuracy_not_held") or []:
+        lines.append(
+            f"accuracy not held: region {miss['region']!r} lies up to {miss['deviation_mm']:.3g} "
+            f"mm from its input, beyond accuracy_mm ({miss['accuracy_mm']:.3g} mm)"
+        )
+        if miss["lost_mm"] >= miss["strayed_mm"]:
+            for feature in miss["lost_features"]:
+                centre = ", ".join(f"{c:.1f}" for c in feature["centre_mm"])
+                thick = feature["thickness_mm"]
+                kind = feature.get("kind", "thin part")
+                size = ""
+                if thick is not None:
+                    size = f", {thick:.2g} mm " + ("wide" if kind == "narrow gap" else "thick")
+                lines.append(
+                    f"  lost: a {kind} near ({centre}) mm, {feature['length_mm']:.2g} mm long"
+                    f"{size}, up to {feature['deviation_mm']:.2g} mm off"
+                )
+            finer = any(f.get("meshed_finer") for f in miss["lost_features"])
+            lines.append(
+                ("  meshed finer there without keeping it" if finer else "  too fine to chase")
+                + ": the best mesh is kept; lower edge_near_mm to keep it (slower), or "
+                "raise accuracy_mm to accept it"
+            )
+        else:
+            lines.append("  the meshed surface strays from the input: lower accuracy_mm")
+    return lines
 
 
 def _plain(value):
