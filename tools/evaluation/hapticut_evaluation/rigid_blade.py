@@ -202,18 +202,15 @@ def run_edge_penetration(finger_path, *, quick: bool = False) -> list[dict]:
     strokes = [_press_and_slide(x, 0.0, 18.0, 15.0, -3.0) for x in places]
     for row in _penetration(space, rigid, strokes, 20.0, 20):
         rows.append({"scene": "finger (its bones)", **row})
-    # A cylinder across the blade: independent points wrap round it.
-    space = cylinder_space()
-    rigid = np.asarray(space.tet_materials) == 1
-    offsets = (0.0,) if quick else (0.0, 3.0, 7.5)
-    strokes = [_press_and_slide(x, 0.0, 4.0, 8.0, -3.0) for x in offsets]
-    for row in _penetration(space, rigid, strokes, 20.0, 20):
-        rows.append({"scene": "cylinder r 4 mm across the edge", **row})
-    # A plate thinner than the spacing, edge-on, between two points and under one.
-    space = plate_space()
-    rigid = np.asarray(space.tet_materials) == 1
-    offsets = (1.05,) if quick else (0.0, 0.5, 1.05)
-    strokes = [_press_and_slide(x, 0.0, 4.0, 4.0, -3.0) for x in offsets]
-    for row in _penetration(space, rigid, strokes, 20.0, 20):
-        rows.append({"scene": "plate 0.5 mm, edge-on", **row})
+    # A cylinder across the blade (independent points wrap round it); a plate thinner than
+    # the spacing, edge-on, under a point and between two (independent points pass it).
+    for name, space, offsets, quick_offsets, start_z in (
+        ("cylinder r 4 mm across the edge", cylinder_space(), (0.0, 3.0, 7.5), (0.0,), 8.0),
+        ("plate 0.5 mm, edge-on", plate_space(), (0.0, 0.5, 1.05), (1.05,), 4.0),
+    ):
+        rigid = np.asarray(space.tet_materials) == 1
+        places = quick_offsets if quick else offsets
+        strokes = [_press_and_slide(x, 0.0, 4.0, start_z, -3.0) for x in places]
+        for row in _penetration(space, rigid, strokes, 20.0, 20):
+            rows.append({"scene": name, **row})
     return rows
