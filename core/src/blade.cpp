@@ -100,8 +100,6 @@ Blade::Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
     trial_tets_.assign(n, kNoTet);
     targets_.assign(n, Vec3{});
     point_forces_.assign(n, Vec3{});
-    walk_places_.assign(n, ProxyPlace{});
-    walk_anchors_.assign(n, Vec3{});
   }
 }
 
@@ -143,7 +141,6 @@ void Blade::reset(const Pose& pose) {
   ideal_pose_ = device_pose_;
   if (coupling_ == BladeCoupling::Rigid) {
     std::fill(point_forces_.begin(), point_forces_.end(), Vec3{});
-    walks_anchored_ = false;
     seated_ = seat_at(device_edge());
     if (seated_) place_proxies_on_ideal(space_->runtime_settings());
   }
@@ -201,7 +198,7 @@ BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& sett
   return tick;
 }
 
-BladeTick Blade::step_points(double dt_s, const RuntimeSettings& settings, bool stop_at_rigid) {
+BladeTick Blade::step_points(double dt_s, const RuntimeSettings& settings) {
   const std::size_t n = proxies_.size();
   int remaining = settings.blade_budget(static_cast<int>(n));
   const int cap = settings.max_transitions_per_tick;
@@ -251,8 +248,7 @@ BladeTick Blade::step_points(double dt_s, const RuntimeSettings& settings, bool 
       continue;
     }
     // Inline (proxy.h): most points settle in the blade's own loop, without a call.
-    proxy.tick_within(world_points_[i], dt_s, settings, std::min(cap, remaining), shading, true, r,
-                      stop_at_rigid);
+    proxy.tick_within(world_points_[i], dt_s, settings, std::min(cap, remaining), shading, true, r);
     remaining -= r.transitions;
     if (r.capped) {
       ++capped_in_first_pass;
@@ -269,7 +265,7 @@ BladeTick Blade::step_points(double dt_s, const RuntimeSettings& settings, bool 
     const Vec3& p = world_points_[i];
     if (remaining > 0) {
       const int before = r.transitions;
-      proxy.walk(p, proxy.context_for(p, dt_s, settings), before + remaining, r, stop_at_rigid);
+      proxy.walk(p, proxy.context_for(p, dt_s, settings), before + remaining, r);
       remaining -= r.transitions - before;
     }
     proxy.finish_tick(p, r, settings, shading);

@@ -6,13 +6,7 @@
 //  1. The point proxies, placed on the last ideal pose, tick toward their
 //     device points as in the paper: where a resisting material (drag,
 //     viscous, membrane) holds one back, its q is the spring's target t_i;
-//     elsewhere t_i is the device point. A walk ends on the first face it
-//     meets with rigid material across (that point's target is its device
-//     point, and the rounds below find the contacts): sliding on round the
-//     body would only be thrown away. While a point's ideal point stays put
-//     (the blade held), its walk goes on from where it ended last tick, so a
-//     tick's walking is the device's motion, not the device's depth past the
-//     held pose.
+//     elsewhere t_i is the device point.
 //  2. The edge nearest the targets (fit_edge) is the first trial.
 //  3. Every point walks from the ideal pose to the trial (probe_segment), then
 //     the stretches between neighbours are walked at the trial. All free:
@@ -215,7 +209,6 @@ BladeTick Blade::step_rigid(const Pose& pose, double dt_s, const RuntimeSettings
     if (!seated_) {
       BladeTick tick;
       tick.unseated = true;
-      walks_anchored_ = false;
       ideal_pose_ = device_pose_;
       std::fill(point_forces_.begin(), point_forces_.end(), Vec3{});
       for (std::size_t i = 0; i < n; ++i) proxies_[i].force_N_ = Vec3{};
@@ -223,25 +216,8 @@ BladeTick Blade::step_rigid(const Pose& pose, double dt_s, const RuntimeSettings
       return tick;
     }
   }
-  // 1. The targets: the paper's tick of every point from the ideal pose, up to
-  // rigid material; a point whose ideal point has not moved since its last
-  // walk goes on from where that walk ended (a held blade walks as far as the
-  // device moved this tick, not from the held pose to the device again).
-  if (walks_anchored_) {
-    // Within the tolerance: the rounds' rounding moves a held pose by ~1e-9 mm a tick.
-    const double eps = space_->tolerance();
-    for (std::size_t i = 0; i < n; ++i) {
-      if (within_tolerance(ideal_points_[i] - walk_anchors_[i], eps)) {
-        proxies_[i].place_ = walk_places_[i];
-      }
-    }
-  }
-  BladeTick tick = step_points(dt_s, settings, true);
-  for (std::size_t i = 0; i < n; ++i) {
-    walk_places_[i] = proxies_[i].place();
-    walk_anchors_[i] = ideal_points_[i];
-  }
-  walks_anchored_ = true;
+  // 1. The targets: the paper's tick of every point from the ideal pose.
+  BladeTick tick = step_points(dt_s, settings);
   for (std::size_t i = 0; i < n; ++i) {
     const ProxyPlace& place = proxies_[i].place();
     const TickResult& r = point_ticks_[i];

@@ -270,20 +270,11 @@ MoveContext Proxy::context_for(const Vec3& p, double dt_s, const RuntimeSettings
   return context;
 }
 
-bool Proxy::against_rigid() const {
-  if (place_.state != ProxyState::Face) return false;
-  const std::int32_t across = space_->mesh().neighbour(place_.tet, place_.local);
-  return across != kNoTet && space_->tet_is_rigid(across);
-}
-
 [[gnu::always_inline]] inline void Proxy::walk_inline(const Vec3& p, const MoveContext& context,
-                                                      int limit, TickResult& result,
-                                                      bool stop_at_rigid) {
+                                                      int limit, TickResult& result) {
   int transitions = result.transitions;  // A local: no store-to-load round trip per transition.
   bool capped = false;
   for (;;) {
-    // Checked before the cap: a walk that ends against rigid material is finished.
-    if (stop_at_rigid && against_rigid()) break;
     if (transitions >= limit) {
       // The cap is exact: capped only if one more transition would still
       // change something. That probe is undone; the next walk redoes it.
@@ -333,9 +324,8 @@ bool Proxy::against_rigid() const {
   unfinished_in_row_ = 0;
 }
 
-void Proxy::walk(const Vec3& p, const MoveContext& context, int limit, TickResult& result,
-                 bool stop_at_rigid) {
-  walk_inline(p, context, limit, result, stop_at_rigid);
+void Proxy::walk(const Vec3& p, const MoveContext& context, int limit, TickResult& result) {
+  walk_inline(p, context, limit, result);
 }
 
 void Proxy::finish_tick(const Vec3& p, TickResult& result, const RuntimeSettings& settings,
@@ -347,9 +337,8 @@ void Proxy::finish_tick(const Vec3& p, TickResult& result, const RuntimeSettings
 // walk and the tick's end inline (two calls more per point cost ~40
 // instructions of a ~450-instruction point tick).
 void Proxy::tick_walk(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
-                      const ForceShading* shading, bool keep_capped_open, TickResult& result,
-                      bool stop_at_rigid) {
-  walk_inline(p, context_for(p, dt_s, settings), limit, result, stop_at_rigid);
+                      const ForceShading* shading, bool keep_capped_open, TickResult& result) {
+  walk_inline(p, context_for(p, dt_s, settings), limit, result);
   if (!result.capped || !keep_capped_open) finish_tick_inline(p, result, settings, shading);
 }
 

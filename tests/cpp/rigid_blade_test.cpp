@@ -12,12 +12,7 @@
 #include <vector>
 
 #include "hapticut/blade.h"
-#include "hapticut/scene_io.h"
 #include "test_support.h"
-
-#ifndef HAPTICUT_EXAMPLES_DIR
-#define HAPTICUT_EXAMPLES_DIR "examples"
-#endif
 
 namespace hapticut {
 namespace {
@@ -332,60 +327,6 @@ TEST(RigidBlade, FuzzNeverInsideBone) {
       EXPECT_EQ(inside, 0);
     }
   }
-}
-
-}  // namespace
-}  // namespace hapticut
-
-namespace hapticut {
-namespace {
-
-// A blade held by a rigid body while the device goes on through it (the
-// bench's stroke through the sphere80 example as authored: its body is
-// rigid). The point walks only give the springs' targets; a point that meets
-// rigid material has its device point as target, so its walk ends there
-// instead of sliding round the body, every tick, from the held pose. Counts,
-// not times: no point capped or deferred, a few transitions per point and
-// tick, and the edge never in the body.
-TEST(RigidBlade, HeldByARigidBodyThePointsStopAtItAndNothingIsCapped) {
-  const auto space = Space::from_scene(
-      load_scene(std::string(HAPTICUT_EXAMPLES_DIR) + "/sphere80.hapticut.msgpack"));
-  Vec3 lo = space->mesh().vertices().front();
-  Vec3 hi = lo;
-  for (const Vec3& v : space->mesh().vertices()) {
-    lo = {std::min(lo.x, v.x), std::min(lo.y, v.y), std::min(lo.z, v.z)};
-    hi = {std::max(hi.x, v.x), std::max(hi.y, v.y), std::max(hi.z, v.z)};
-  }
-  const Vec3 centre = (lo + hi) * 0.5;
-  const double reach = 0.75 * 0.5 * (hi.y - lo.y);
-  // The bench's stroke: across the centre along y at 100 mm/s, 1 kHz.
-  const int ticks = static_cast<int>(std::lround(2.0 * reach / 100.0 * 1000.0)) + 1;
-  const int points = 50;
-  Blade blade(space, BladeSpec{"knife", {-50, 0, 0}, {50, 0, 0}, points});
-  ASSERT_EQ(blade.coupling(), BladeCoupling::Rigid);
-  auto pose_at = [&](int k) {
-    const double s = static_cast<double>(k) / (ticks - 1);
-    return Pose{centre + Vec3{0, -reach + 2.0 * reach * s, 0}, {}};
-  };
-  blade.reset(pose_at(0));
-  int held_ticks = 0;
-  for (int k = 1; k < ticks; ++k) {
-    const BladeTick tick = blade.step(pose_at(k), kDt);
-    ASSERT_FALSE(tick.rejected) << k;
-    EXPECT_EQ(tick.capped_points, 0) << k;
-    // Each point walks on from where it stopped (at the body, or beside it)
-    // as far as the device moved: a few transitions, not the depth past the
-    // held pose (today: up to 366 a tick, and 96 ticks with capped points).
-    EXPECT_LE(tick.max_transitions, 8) << k;
-    EXPECT_LE(tick.transitions, 2 * points) << k;
-    EXPECT_LE(tick.rigid_rounds, Blade::kMaxRigidRounds) << k;
-    held_ticks += tick.contacts > 0 ? 1 : 0;
-    if (k % 50 == 0) EXPECT_EQ(samples_inside_rigid(blade, 4), 0) << k;
-  }
-  EXPECT_GT(held_ticks, ticks / 4);  // The body holds the blade for much of the stroke.
-  EXPECT_EQ(blade.counters().capped_points, 0u);
-  EXPECT_EQ(blade.counters().unfinished_ticks, 0u);
-  EXPECT_EQ(samples_inside_rigid(blade, 4), 0);
 }
 
 }  // namespace

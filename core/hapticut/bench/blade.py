@@ -243,7 +243,6 @@ def run(find_max: bool = True, rounds: int = 3, scenes_dir: Path | None = None) 
         "Worst tick: max ns, and the transitions of all points in the busiest tick (budget:\n"
         "the blade's work budget per tick; a point it does not reach is capped). A rigid\n"
         "blade's tick also walks and fits its pose in rounds (max rounds, at most 8); where\n"
-        "the device goes on through a rigid body, its held blade walks and fits its pose's\n"
-        "chords toward the device every tick (its points stop at the body).\n"
+        "the device goes on through a rigid body, its held blade's points walk round it.\n"
     )
     return paper + found + "\n" + format_table(headers, rows)

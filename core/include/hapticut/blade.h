@@ -171,10 +171,8 @@ class Blade {
   PoseCheck place_checked(const Pose& pose);
   BladeTick reject(bool out_of_workspace);
   // Today's per-point tick (the paper's blade): every proxy toward its
-  // device point under the work budget; the summed force and torque. With
-  // `stop_at_rigid` (the rigid blade's targets) a point's walk ends on the
-  // first face it meets with rigid material across (Proxy::against_rigid).
-  BladeTick step_points(double dt_s, const RuntimeSettings& settings, bool stop_at_rigid = false);
+  // device point under the work budget; the summed force and torque.
+  BladeTick step_points(double dt_s, const RuntimeSettings& settings);
   void count(const BladeTick& tick);
   // The rigid coupling (blade_rigid.cpp).
   BladeTick step_rigid(const Pose& pose, double dt_s, const RuntimeSettings& settings);
@@ -227,11 +225,6 @@ class Blade {
   std::vector<std::int32_t> trial_tets_;
   std::vector<Vec3> targets_;
   std::vector<Vec3> point_forces_;
-  // Where each point's walk ended last tick, and the ideal point it started
-  // from: while that ideal point has not moved, the walk goes on from there.
-  std::vector<ProxyPlace> walk_places_;
-  std::vector<Vec3> walk_anchors_;
-  bool walks_anchored_ = false;
   std::array<EdgeContact, kMaxEdgeContacts> contacts_{};
   int contact_count_ = 0;
 };

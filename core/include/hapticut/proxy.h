@@ -175,26 +175,17 @@ class alignas(64) Proxy {
                         const RuntimeSettings& settings, TickResult& result);
   // A point's tick (inline, defined below; the blade's loop calls it too):
   // tick_in_tet, else tick_on_face, else tick_beside_mesh, else tick_walk.
-  // `stop_at_rigid` (the rigid blade's targets, blade_rigid.cpp): the walk ends,
-  // finished, when the proxy stands on a face with rigid material across it
-  // (against_rigid), instead of sliding on round the rigid body.
   void tick_within(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
-                   const ForceShading* shading, bool keep_capped_open, TickResult& result,
-                   bool stop_at_rigid = false);
+                   const ForceShading* shading, bool keep_capped_open, TickResult& result);
   void tick_walk(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
-                 const ForceShading* shading, bool keep_capped_open, TickResult& result,
-                 bool stop_at_rigid = false);
+                 const ForceShading* shading, bool keep_capped_open, TickResult& result);
   MoveContext context_for(const Vec3& p, double dt_s, const RuntimeSettings& settings) const;
-  void walk(const Vec3& p, const MoveContext& context, int limit, TickResult& result,
-            bool stop_at_rigid = false);
-  // FACE on a face whose tet across is rigid: the proxy has met rigid material.
-  bool against_rigid() const;
+  void walk(const Vec3& p, const MoveContext& context, int limit, TickResult& result);
   void finish_tick(const Vec3& p, TickResult& result, const RuntimeSettings& settings,
                    const ForceShading* shading);
   // The bodies of walk and finish_tick, inlined into tick_walk (proxy.cpp
   // only): a point the settles decline makes one call, not three.
-  void walk_inline(const Vec3& p, const MoveContext& context, int limit, TickResult& result,
-                   bool stop_at_rigid);
+  void walk_inline(const Vec3& p, const MoveContext& context, int limit, TickResult& result);
   void finish_tick_inline(const Vec3& p, TickResult& result, const RuntimeSettings& settings,
                           const ForceShading* shading);
   void defer_tick(TickResult& result, const RuntimeSettings& settings);
@@ -354,14 +345,13 @@ class alignas(64) Proxy {
 [[gnu::always_inline]] inline void Proxy::tick_within(const Vec3& p, double dt_s,
                                                       const RuntimeSettings& settings, int limit,
                                                       const ForceShading* shading,
-                                                      bool keep_capped_open, TickResult& result,
-                                                      bool stop_at_rigid) {
+                                                      bool keep_capped_open, TickResult& result) {
   if (tick_in_tet(p, settings, limit, result) ||
-      (!stop_at_rigid && tick_on_face(p, settings, limit, shading, result)) ||
+      tick_on_face(p, settings, limit, shading, result) ||
       tick_beside_mesh(p, settings, limit, shading, result)) {
     return;
   }
-  tick_walk(p, dt_s, settings, limit, shading, keep_capped_open, result, stop_at_rigid);
+  tick_walk(p, dt_s, settings, limit, shading, keep_capped_open, result);
 }
 
 }  // namespace hapticut
