@@ -94,7 +94,7 @@ class HAPTICUT_PG_problem(bpy.types.PropertyGroup):
 class HAPTICUT_PG_scene(bpy.types.PropertyGroup):
     accuracy: FloatProperty(
         name="Accuracy",
-        description="How far the meshed surfaces may lie from yours (0: 0.5% of the size)",
+        description="How far the meshed surfaces may lie from yours (0: 1% of the size)",
         default=0.0,
         min=0.0,
         subtype="DISTANCE",
@@ -125,7 +125,10 @@ class HAPTICUT_PG_scene(bpy.types.PropertyGroup):
         ),
         default="box",
     )
-    coarsen: BoolProperty(name="Coarsen", description="Fewer tets, slower build", default=False)
+    # On, as the toolkit's builder: the air is most of what coarsening removes.
+    coarsen: BoolProperty(
+        name="Coarsen", description="Fewer tets (most of them air), a slower build", default=True
+    )
     work_directory: StringProperty(
         name="Work directory",
         subtype="DIR_PATH",
