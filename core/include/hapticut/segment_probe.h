@@ -30,10 +30,15 @@ struct SegmentProbe {
 
 inline constexpr int kSegmentProbeMaxSteps = 4096;
 
+// What stops the segment: rigid material, or also a membrane (a membrane the
+// point has not broken is a wall for the rigid blade).
+enum class ProbeWalls : std::uint8_t { Rigid, RigidAndMembrane };
+
 // start_tet must hold a (within the tolerance) and not be rigid, or be kNoTet
-// with a outside the mesh.
-SegmentProbe probe_segment(const Space& space, std::int32_t start_tet, const Vec3& a,
-                           const Vec3& b);
+// with a outside the mesh. Started in a wall tet, the walk may cross that tet
+// and stops where it would enter the next wall tet.
+SegmentProbe probe_segment(const Space& space, std::int32_t start_tet, const Vec3& a, const Vec3& b,
+                           ProbeWalls walls = ProbeWalls::Rigid);
 
 // The tet a point lies in for the probe: a non-rigid tet holding it, kNoTet
 // outside the mesh; `inside_rigid` when only rigid tets hold it.
