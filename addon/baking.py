@@ -15,7 +15,7 @@ import mathutils
 import numpy as np
 
 from . import cut_reveal
-from .stroke_path import frames_per_second
+from .stroke_path import frames_per_second, object_fcurves
 from .units import mm_per_unit
 
 COLLECTION = "Hapticut Bake"
@@ -23,6 +23,9 @@ TAG = "hapticut_bake"
 ARROW_MESH = "Hapticut Arrow"
 CUT_COLOUR = (0.75, 0.05, 0.05, 1.0)
 ARROW_COLOUR = (1.0, 0.75, 0.05, 1.0)
+# Automatic arrow length (*Arrow length* 0): the stroke's peak force spans this fraction of the
+# scene's diagonal, so the arrow reads on any scene size without covering it.
+ARROW_SCENE_FRACTION = 0.2
 
 
 class BakeError(RuntimeError):
@@ -35,9 +38,14 @@ def record_times(recording) -> np.ndarray:
     return times - times[0] if len(times) else times
 
 
-def frame_indices(times: np.ndarray, fps: float, frame_start: int) -> tuple[np.ndarray, np.ndarray]:
-    """(the scene frames the recording covers, the record nearest each)."""
+def frame_indices(
+    times: np.ndarray, fps: float, frame_start: int, frame_end: int | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """(the scene frames the recording covers, up to frame_end when given; the record nearest
+    each)."""
     count = int(np.floor(times[-1] * fps + 1e-9)) + 1 if len(times) else 0
+    if frame_end is not None:
+        count = min(count, max(frame_end - frame_start + 1, 0))
     wanted = np.arange(count) / fps
     index = np.clip(np.searchsorted(times, wanted), 0, max(len(times) - 1, 0))
     before = np.clip(index - 1, 0, None)
@@ -117,17 +125,35 @@ def _arrow_mesh(mm: float):
 
 def _keyframes(obj, frames, values: dict) -> None:
     """Keyframes of obj's properties at the frames (values: path -> (frames, k) array),
-    linear between them."""
-    preferences = bpy.context.preferences.edit
-    saved = preferences.keyframe_new_interpolation_type
-    preferences.keyframe_new_interpolation_type = "LINEAR"
-    try:
-        for k, frame in enumerate(frames):
-            for path, array in values.items():
-                setattr(obj, path, array[k])
-                obj.keyframe_insert(path, frame=float(frame))
-    finally:
-        preferences.keyframe_new_interpolation_type = saved
+    linear between them. Each key's interpolation is set: the preference for new keys is not
+    honoured by keyframe_insert from Python in every Blender version."""
+    for k, frame in enumerate(frames):
+        for path, array in values.items():
+            setattr(obj, path, array[k])
+            obj.keyframe_insert(path, frame=float(frame))
+    for curve in object_fcurves(obj):
+        for key in curve.keyframe_points:
+            key.interpolation = "LINEAR"
+        curve.update()
+
+
+def scene_diagonal_mm(tets: dict) -> float:
+    """The diagonal (mm) of the box of the scene's material, the air around it left out."""
+    solid = [i for i, model in enumerate(tets["models"]) if model != "free"]
+    chosen = np.isin(tets["materials"], solid)
+    corners = tets["tets"][chosen] if chosen.any() else tets["tets"]
+    points = np.asarray(tets["vertices"], np.float64)[np.unique(corners)]
+    return float(np.linalg.norm(points.max(axis=0) - points.min(axis=0))) if len(points) else 0.0
+
+
+def arrow_mm_per_N(setting: float, peak_force_N: float, diagonal_mm: float) -> float:
+    """The setting when it is above 0; else the scale at which the peak force's arrow spans
+    ARROW_SCENE_FRACTION of the scene's diagonal (1 mm/N for a scene without force)."""
+    if setting > 0:
+        return float(setting)
+    if peak_force_N <= 0 or diagonal_mm <= 0:
+        return 1.0
+    return ARROW_SCENE_FRACTION * diagonal_mm / peak_force_N
 
 
 def cut_mesh(name: str, surface, mm: float):
@@ -189,18 +215,41 @@ def bake(scene, link, recording_path: str, preview_path: str) -> dict:
             f"recording {recording_path} holds {len(recording)} tick(s): nothing to bake"
         )
     tets = load_preview_tets(preview_path)
-    clear(scene)
     live = scene.hapticut_live
     mm = mm_per_unit(scene)
     fps = frames_per_second(scene)
     times = record_times(recording)
-    frames, nearest = frame_indices(times, fps, scene.frame_start)
+    # The keys stay in the scene's frame range; what the recording holds after it (a Simulate
+    # stroke's stop ramp, a longer live recording) is not baked, and the report says so.
+    frames, nearest = frame_indices(times, fps, scene.frame_start, scene.frame_end)
+    if not len(frames):
+        raise BakeError(
+            f"the scene's frame range {scene.frame_start}-{scene.frame_end} is empty: "
+            "nothing to bake"
+        )
+    baked_ticks = int(nearest[-1]) + 1
+    last_frame_s = (frames[-1] - scene.frame_start) / fps
+    covered = len(frame_indices(times, fps, scene.frame_start)[0])
+    forces_by_blade = {
+        name: recording.blade(name)["block"]["engine_force_N"][nearest]
+        for name in recording.blade_names
+    }
+    peak_force_N = max(
+        (float(np.max(np.linalg.norm(f, axis=1))) for f in forces_by_blade.values()), default=0.0
+    )
+    mm_per_N = arrow_mm_per_N(live.arrow_mm_per_N, peak_force_N, scene_diagonal_mm(tets))
+    clear(scene)
     collection = _collection(scene)
     locator = link.cut_surface.TetLocator(tets["vertices"], tets["tets"])
     figures = {
         "recording": recording_path,
         "ticks": len(recording),
         "frames": len(frames),
+        "frame_range": [int(frames[0]), int(frames[-1])],
+        # The frames the recording covers after frame_end (not baked), and their seconds.
+        "unbaked_frames": covered - len(frames),
+        "unbaked_s": float(times[-1] - last_frame_s) if covered > len(frames) else 0.0,
+        "arrow_mm_per_N": mm_per_N,
         "dropped_records": int(recording.ticks["dropped_records"][-1]),
         # A cut recording bakes its whole records; the panel says it was cut.
         "truncated": recording.problem,
@@ -220,11 +269,11 @@ def bake(scene, link, recording_path: str, preview_path: str) -> dict:
             ideal.scale = source.matrix_world.to_scale()
         _keyframes(ideal, frames, {"location": locations, "rotation_quaternion": rotations})
         # The force arrow at the proxies' centre.
-        forces = blade["block"]["engine_force_N"][nearest]
+        forces = forces_by_blade[name]
         arrow = _new_object(collection, f"Force {name}", _arrow_mesh(mm))
         arrow["hapticut_blade"] = name
         arrow.rotation_mode = "QUATERNION"
-        lengths = np.linalg.norm(forces, axis=1) * live.arrow_mm_per_N / mm
+        lengths = np.linalg.norm(forces, axis=1) * mm_per_N / mm
         z = mathutils.Vector((0, 0, 1))
         arrow_rotations = [
             z.rotation_difference(mathutils.Vector(f))
@@ -244,9 +293,9 @@ def bake(scene, link, recording_path: str, preview_path: str) -> dict:
         )
         # The cut surface.
         surface = link.cut_surface.cut_surface(
-            blade["q"],
-            blade["state"],
-            times,
+            blade["q"][:baked_ticks],
+            blade["state"][:baked_ticks],
+            times[:baked_ticks],
             fps,
             scene.frame_start,
             tets["vertices"],

@@ -118,9 +118,10 @@ class HAPTICUT_PG_live(bpy.types.PropertyGroup):
     )
     arrow_mm_per_N: FloatProperty(
         name="Arrow length",
-        default=20.0,
+        default=0.0,
         min=0.0,
-        description="Force arrow length per newton (mm/N)",
+        description="Force arrow length per newton (mm/N); 0: automatic, the stroke's peak "
+        "force spans a fixed fraction of the scene's diagonal",
     )
     substeps: IntProperty(name="Cut rows per frame", default=2, min=1, max=16)
     bake_after_simulate: BoolProperty(name="Bake when done", default=True)

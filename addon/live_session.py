@@ -26,6 +26,9 @@ REPLY_TIMEOUT_S = 5.0
 MAX_UNANSWERED = 64
 # Exit codes of hapticut-servo (docs/servo.md).
 EXIT_NETWORK = 5
+# FrameHeader.servo_flags: the run is as fast as possible, its servo_time_s virtual (the run's
+# start plus one period a tick, docs/protocol.md "Clock"), so no age can be read from it.
+SERVO_FLAG_AS_FAST_AS_POSSIBLE = 4
 
 
 class SessionError(RuntimeError):
@@ -192,6 +195,9 @@ def run(
     )
     session.blades = reply["blades"]
     session.scene_path = scene_path
+    # The ages shown are this run's.
+    session.frame_ages_s.clear()
+    session.drawn_ages_s.clear()
     if settings:
         request(session, "set_parameters", **settings)
     request(session, "engage", engage)
@@ -231,7 +237,9 @@ def tick(session: Session, poses: dict[str, list[float]] | None = None) -> bool:
         frame = client.poll_newest(MAX_DATAGRAMS, BUDGET_S)
         if frame is not None:
             session.frame, new = frame, True
-            session.frame_ages_s.append(time.monotonic() - float(frame.header["servo_time_s"]))
+            age_s = frame_age_s(frame, time.monotonic())
+            if age_s is not None:
+                session.frame_ages_s.append(age_s)
         if client.unanswered < MAX_UNANSWERED:
             for blade, pose in (poses or {}).items():
                 client.send_request("pose", blade=blade, pose=[float(x) for x in pose], buttons=0)
@@ -272,6 +280,16 @@ def port_is_free(port: int) -> bool:
         except OSError:
             return False
     return True
+
+
+def frame_age_s(frame, now_s: float) -> float | None:
+    """A frame's age at now_s (time.monotonic(), the servo's CLOCK_MONOTONIC): None when it
+    has none, in a run as fast as possible (virtual servo time, ahead of the clock) or when
+    the servo time lies in the future (another machine's clock)."""
+    if int(frame.header["servo_flags"]) & SERVO_FLAG_AS_FAST_AS_POSSIBLE:
+        return None
+    age_s = now_s - float(frame.header["servo_time_s"])
+    return age_s if age_s >= 0.0 else None
 
 
 def age_text(ages_s: list) -> str:

@@ -53,6 +53,9 @@ def show_preview(scene, path: str) -> dict:
         collection = bpy.data.collections.new(COLLECTION)
     if collection.name not in scene.collection.children:
         scene.collection.children.link(collection)
+    # A view of the build for the viewport: its opaque surfaces would hide the scene's own
+    # objects in a render.
+    collection.hide_render = True
     _clear(collection)
     units = data["vertices"] / mm_per_unit(scene)
     names, models = data["material_names"], data["material_models"]

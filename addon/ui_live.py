@@ -75,6 +75,20 @@ def status_lines(session) -> list[str]:
 BAKE_SETTINGS = ("simulated_hand", "bake_after_simulate", "arrow_mm_per_N", "substeps")
 
 
+def bake_lines(report: dict) -> list[str]:
+    """What the bake panel says of the range baked and the arrow's scale (the tests read it)."""
+    lines = []
+    if report.get("unbaked_frames"):
+        first, last = report["frame_range"]
+        lines.append(
+            f"keys on frames {first}-{last}: the recording's last {report['unbaked_s']:.2f} s "
+            f"({report['unbaked_frames']} frames) lie after the scene's end, not baked"
+        )
+    if "arrow_mm_per_N" in report:
+        lines.append(f"force arrow {report['arrow_mm_per_N']:.3g} mm/N")
+    return lines
+
+
 def draw_device(layout, settings) -> None:
     """The device menu with *Refresh devices*, its options, its limits and what of the
     settings lies above them (Go Live and Simulate stroke refuse it)."""
@@ -129,7 +143,10 @@ class HAPTICUT_PT_live(SidebarSubpanel, bpy.types.Panel):
         if settings.log_path:
             layout.operator("hapticut.open_servo_log", icon="TEXT")
         if live_draw.handler_added():
-            layout.label(text="drawing proxies (cyan), device points (pink), force (yellow)")
+            layout.label(
+                text="drawing proxies (cyan), device points (pink), force (yellow), "
+                "the knife at its ideal pose (green)"
+            )
 
 
 class HAPTICUT_PT_bake(SidebarSubpanel, bpy.types.Panel):
@@ -152,6 +169,8 @@ class HAPTICUT_PT_bake(SidebarSubpanel, bpy.types.Panel):
                 text=f"baked {report['frames']} frames from {report['ticks']} ticks "
                 f"in {report['seconds']:.1f} s"
             )
+            for line in bake_lines(report):
+                layout.label(text=line)
             if report.get("truncated"):
                 layout.label(text=report["truncated"], icon="ERROR")
             for name, blade in report["blades"].items():

@@ -98,20 +98,27 @@ def test_draw_builds_once_per_frame_draws_the_frame_and_records_its_age(finger, 
     # One build per new frame drawn, none for a redraw of a frame already built.
     assert builds == len(sequences) == session.frames_drawn - drawn0
     assert builds > 20, builds  # Frames stream at 120 Hz: about 100 in the second.
-    assert len(recording_gpu["draws"]) == 4 * (live_draw.draws - draws0)
-    # Every draw: the four batches of the newest build, in the add-on's colours.
-    newest = recording_gpu["batches"][-4:]
-    assert [b.kind for b in newest] == ["POINTS", "POINTS", "LINES", "LINES"]
-    geometry = live_draw.frame_geometry(session.frame, live_draw.mm_per_unit(finger))
+    assert len(recording_gpu["draws"]) == 5 * (live_draw.draws - draws0)
+    # Every draw: the five batches of the newest build, in the add-on's colours.
+    newest = recording_gpu["batches"][-5:]
+    assert [b.kind for b in newest] == ["POINTS", "POINTS", "LINES", "LINES", "LINES"]
+    geometry = live_draw.frame_geometry(
+        session.frame, live_draw.mm_per_unit(finger), finger.objects
+    )
     points = len(session.frame.blades["Knife"]["q"])
     assert np.array_equal(newest[0].pos, geometry["proxies"]) and len(newest[0].pos) == points
     assert np.array_equal(newest[1].pos, geometry["devices"])
     assert len(newest[2].pos) == 2 * points and len(newest[3].pos) == 2
-    assert recording_gpu["shaders"][-1].colours[-4:] == [
+    # The knife object's edges at the frame's ideal pose.
+    knife = bpy.data.objects["Knife"]
+    assert np.array_equal(newest[4].pos, geometry["knife"])
+    assert len(newest[4].pos) == 2 * len(knife.data.edges) > 0
+    assert recording_gpu["shaders"][-1].colours[-5:] == [
         live_draw.PROXY_COLOUR,
         live_draw.DEVICE_COLOUR,
         live_draw.DEVICE_COLOUR,
         live_draw.FORCE_COLOUR,
+        live_draw.KNIFE_COLOUR,
     ]
     # The age of each drawn frame: servo time to its first draw, never before the timer took it.
     drawn = session.drawn_ages_s[-builds:]

@@ -87,6 +87,91 @@ def test_the_ideal_blade_keyframes_follow_the_recording(baked):
     assert up.z > 0.8 and arrow.matrix_world.to_scale().z > 1.0
 
 
+def test_no_negative_frame_age_is_shown_after_simulate(baked):
+    """A stroke runs as fast as possible: its servo time is virtual (ahead of the clock), so
+    its frames have no age to show."""
+    from addon import live, live_session, ui_live
+
+    session = live.current()
+    assert session.frame is not None  # The stroke's last frame is kept.
+    lines = [line for line in ui_live.status_lines(session) if line.startswith("frame age")]
+    print(f"\nafter Simulate stroke: {lines or 'no frame age line'}")
+    assert all(age >= 0 for age in session.frame_ages_s + session.drawn_ages_s)
+    assert not any("-" in line.partition(":")[2] for line in lines), lines
+    assert live_session.frame_age_s(session.frame, time.monotonic()) is None
+
+
+def baked_curves():
+    from addon import stroke_path
+
+    for name in ("Ideal Knife", "Force Knife"):
+        curves = stroke_path.object_fcurves(bpy.data.objects[name])
+        assert curves, name
+        yield from ((name, curve) for curve in curves)
+
+
+def test_every_baked_key_is_linear(baked):
+    for name, curve in baked_curves():
+        kinds = {key.interpolation for key in curve.keyframe_points}
+        assert kinds == {"LINEAR"}, (name, curve.data_path, kinds)
+
+
+def test_the_keys_stay_in_the_frame_range_and_the_panel_says_what_is_not_baked(baked):
+    from addon import ui_live
+
+    first, last = baked.frame_start, baked.frame_end
+    for name, curve in baked_curves():
+        frames = [key.co.x for key in curve.keyframe_points]
+        assert first <= min(frames) and max(frames) <= last, (name, min(frames), max(frames))
+        assert len(frames) == last - first + 1, (name, curve.data_path, len(frames))
+    # The stroke's stop ramp runs after the last frame: not baked, and the panel says so.
+    report = json.loads(baked.hapticut_live.bake_report)
+    lines = ui_live.bake_lines(report)
+    print(f"\n{lines}")
+    assert report["frame_range"] == [first, last] and report["unbaked_frames"] > 0
+    assert any(line.endswith("not baked") for line in lines)
+
+
+def test_the_force_arrow_is_scaled_to_the_scene(baked):
+    """Automatic (Arrow length 0, the default): the peak force's arrow spans
+    ARROW_SCENE_FRACTION of the scene's diagonal, whatever the scene's size."""
+    from addon import baking
+    from addon.units import mm_per_unit
+
+    mm = mm_per_unit(baked)
+    corners = np.array(
+        [
+            obj.matrix_world @ mathutils.Vector(corner)
+            for obj in (bpy.data.objects[name] for name in ("Skin", "Flesh", "Bone"))
+            for corner in obj.bound_box
+        ]
+    )
+    diagonal_mm = float(np.linalg.norm(corners.max(axis=0) - corners.min(axis=0))) * mm
+    arrow = bpy.data.objects["Force Knife"]
+    lengths_mm = []
+    for frame in range(baked.frame_start, baked.frame_end + 1):
+        baked.frame_set(frame)
+        lengths_mm.append(arrow.matrix_world.to_scale().z * mm)
+    report = json.loads(baked.hapticut_live.bake_report)
+    print(
+        f"\nforce arrow: longest {max(lengths_mm):.1f} mm on a scene of {diagonal_mm:.1f} mm "
+        f"diagonal ({report.get('arrow_mm_per_N', baked.hapticut_live.arrow_mm_per_N):.2f} "
+        f"mm/N, peak {report['blades']['Knife']['max_force_N']:.2f} N)"
+    )
+    assert 0.1 * diagonal_mm < max(lengths_mm) <= 0.25 * diagonal_mm
+    assert baked.hapticut_live.arrow_mm_per_N == 0.0
+    assert max(lengths_mm) == pytest.approx(
+        baking.ARROW_SCENE_FRACTION
+        * baking.scene_diagonal_mm(baking.load_preview_tets(baked.hapticut_live.preview_path)),
+        rel=0.05,
+    )
+
+
+def test_the_preview_is_left_out_of_renders(baked):
+    preview = bpy.data.collections["Hapticut Preview"]
+    assert preview.objects and preview.hide_render
+
+
 def test_the_baked_knife_rests_on_the_bone_and_never_enters_it(baked):
     """The default blade is rigid: the servo's ideal pose places the whole knife, and its
     cutting edge, sampled at ten times the blade's point density, is never in bone."""
