@@ -6,9 +6,15 @@ import json
 
 import bpy
 
-from . import toolkit
+from . import build_job, toolkit
 from .report_text import report_lines
 from .ui_common import SidebarPanel, SidebarSubpanel, draw_properties, draw_status
+
+
+def draw_job(layout, job: build_job.Job) -> None:
+    """The running build or check: its progress bar and its cancel button."""
+    layout.progress(factor=job.fraction, type="BAR", text=build_job.progress_text(job))
+    layout.operator("hapticut.cancel_build", icon="CANCEL", text=f"Cancel {job.kind.title()}")
 
 
 class HAPTICUT_UL_objects(bpy.types.UIList):
@@ -46,7 +52,11 @@ class HAPTICUT_PT_scene(SidebarPanel, bpy.types.Panel):
                 else problem.problem
             )
             layout.label(text=text, icon="ERROR")
-        layout.operator("hapticut.check_scene", icon="CHECKMARK")
+        job = build_job.running(scene.name)
+        if job is not None and job.kind == "check":
+            draw_job(layout, job)
+        else:
+            layout.operator("hapticut.check_scene", icon="CHECKMARK")
 
 
 class HAPTICUT_PT_object(SidebarSubpanel, bpy.types.Panel):
@@ -116,13 +126,9 @@ class HAPTICUT_PT_build(SidebarSubpanel, bpy.types.Panel):
             settings,
             ("accuracy", "edge_near", "edge_far", "enclosure", "coarsen", "work_directory"),
         )
-        if settings.running:
-            layout.progress(
-                factor=settings.progress,
-                type="BAR",
-                text=f"{settings.stage} {100 * settings.progress:.0f}%",
-            )
-            layout.operator("hapticut.cancel_build", icon="CANCEL")
+        job = build_job.running(context.scene.name)
+        if job is not None:
+            draw_job(layout, job)
         else:
             layout.operator("hapticut.tetrahedralize", icon="MESH_ICOSPHERE")
         draw_status(layout, settings.status, settings.error)
