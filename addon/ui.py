@@ -11,10 +11,15 @@ from .report_text import report_lines
 from .ui_common import SidebarPanel, SidebarSubpanel, draw_properties, draw_status
 
 
-def draw_job(layout, job: build_job.Job) -> None:
-    """The running build or check: its progress bar and its cancel button."""
-    layout.progress(factor=job.fraction, type="BAR", text=build_job.progress_text(job))
-    layout.operator("hapticut.cancel_build", icon="CANCEL", text=f"Cancel {job.kind.title()}")
+def draw_job(layout, settings, job: build_job.Job | None) -> None:
+    """The running build or check: its progress bar and its cancel button (the scene's own
+    progress properties when the job is not at hand, as after reloading add-ons)."""
+    if job is None:
+        text, kind = f"{settings.stage} {100 * settings.progress:.0f}%", "build"
+    else:
+        text, kind = build_job.progress_text(job), job.kind
+    layout.progress(factor=settings.progress, type="BAR", text=text)
+    layout.operator("hapticut.cancel_build", icon="CANCEL", text=f"Cancel {kind.title()}")
 
 
 class HAPTICUT_UL_objects(bpy.types.UIList):
@@ -54,7 +59,7 @@ class HAPTICUT_PT_scene(SidebarPanel, bpy.types.Panel):
             layout.label(text=text, icon="ERROR")
         job = build_job.running(scene.name)
         if job is not None and job.kind == "check":
-            draw_job(layout, job)
+            draw_job(layout, settings, job)
         else:
             layout.operator("hapticut.check_scene", icon="CHECKMARK")
 
@@ -126,9 +131,8 @@ class HAPTICUT_PT_build(SidebarSubpanel, bpy.types.Panel):
             settings,
             ("accuracy", "edge_near", "edge_far", "enclosure", "coarsen", "work_directory"),
         )
-        job = build_job.running(context.scene.name)
-        if job is not None:
-            draw_job(layout, job)
+        if settings.running:
+            draw_job(layout, settings, build_job.running(context.scene.name))
         else:
             layout.operator("hapticut.tetrahedralize", icon="MESH_ICOSPHERE")
         draw_status(layout, settings.status, settings.error)

@@ -227,8 +227,9 @@ def test_nested_regions_pass_and_say_so(addon, tmp_path):
 
 def test_a_running_check_can_be_cancelled_and_tells_a_slow_one_what_to_do(addon, tmp_path):
     from test_addon_cancel import group_members
+    from test_addon_panels import CheckingLayout, draw
 
-    from addon import build_job
+    from addon import build_job, ui
 
     scene = blender_scene.empty_scene(str(tmp_path))
     cube("Cow", size=20.0)
@@ -241,6 +242,9 @@ def test_a_running_check_can_be_cancelled_and_tells_a_slow_one_what_to_do(addon,
     # A check running long names what it does and suggests decimating.
     job.started -= build_job.SLOW_CHECK_S + 1
     assert "Decimate modifier" in build_job.progress_text(job)
+    layout = CheckingLayout()  # The panel shows the check's progress where it was started.
+    draw(ui.HAPTICUT_PT_scene, layout)
+    assert any("Decimate modifier" in text for text in layout.texts), layout.texts
     assert bpy.ops.hapticut.cancel_build() == {"FINISHED"}
     assert build_job.running(scene.name) is None
     assert group_members(job.process.pid) == [] and job.process.poll() is not None
