@@ -134,6 +134,9 @@ def test_check_finds_regions_crossing_as_the_build_does(tmp_path):
         "validate", "repair", "simplify", "check"
     ]  # fmt: skip
     messages = [e["message"] for e in progress]
+    assert {"stage": "validate", "message": "checking Left (320 faces)"}.items() <= next(
+        e for e in progress if e["message"] == "checking Left (320 faces)"
+    ).items()
     assert "repairing Left (320 faces)" in messages and "simplifying Right (320 faces)" in messages
     assert "checking that regions do not cross (640 faces)" in messages
 

@@ -94,7 +94,12 @@ def run(args: argparse.Namespace) -> int:
     except RequestError as error:
         return _fail(events, "", f"request {error}", 2)
     events.emit("progress", stage="validate", fraction=0.0, message="checking regions")
-    problems = input_problems(request.regions)
+    problems = input_problems(
+        request.regions,
+        lambda fraction, message: events.emit(
+            "progress", stage="validate", fraction=0.0, message=message
+        ),
+    )
     if not request.regions:
         problems.append(("", "no regions to build a scene from"))
     if args.check:
