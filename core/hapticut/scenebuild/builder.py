@@ -617,14 +617,13 @@ def _simplify(
     steps.begin("simplify", "simplifying surfaces")
     surfaces: list[Surface] = []
     for i, (region, surface) in enumerate(zip(regions, repaired, strict=True)):
-        steps(i / len(regions), f"simplifying {region.name} ({len(surface.faces):,} faces)")
+        doing = f"simplifying {region.name} ({len(surface.faces):,} faces)"
+        steps(i / len(regions), doing)
         if settings.simplify:
             simple, before, deviation = simplify_surface(
                 surface,
                 lengths.accuracy_mm * SIMPLIFY_SHARE,
-                on_attempt=lambda f, i=i, n=region.name: steps(
-                    (i + f) / len(regions), f"simplifying {n}"
-                ),
+                on_attempt=lambda f, i=i, doing=doing: steps((i + f) / len(regions), doing),
             )
         else:
             simple, before, deviation = surface, len(surface.faces), 0.0
