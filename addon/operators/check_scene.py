@@ -1,9 +1,10 @@
 import bpy
 
 from .. import build_job, building
+from ..job_modal import CancelsJobOnEsc
 
 
-class HAPTICUT_OT_check_scene(bpy.types.Operator):
+class HAPTICUT_OT_check_scene(CancelsJobOnEsc, bpy.types.Operator):
     """Check the regions and blades (closed, not self-intersecting, with volume, a cutting edge;
     regions nested or apart), as Tetrahedralize checks them, without meshing (Esc cancels)"""
 
@@ -24,23 +25,5 @@ class HAPTICUT_OT_check_scene(bpy.types.Operator):
             first = problems[0]
             self.report({"ERROR"}, f"{len(problems)} problem(s); first: {first}")
             return {"CANCELLED"}
-        self.report({"INFO"}, "checking the meshes: the Build panel shows the progress")
+        self.report({"INFO"}, "checking the meshes (the panel shows the progress; Esc cancels)")
         return {"FINISHED"}
-
-    def invoke(self, context, event):
-        result = self.execute(context)
-        if "FINISHED" in result and build_job.running(context.scene.name):
-            self._scene_name = context.scene.name
-            context.window_manager.modal_handler_add(self)
-            return {"RUNNING_MODAL"}
-        return result
-
-    def modal(self, context, event):
-        # Only watches for Esc: the timer follows the check.
-        if build_job.running(self._scene_name) is None:
-            return {"FINISHED"}
-        if event.type == "ESC" and event.value == "PRESS":
-            building.cancel_build(self._scene_name)
-            self.report({"WARNING"}, "check cancelled")
-            return {"CANCELLED"}
-        return {"PASS_THROUGH"}

@@ -251,3 +251,24 @@ def test_a_running_check_can_be_cancelled_and_tells_a_slow_one_what_to_do(addon,
     assert not os.path.exists(job.job_dir)
     assert scene.hapticut.status == "check cancelled" and not scene.hapticut.running
     assert sorted(os.listdir(tmp_path)) == []
+
+
+def test_esc_cancels_a_check_started_from_the_panel(addon, tmp_path):
+    # Background mode runs no modal operators: the operator's modal() is called as Blender would.
+    import types
+
+    from addon import build_job
+    from addon.job_modal import CancelsJobOnEsc
+
+    scene = blender_scene.empty_scene(str(tmp_path))
+    cube("Cow")
+    blender_scene.knife()
+    assert bpy.ops.hapticut.check_scene() == {"FINISHED"}
+    reports = []
+    operator = types.SimpleNamespace(_scene_name=scene.name, report=lambda *a: reports.append(a))
+    other_key = types.SimpleNamespace(type="A", value="PRESS")
+    assert CancelsJobOnEsc.modal(operator, bpy.context, other_key) == {"PASS_THROUGH"}
+    esc = types.SimpleNamespace(type="ESC", value="PRESS")
+    assert CancelsJobOnEsc.modal(operator, bpy.context, esc) == {"CANCELLED"}
+    assert build_job.running(scene.name) is None and reports == [({"WARNING"}, "check cancelled")]
+    assert scene.hapticut.status == "check cancelled"
