@@ -1,4 +1,6 @@
-"""The running build: a ``hapticut build-request`` child process, polled from a timer.
+"""The running build or check: a ``hapticut build-request`` child process (with ``--check``
+for Check Scene: the build's checks without the meshing), polled from a timer. A scene runs
+one at a time.
 
 No thread touches bpy: ``poll()`` is a plain function that bpy.app.timers calls on the main
 thread (tests call it themselves: timers do not run in background mode). The child writes
@@ -22,6 +24,9 @@ from dataclasses import dataclass, field
 from . import toolkit
 
 POLL_INTERVAL_S = 0.1
+# A check running longer than this is slowed by its meshes' size: the progress suggests a
+# Decimate modifier (the progress line names the region and its faces).
+SLOW_CHECK_S = 10.0
 # After SIGTERM the toolkit removes its temporary files; it gets this long before SIGKILL.
 TERMINATE_GRACE_S = 5.0
 BUILD_FOLDER = "build"
@@ -34,11 +39,16 @@ class Job:
     job_dir: str  # Request, meshes, logs, the child's cwd and TMPDIR: removed at the end.
     out_dir: str
     digest: str
+    kind: str = "build"  # Or "check" (build-request --check).
     started: float = field(default_factory=time.perf_counter)
     read_offset: int = 0
     pending: str = ""
     stage: str = "starting"
     fraction: float = 0.0
+    message: str = ""  # What the toolkit is doing ("repairing Cow (4,300,000 faces)").
+    meshing: int = 1  # Which meshing, of meshings, when the build meshes again.
+    meshings: int = 1
+    problems: list = field(default_factory=list)  # (object, problem) found by a check.
     error: str = ""
     error_object: str = ""
     done_event: dict | None = None
@@ -86,9 +96,12 @@ def start(
     work_dir: str,
     digest: str,
     on_finish,
+    kind: str = "build",
 ) -> Job:
-    """Start the build child (its own process group, cwd and TMPDIR in the job dir)."""
+    """Start the build child, or with kind "check" the check child (its own process group,
+    cwd and TMPDIR in the job dir)."""
     out_dir = os.path.join(work_dir, BUILD_FOLDER)
+    action = ["--check"] if kind == "check" else ["--out", out_dir]
     scratch = os.path.join(job_dir, "tmp")
     os.makedirs(scratch, exist_ok=True)
     env = toolkit.child_environment(TMPDIR=scratch, PYTHONUNBUFFERED="1")
@@ -97,7 +110,7 @@ def start(
         open(os.path.join(job_dir, "stderr.log"), "wb") as stderr,
     ):
         process = subprocess.Popen(
-            [executable, "build-request", request, "--out", out_dir, "--progress", "jsonl"],
+            [executable, "build-request", request, *action, "--progress", "jsonl"],
             stdout=stdout,
             stderr=stderr,
             stdin=subprocess.DEVNULL,
@@ -105,7 +118,7 @@ def start(
             env=env,
             start_new_session=True,
         )
-    job = Job(process, scene_name, job_dir, out_dir, digest, on_finish=on_finish)
+    job = Job(process, scene_name, job_dir, out_dir, digest, kind=kind, on_finish=on_finish)
     _jobs[scene_name] = job
     return job
 
@@ -134,11 +147,29 @@ def _apply(job: Job, event: dict) -> None:
     if kind == "progress":
         job.stage = str(event.get("stage", job.stage))
         job.fraction = float(event.get("fraction", job.fraction))
+        job.message = str(event.get("message", ""))
+        job.meshing, job.meshings = int(event.get("meshing", 1)), int(event.get("meshings", 1))
     elif kind == "error":
         name, problem = event.get("object", ""), event.get("problem", "")
         job.error, job.error_object = str(problem), str(name)
-    elif kind == "done":
+    elif kind == "problem":
+        job.problems.append((str(event.get("object", "")), str(event.get("problem", ""))))
+    elif kind in ("done", "checked"):
         job.done_event = event
+
+
+def progress_text(job: Job) -> str:
+    """The progress bar's text: the step, which meshing when meshing again, the percentage
+    and what the toolkit does ("tetrahedralize, meshing again, 2 of 3: 91%: ...")."""
+    text = job.stage
+    if job.meshing > 1:
+        text += f", meshing again, {job.meshing} of {job.meshings}"
+    text += f" {100 * job.fraction:.0f}%"
+    if job.message and job.message != job.stage:
+        text += f": {job.message}"
+    if job.kind == "check" and time.perf_counter() - job.started > SLOW_CHECK_S:
+        text += " (large meshes check slowly: a Decimate modifier on them makes it faster)"
+    return text
 
 
 def _stderr_tail(job: Job) -> str:
@@ -162,8 +193,10 @@ def poll(scene_name: str) -> bool:
         for event in _read_events(job):
             _apply(job, event)
         ok = job.process.returncode == 0 and job.done_event is not None
-        if not ok and not job.error:
-            job.error = f"the build failed (exit {job.process.returncode}): {_stderr_tail(job)}"
+        if not ok and not job.error and not job.problems:
+            job.error = (
+                f"the {job.kind} failed (exit {job.process.returncode}): {_stderr_tail(job)}"
+            )
         job.longest_poll_s = max(job.longest_poll_s, time.perf_counter() - began)
         _finish(job, ok)
         return False

@@ -1,5 +1,7 @@
 """Tetrahedralize from start to preview: write the request, start the child, follow it
-(``update`` is what the timer calls), show the preview and the report at the end."""
+(``update`` is what the timer calls), show the preview and the report at the end. Check
+Scene's toolkit check runs the same way (a child of kind "check"), its problems recorded at
+the end."""
 
 from __future__ import annotations
 
@@ -36,10 +38,9 @@ def start_build(context) -> str:
     """Start a build of the context's scene; "started" or "unchanged". Raises BuildRefusedError."""
     scene = context.scene
     settings = scene.hapticut
-    if build_job.running(scene.name):
-        raise BuildRefusedError("a build of this scene is running: cancel it first")
+    _refuse_while_running(scene.name)
     settings.error = ""
-    messages = checking.check_scene(context, with_toolkit=False)
+    messages = checking.check_scene(context)
     if messages:
         raise BuildRefusedError(messages[0])
     try:
@@ -72,11 +73,60 @@ def start_build(context) -> str:
         digest,
         functools.partial(_finished, scene.name),
     )
+    _follow(scene, "building")
+    return "started"
+
+
+def start_check(context) -> list[str]:
+    """Check Scene: Blender's checks now, their problems returned; when they pass, the
+    build's own checks without the meshing in a child (followed like a build; the problems are
+    recorded when it ends) and []. Raises BuildRefusedError while a job runs."""
+    scene = context.scene
+    _refuse_while_running(scene.name)
+    messages = checking.check_scene(context)
+    if messages:
+        return messages
+    try:
+        table = preferences.material_table(context)
+        executable = preferences.executable(context)
+    except toolkit.ToolkitError as error:
+        return checking.record(scene, [exchange.SceneProblemError("", str(error))])
+    work_dir = build_job.work_directory(scene, bpy.data.filepath)
+    job_dir = build_job.new_job_dir(work_dir)
+    try:
+        request, digest = exchange.write_request(
+            scene, context.evaluated_depsgraph_get(), table, job_dir
+        )
+    except exchange.SceneProblemError as problem:
+        shutil.rmtree(job_dir, ignore_errors=True)
+        return checking.record(scene, [problem])
+    build_job.start(
+        executable,
+        scene.name,
+        job_dir,
+        request,
+        work_dir,
+        digest,
+        functools.partial(_checked, scene.name),
+        kind="check",
+    )
+    _follow(scene, "checking")
+    return []
+
+
+def _refuse_while_running(scene_name: str) -> None:
+    job = build_job.running(scene_name)
+    if job is not None:
+        raise BuildRefusedError(f"a {job.kind} of this scene is running: cancel it first")
+
+
+def _follow(scene, status: str) -> None:
+    """The job just started: show its progress and poll it from a timer."""
+    settings = scene.hapticut
     settings.running, settings.progress, settings.stage = True, 0.0, "starting"
-    settings.status = "building"
+    settings.status = status
     if not bpy.app.background:
         bpy.app.timers.register(functools.partial(timer_tick, scene.name), first_interval=0.1)
-    return "started"
 
 
 def update(scene_name: str) -> bool:
@@ -96,11 +146,13 @@ def timer_tick(scene_name: str):
 
 
 def cancel_build(scene_name: str) -> bool:
+    """Cancel the scene's build or check; False when none runs."""
+    job = build_job.running(scene_name)
     cancelled = build_job.cancel(scene_name)
     scene = _scene(scene_name)
     if cancelled and scene is not None:
         scene.hapticut.running = False
-        scene.hapticut.status = "cancelled"
+        scene.hapticut.status = "cancelled" if job.kind == "build" else f"{job.kind} cancelled"
         scene.hapticut.progress, scene.hapticut.stage = 0.0, ""
     return cancelled
 
@@ -126,6 +178,24 @@ def _finished(scene_name: str, job: build_job.Job, ok: bool) -> None:
     settings.build_hash = job.digest
     settings.status = f"built in {job.done_event.get('seconds', 0):.1f} s"
     checking.record(scene, [])
+
+
+def _checked(scene_name: str, job: build_job.Job, ok: bool) -> None:
+    scene = _scene(scene_name)
+    if scene is None:
+        return
+    settings = scene.hapticut
+    settings.running, settings.progress, settings.stage = False, 0.0, ""
+    problems = [exchange.SceneProblemError(name, text) for name, text in job.problems]
+    if job.error:
+        problems.append(exchange.SceneProblemError(job.error_object, job.error))
+    checking.record(scene, problems)
+    if ok:
+        settings.status = "checked: ready to build"
+    elif job.problems:
+        settings.status = f"checked: {len(problems)} problem(s)"
+    else:
+        settings.status = "check failed"
 
 
 def scene_file(scene) -> str | None:

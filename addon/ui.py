@@ -6,9 +6,20 @@ import json
 
 import bpy
 
-from . import toolkit
+from . import build_job, toolkit
 from .report_text import report_lines
 from .ui_common import SidebarPanel, SidebarSubpanel, draw_properties, draw_status
+
+
+def draw_job(layout, settings, job: build_job.Job | None) -> None:
+    """The running build or check: its progress bar and its cancel button (the scene's own
+    progress properties when the job is not at hand, as after reloading add-ons)."""
+    if job is None:
+        text, kind = f"{settings.stage} {100 * settings.progress:.0f}%", "build"
+    else:
+        text, kind = build_job.progress_text(job), job.kind
+    layout.progress(factor=settings.progress, type="BAR", text=text)
+    layout.operator("hapticut.cancel_build", icon="CANCEL", text=f"Cancel {kind.title()}")
 
 
 class HAPTICUT_UL_objects(bpy.types.UIList):
@@ -46,7 +57,11 @@ class HAPTICUT_PT_scene(SidebarPanel, bpy.types.Panel):
                 else problem.problem
             )
             layout.label(text=text, icon="ERROR")
-        layout.operator("hapticut.check_scene", icon="CHECKMARK")
+        job = build_job.running(scene.name)
+        if job is not None and job.kind == "check":
+            draw_job(layout, settings, job)
+        else:
+            layout.operator("hapticut.check_scene", icon="CHECKMARK")
 
 
 class HAPTICUT_PT_object(SidebarSubpanel, bpy.types.Panel):
@@ -117,12 +132,7 @@ class HAPTICUT_PT_build(SidebarSubpanel, bpy.types.Panel):
             ("accuracy", "edge_near", "edge_far", "enclosure", "coarsen", "work_directory"),
         )
         if settings.running:
-            layout.progress(
-                factor=settings.progress,
-                type="BAR",
-                text=f"{settings.stage} {100 * settings.progress:.0f}%",
-            )
-            layout.operator("hapticut.cancel_build", icon="CANCEL")
+            draw_job(layout, settings, build_job.running(context.scene.name))
         else:
             layout.operator("hapticut.tetrahedralize", icon="MESH_ICOSPHERE")
         draw_status(layout, settings.status, settings.error)

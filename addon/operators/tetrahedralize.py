@@ -1,9 +1,10 @@
 import bpy
 
 from .. import build_job, building
+from ..job_modal import CancelsJobOnEsc
 
 
-class HAPTICUT_OT_tetrahedralize(bpy.types.Operator):
+class HAPTICUT_OT_tetrahedralize(CancelsJobOnEsc, bpy.types.Operator):
     """Build the tetrahedral scene from the regions and blades (Esc cancels)"""
 
     bl_idname = "hapticut.tetrahedralize"
@@ -22,21 +23,3 @@ class HAPTICUT_OT_tetrahedralize(bpy.types.Operator):
         if outcome == "unchanged":
             self.report({"INFO"}, "the scene is unchanged: not rebuilt")
         return {"FINISHED"}
-
-    def invoke(self, context, event):
-        result = self.execute(context)
-        if "FINISHED" in result and build_job.running(context.scene.name):
-            self._scene_name = context.scene.name
-            context.window_manager.modal_handler_add(self)
-            return {"RUNNING_MODAL"}
-        return result
-
-    def modal(self, context, event):
-        # Only watches for Esc: the timer follows the build.
-        if build_job.running(self._scene_name) is None:
-            return {"FINISHED"}
-        if event.type == "ESC" and event.value == "PRESS":
-            building.cancel_build(self._scene_name)
-            self.report({"WARNING"}, "build cancelled")
-            return {"CANCELLED"}
-        return {"PASS_THROUGH"}

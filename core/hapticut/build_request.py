@@ -178,14 +178,17 @@ def read_request(path: str | os.PathLike) -> BuildRequest:
     )
 
 
-def input_problems(regions: list[Region]) -> list[tuple[str, str]]:
+def input_problems(regions: list[Region], progress=None) -> list[tuple[str, str]]:
     """(region, problem) for each region that is open, self-intersecting or without volume,
-    before any repair: the add-on asks its user to fix these rather than have them patched."""
+    before any repair: the add-on asks its user to fix these rather than have them patched.
+    progress(fraction, message), when given, is told which region is checked."""
     from hapticut.scenebuild.geometry import Surface
     from hapticut.scenebuild.repair import check_arrays, self_intersecting_faces
 
     problems = []
-    for region in regions:
+    for i, region in enumerate(regions):
+        if progress is not None:
+            progress(i / len(regions), f"checking {region.name} ({len(region.faces):,} faces)")
         try:
             vertices, faces = check_arrays(region.name, region.vertices, region.faces)
         except BuildError as error:

@@ -112,6 +112,84 @@ def test_check_lists_open_self_intersecting_and_flat_regions(tmp_path):
     assert problems[-1] == {"event": "checked", "problems": len(found)}
 
 
+def check_events(tmp_path, regions):
+    result = run_cli("build-request", write_request(tmp_path, regions), "--check")
+    return result, [json.loads(line) for line in result.stdout.splitlines()]
+
+
+def test_check_finds_regions_crossing_as_the_build_does(tmp_path):
+    # What Tetrahedralize refuses after repairing and simplifying, the check finds alone.
+    a, b = icosphere(10.0, 2), icosphere(10.0, 2)
+    b = (b[0] + [8.0, 0, 0], b[1])
+    rigid = {"name": "r", "model": "rigid"}
+    result, events = check_events(tmp_path, [("Left", a, rigid), ("Right", b, rigid)])
+    assert result.returncode == 1, result.stderr
+    (problem,) = [e for e in events if e["event"] == "problem"]
+    assert {problem["object"], problem["problem"].split("'")[1]} == {"Left", "Right"}
+    assert "crosses region" in problem["problem"]
+    assert events[-1] == {"event": "checked", "problems": 1}
+    # The progress names the build's steps and the region being worked on.
+    progress = [e for e in events if e["event"] == "progress"]
+    assert list(dict.fromkeys(e["stage"] for e in progress)) == [
+        "validate", "repair", "simplify", "check"
+    ]  # fmt: skip
+    messages = [e["message"] for e in progress]
+    assert {"stage": "validate", "message": "checking Left (320 faces)"}.items() <= next(
+        e for e in progress if e["message"] == "checking Left (320 faces)"
+    ).items()
+    assert "repairing Left (320 faces)" in messages and "simplifying Right (320 faces)" in messages
+    assert "checking that regions do not cross (640 faces)" in messages
+
+
+def test_check_finds_a_region_lying_on_a_copy_of_itself(tmp_path):
+    ball = icosphere(10.0, 2)
+    rigid = {"name": "r", "model": "rigid"}
+    result, events = check_events(tmp_path, [("Cow", ball, rigid), ("Cow.001", ball, rigid)])
+    assert result.returncode == 1, result.stderr
+    (problem,) = [e for e in events if e["event"] == "problem"]
+    other = "Cow.001" if problem["object"] == "Cow" else "Cow"
+    assert problem["object"] in ("Cow", "Cow.001") and f"region {other!r}" in problem["problem"]
+
+
+def test_check_passes_nested_regions_and_ends_its_progress(tmp_path):
+    result = run_cli("build-request", nested_spheres(tmp_path), "--check")
+    assert result.returncode == 0, result.stderr
+    events = [json.loads(line) for line in result.stdout.splitlines()]
+    assert events[-1] == {"event": "checked", "problems": 0}
+    progress = [e for e in events if e["event"] == "progress"]
+    assert progress[-1]["stage"] == "done" and progress[-1]["fraction"] == 1.0
+    fractions = [e["fraction"] for e in progress]
+    assert fractions == sorted(fractions)
+
+
+def test_progress_names_each_meshing_when_the_build_meshes_again(monkeypatch):
+    """An envelope three times the accuracy lets fTetWild stray (test_scene_build.py): the
+    builder meshes again, and every progress line of a later meshing names its step and
+    which meshing it is, with the reason once."""
+    import io
+
+    from hapticut.commands.build_request import JsonLines
+    from hapticut.scenebuild import BuildSettings, build, builder
+
+    monkeypatch.setattr(builder, "ENVELOPE_SHARE", 3.0)
+    stream = io.StringIO()
+    region = Region("ball", *icosphere(10.0, 2), Material("bone", "rigid"))
+    build([region], settings=BuildSettings(accuracy_mm=0.3), progress=JsonLines(stream))
+    events = [json.loads(line) for line in stream.getvalue().splitlines()]
+    for line in stream.getvalue().splitlines()[-12:]:
+        print(line)
+    again = [e for e in events if e.get("meshing", 1) > 1]
+    assert again, "the build should have meshed again"
+    assert {e["meshings"] for e in again} == {builder.MESHING_ATTEMPTS}
+    first = again[0]
+    assert (first["stage"], first["meshing"]) == ("tetrahedralize", 2)
+    assert first["message"].startswith("meshing again with a 0.45 mm envelope")
+    assert {"tetrahedralize", "label", "report"} <= {e["stage"] for e in again}
+    # Each line of the first meshing precedes the second's; the end is "done".
+    assert all(e.get("meshing", 1) == 1 for e in events[: events.index(first)])
+    assert events[-1]["stage"] == "done" and events[-1]["fraction"] == 1.0
+
+
 @pytest.mark.parametrize(
     ("change", "field"),
     [

@@ -5,10 +5,14 @@ hapticut.scenebuild and writes into DIR: the scene file, ``preview.npz``
 (hapticut.preview) and ``report.json``. DIR appears whole or not at all: everything is
 written into a temporary directory beside it, renamed to DIR at the end (an existing DIR is
 replaced). ``--progress jsonl`` prints one JSON object per line on stdout:
-``{"event": "progress", "stage": "repair", "fraction": 0.03, "message": "..."}``, then
+``{"event": "progress", "stage": "repair", "fraction": 0.03, "message": "..."}`` (the
+builder's step; when it meshes again also ``"meshing": 2, "meshings": 3``), then
 ``{"event": "done", ...}`` or ``{"event": "error", "object": NAME, "problem": TEXT}``
-(also the last line on stderr). ``--check`` only checks the regions (open, self-intersecting,
-without volume) and prints their problems.
+(also the last line on stderr). ``--check`` runs the build's checks without meshing
+(hapticut.scenebuild.check_layout: each region open, self-intersecting or without volume;
+regions crossing, touching or lying on one another), with the same progress lines, then
+``{"event": "problem", "object": NAME, "problem": TEXT}`` for each problem and
+``{"event": "checked", "problems": N}``.
 """
 
 from __future__ import annotations
@@ -38,39 +42,36 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 class JsonLines:
-    """Events as JSON lines on a stream, progress thinned to PROGRESS_LINES_PER_S."""
+    """Events as JSON lines on a stream. Progress names the builder's step and, when it
+    meshes again, which meshing; a line whose step or message is new is always written (it
+    says what the next long stretch is), repeats at most PROGRESS_LINES_PER_S."""
 
     def __init__(self, stream, enabled: bool = True) -> None:
-        from hapticut.scenebuild.builder import _Progress
-
         self.stream = stream
         self.enabled = enabled
-        self.last_stage = ""
+        self.stage = "starting"
+        self.meshing, self.meshings = 1, 1
+        self.last_line = ("", "")
         self.last_time = 0.0
-        # The builder's steps and their shares of the whole, in order: a fraction's stage.
-        self.stage_ends = []
-        total = 0.0
-        for stage, weight in _Progress.WEIGHTS.items():
-            total += weight
-            self.stage_ends.append((total, stage))
 
     def emit(self, event: str, **values) -> None:
         if self.enabled or event != "progress":
             self.stream.write(json.dumps({"event": event, **values}) + "\n")
             self.stream.flush()
 
-    def stage_of(self, fraction: float) -> str:
-        for end, stage in self.stage_ends:
-            if fraction < end - 1e-9:
-                return stage
-        return self.stage_ends[-1][1]
+    def on_step(self, step: str, meshing: int, meshings: int) -> None:
+        """The builder begins a step (hapticut.scenebuild.ProgressCallback)."""
+        self.stage, self.meshing, self.meshings = step, meshing, meshings
 
     def __call__(self, fraction: float, message: str) -> bool:
-        stage = self.stage_of(fraction) if fraction < 1.0 else "done"
         now = time.monotonic()
-        if stage != self.last_stage or now - self.last_time >= 1.0 / PROGRESS_LINES_PER_S:
-            self.emit("progress", stage=stage, fraction=round(fraction, 4), message=message)
-            self.last_stage, self.last_time = stage, now
+        line = (self.stage, message)
+        if line != self.last_line or now - self.last_time >= 1.0 / PROGRESS_LINES_PER_S:
+            again = {"meshing": self.meshing, "meshings": self.meshings} if self.meshing > 1 else {}
+            self.emit(
+                "progress", stage=self.stage, fraction=round(fraction, 4), message=message, **again
+            )
+            self.last_line, self.last_time = line, now
         return True
 
 
@@ -93,18 +94,35 @@ def run(args: argparse.Namespace) -> int:
     except RequestError as error:
         return _fail(events, "", f"request {error}", 2)
     events.emit("progress", stage="validate", fraction=0.0, message="checking regions")
-    problems = input_problems(request.regions)
+    problems = input_problems(
+        request.regions,
+        lambda fraction, message: events.emit(
+            "progress", stage="validate", fraction=0.0, message=message
+        ),
+    )
     if not request.regions:
         problems.append(("", "no regions to build a scene from"))
     if args.check:
-        for name, problem in problems:
-            events.emit("problem", object=name, problem=problem)
-        events.emit("checked", problems=len(problems))
-        return 1 if problems else 0
+        return _check(request, problems, events)
     if problems:
         return _fail(events, *problems[0])
     with _terminate_as_exit():
         return _build(request, os.path.abspath(args.out), events)
+
+
+def _check(request, problems: list[tuple[str, str]], events: JsonLines) -> int:
+    """The regions' own problems; when there are none, the build's checks before meshing."""
+    from hapticut.scenebuild import BuildError, check_layout
+
+    if not problems:
+        try:
+            check_layout(request.regions, request.settings, progress=events)
+        except BuildError as error:
+            problems = [(error.region, error.problem)]
+    for name, problem in problems:
+        events.emit("problem", object=name, problem=problem)
+    events.emit("checked", problems=len(problems))
+    return 1 if problems else 0
 
 
 def _build(request, out: str, events: JsonLines) -> int:

@@ -2,7 +2,7 @@
 sizing, fTetWild (tetwild.py), labels (labels.py), quality (quality.py). The file format is
 hapticut.scenefile."""
 
-from .builder import BuildSettings, RefineZone, Region, build, units_warning
+from .builder import BuildSettings, RefineZone, Region, build, check_layout, units_warning
 from .errors import BuildCancelled, BuildError
 from .report import BuildReport
 
@@ -14,5 +14,6 @@ __all__ = [
     "RefineZone",
     "Region",
     "build",
+    "check_layout",
     "units_warning",
 ]

@@ -67,11 +67,14 @@ __all__ = [
     "RefineZone",
     "Region",
     "build",
+    "check_layout",
     "units_warning",
 ]
 
 ENCLOSURES = ("box", "cube", "tetrahedron")
-# progress(fraction 0..1, message) -> False to cancel (None or True: go on).
+# progress(fraction 0..1, message) -> False to cancel (None or True: go on). A callback that
+# also has on_step(step, meshing, meshings) is told each step as it begins ("repair", ...,
+# "report", then "done") and which meshing it belongs to (2 of 3 when meshing again).
 ProgressCallback = Callable[[float, str], "bool | None"]
 # Defaults relative to the regions' size (their bounding box): see BuildSettings.
 # The air is modelled only as far as the scene needs it (issue 32): a margin of 5% of the
@@ -206,7 +209,8 @@ class BuildSettings:
 
 
 class _Progress:
-    """Maps each step's own 0..1 onto the whole build and turns False into BuildCancelled."""
+    """Maps each step's own 0..1 onto the whole run (the build, or only the given steps of
+    it) and turns False into BuildCancelled."""
 
     # Step name -> share of the whole build (fTetWild dominates).
     WEIGHTS = {
@@ -219,8 +223,13 @@ class _Progress:
         "report": 0.10,
     }
 
-    def __init__(self, callback: ProgressCallback | None) -> None:
+    def __init__(self, callback: ProgressCallback | None, steps: Sequence[str] = ()) -> None:
         self.callback = callback
+        chosen = steps or tuple(self.WEIGHTS)
+        total = sum(self.WEIGHTS[step] for step in chosen)
+        self.weights = {step: self.WEIGHTS[step] / total for step in chosen}
+        self.on_step = getattr(callback, "on_step", None)
+        self.meshing = 1  # Which meshing the steps belong to (again() counts up).
         self.start = 0.0
         self.step = ""
         self.timings: dict[str, float] = {}
@@ -233,15 +242,19 @@ class _Progress:
         if self.step:
             self.timings[self.step] = round(self.timings.get(self.step, 0.0) + now - self._clock, 3)
             if not self.repeating:
-                self.start += self.WEIGHTS[self.step]
+                self.start += self.weights[self.step]
         self.step, self._clock = step, now
+        if self.on_step is not None:
+            self.on_step(step, self.meshing, MESHING_ATTEMPTS)
         self(0.0, message)
 
     def again(self, message: str) -> None:
         """The meshing steps are run once more: the progress holds where it got to (it never
-        goes back) and the messages say why; their time adds to the same steps."""
+        goes back), the steps say which meshing they belong to and the message says why;
+        their time adds to the same steps."""
         self.repeating, self.start = True, self.reached
-        self.begin("", message)
+        self.meshing += 1
+        self.begin("tetrahedralize", message)
 
     def finish(self) -> None:
         if self.step:
@@ -249,13 +262,15 @@ class _Progress:
                 self.timings.get(self.step, 0.0) + time.perf_counter() - self._clock, 3
             )
         self.step = ""
+        if self.on_step is not None:
+            self.on_step("done", self.meshing, MESHING_ATTEMPTS)
         if self.callback is not None and self.callback(1.0, "done") is False:
             raise BuildCancelled("cancelled at the end of the build")
 
     def __call__(self, fraction: float, message: str) -> None:
         if self.callback is None:
             return
-        weight = 0.0 if self.repeating else self.WEIGHTS.get(self.step, 0.0)
+        weight = 0.0 if self.repeating else self.weights.get(self.step, 0.0)
         self.reached = min(self.start + weight * min(max(fraction, 0.0), 1.0), 1.0)
         if self.callback(self.reached, message) is False:
             raise BuildCancelled(f"cancelled while {message}")
@@ -279,12 +294,18 @@ def _materials(regions: Sequence[Region], air: Material) -> list[Material]:
 def _check_no_crossings(
     names: list[str], surfaces: list[Surface], envelope_mm: float, progress
 ) -> dict:
-    """BuildError when two regions' surfaces cross or come closer than the envelope."""
+    """BuildError when two regions' surfaces cross or come closer than the envelope (a
+    region touching another, or a copy of it in the same place)."""
+    count = len(surfaces)
+    progress(0.0, f"checking that regions do not cross ({_faces_text(surfaces)})")
     crossing = self_intersecting_faces(surfaces)
-    owner = np.repeat(np.arange(len(surfaces)), [len(s.faces) for s in surfaces])
-    own = np.concatenate([self_intersecting_faces([s]) for s in surfaces])
-    self_crossing = {names[r]: int((own & (owner == r)).sum()) for r in range(len(surfaces))}
-    progress(0.5, "checking that regions do not cross")
+    owner = np.repeat(np.arange(count), [len(s.faces) for s in surfaces])
+    own_parts = []
+    for r, surface in enumerate(surfaces):
+        progress(0.2 + 0.2 * r / count, f"checking {names[r]} ({_faces_text([surface])})")
+        own_parts.append(self_intersecting_faces([surface]))
+    own = np.concatenate(own_parts)
+    self_crossing = {names[r]: int((own & (owner == r)).sum()) for r in range(count)}
     between = crossing & ~own
     if between.any():
         first = int(owner[np.argmax(between)])
@@ -303,6 +324,7 @@ def _check_no_crossings(
         others = [s for q, s in enumerate(surfaces) if q != r]
         if not others:
             break
+        progress(0.4 + 0.6 * r / count, f"checking how near {names[r]} comes to the others")
         gap = distance_to_surfaces(surface.vertices, others, 2 * envelope_mm)
         if gap.min() < envelope_mm:
             near = min(
@@ -318,6 +340,11 @@ def _check_no_crossings(
                 "between them cannot be resolved; lower accuracy_mm",
             )
     return {name: count for name, count in self_crossing.items() if count}
+
+
+def _faces_text(surfaces: list[Surface]) -> str:
+    faces = sum(len(s.faces) for s in surfaces)
+    return f"{faces:,} face" + ("s" if faces != 1 else "")
 
 
 def _nesting(names: list[str], surfaces: list[Surface], volumes: np.ndarray) -> dict[str, str]:
@@ -426,14 +453,9 @@ def build(
     """
     settings = (settings or BuildSettings()).checked()
     regions = list(regions)
-    materials = _check_regions(regions, settings)
     steps = _Progress(progress)
     report = BuildReport(tetwild=f"pytetwild {tetwild.version()}")
-    report.warnings = [w for w in (units_warning(r.name, r.vertices) for r in regions) if w]
-    repaired = _repair(regions, settings, steps, report)
-    lengths = _lengths(repaired, settings)
-    surfaces = _simplify(regions, repaired, lengths, settings, steps, report)
-    volumes = _check_layout(regions, surfaces, lengths, steps, report)
+    materials, repaired, lengths, surfaces, volumes = _prepare(regions, settings, steps, report)
     enclosure, sizing, edge_mm = _enclose_and_size(surfaces, lengths, settings, steps, report)
     in_subprocess = (
         settings.in_subprocess if settings.in_subprocess is not None else progress is not None
@@ -494,6 +516,42 @@ def build(
     )
 
 
+# The steps before meshing: what check_layout runs.
+CHECK_STEPS = ("repair", "simplify", "check")
+
+
+def check_layout(
+    regions: Sequence[Region],
+    settings: BuildSettings | None = None,
+    progress: ProgressCallback | None = None,
+) -> BuildReport:
+    """The build's checks without the meshing (the add-on's Check Scene): the regions
+    repaired, simplified and tested as build() tests them (crossing, touching or lying on one
+    another: regions must be nested or apart). Raises BuildError as build() would; the report
+    of the steps run (repairs, nesting, volumes)."""
+    settings = (settings or BuildSettings()).checked()
+    steps = _Progress(progress, CHECK_STEPS)
+    report = BuildReport(tetwild=f"pytetwild {tetwild.version()}")
+    _prepare(list(regions), settings, steps, report)
+    steps.finish()
+    report.timings_s = dict(steps.timings)
+    return report
+
+
+def _prepare(
+    regions: list[Region], settings: BuildSettings, steps: _Progress, report: BuildReport
+) -> tuple[list[Material], list[Surface], Lengths, list[Surface], np.ndarray]:
+    """The steps before meshing, shared by build() and check_layout(): the materials, the
+    repaired and the simplified surfaces, the lengths and each region's volume."""
+    materials = _check_regions(regions, settings)
+    report.warnings = [w for w in (units_warning(r.name, r.vertices) for r in regions) if w]
+    repaired = _repair(regions, settings, steps, report)
+    lengths = _lengths(repaired, settings)
+    surfaces = _simplify(regions, repaired, lengths, settings, steps, report)
+    volumes = _check_layout(regions, surfaces, lengths, steps, report)
+    return materials, repaired, lengths, surfaces, volumes
+
+
 def units_warning(name: str, vertices: np.ndarray) -> str | None:
     """A warning when a region is under UNITS_MIN_MM or over UNITS_MAX_MM across (its bounding
     box's largest side): mesh files have no units, so it is most likely not in mm."""
@@ -529,6 +587,7 @@ def _repair(
     steps.begin("repair", "repairing surfaces")
     repaired: list[Surface] = []
     for i, region in enumerate(regions):
+        steps(i / len(regions), f"repairing {region.name} ({len(region.faces):,} faces)")
         surface, repairs = repair_surface(
             region.name, region.vertices, region.faces, settings.max_hole_edges
         )
@@ -558,13 +617,13 @@ def _simplify(
     steps.begin("simplify", "simplifying surfaces")
     surfaces: list[Surface] = []
     for i, (region, surface) in enumerate(zip(regions, repaired, strict=True)):
+        doing = f"simplifying {region.name} ({len(surface.faces):,} faces)"
+        steps(i / len(regions), doing)
         if settings.simplify:
             simple, before, deviation = simplify_surface(
                 surface,
                 lengths.accuracy_mm * SIMPLIFY_SHARE,
-                on_attempt=lambda f, i=i, n=region.name: steps(
-                    (i + f) / len(regions), f"simplifying {n}"
-                ),
+                on_attempt=lambda f, i=i, doing=doing: steps((i + f) / len(regions), doing),
             )
         else:
             simple, before, deviation = surface, len(surface.faces), 0.0

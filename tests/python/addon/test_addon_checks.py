@@ -1,5 +1,6 @@
 """Every check names the object and the problem before anything is built."""
 
+import os
 import time
 
 import blender_scene
@@ -12,13 +13,42 @@ def problems() -> list[tuple[str, str]]:
     return [(p.object_name, p.problem) for p in bpy.context.scene.hapticut.problems]
 
 
+def follow(scene_name: str) -> list[str]:
+    """Poll the running check (or build) as the timer does, until it ends; the progress
+    texts seen. Prints the longest time one poll took."""
+    from addon import build_job, building
+
+    texts, longest_s = [], 0.0
+    deadline = time.monotonic() + 300
+    while True:
+        job = build_job.running(scene_name)
+        began = time.perf_counter()
+        still_running = building.update(scene_name)
+        longest_s = max(longest_s, time.perf_counter() - began)
+        if not still_running:
+            break
+        texts.append(build_job.progress_text(job))
+        assert time.monotonic() < deadline
+        time.sleep(0.02)
+    print(f"check: longest poll {1000 * longest_s:.1f} ms over {len(texts)} polls")
+    return texts
+
+
 def check(expect_ok: bool = False) -> list[tuple[str, str]]:
-    result = bpy.ops.hapticut.check_scene() if expect_ok else None
-    if not expect_ok:
-        with pytest.raises(RuntimeError):
-            bpy.ops.hapticut.check_scene()
-    else:
-        assert result == {"FINISHED"}
+    """Check Scene: Blender's own problems fail the operator at once; when they pass, the
+    toolkit's check runs as a child (the operator returns while it runs), followed here."""
+    from addon import build_job
+
+    scene = bpy.context.scene
+    try:
+        result = bpy.ops.hapticut.check_scene()
+    except RuntimeError:
+        assert not expect_ok, problems()
+        return problems()
+    assert result == {"FINISHED"}
+    assert build_job.running(scene.name).kind == "check"
+    follow(scene.name)
+    assert bool(problems()) != expect_ok, problems()
     return problems()
 
 
@@ -152,3 +182,93 @@ def test_a_missing_toolkit_names_the_install_command(addon, tmp_path):
         prefs.toolkit_path = toolkit_path
         assert bpy.ops.hapticut.check_toolkit() == {"FINISHED"}
     assert prefs.toolkit_version and not prefs.toolkit_error
+
+
+def test_regions_crossing_are_found_without_tetrahedralizing(addon, tmp_path):
+    from addon import build_job
+
+    scene = blender_scene.empty_scene(str(tmp_path))
+    cube("Cow", size=20.0)
+    cube("Bone", size=10.0, location=(8.0, 0, 0))  # Half out of the cow.
+    blender_scene.knife()
+    assert bpy.ops.hapticut.check_scene() == {"FINISHED"}
+    job = build_job.running(scene.name)
+    assert job.kind == "check" and job.process.poll() is None  # Returned while it runs.
+    assert scene.hapticut.running
+    texts = follow(scene.name)
+    print("check progress:", texts)
+    ((name, text),) = problems()
+    assert "crosses region" in text and "regions must be nested or apart" in text
+    assert {name, text.split("'")[1]} == {"Cow", "Bone"}
+    assert scene.hapticut.status == "checked: 1 problem(s)" and not scene.hapticut.running
+    assert not os.path.exists(job.job_dir) and sorted(os.listdir(tmp_path)) == []
+
+
+def test_a_duplicated_region_is_found_naming_both(addon, tmp_path):
+    blender_scene.empty_scene(str(tmp_path))
+    cow = cube("Cow")
+    copy = cow.copy()  # Shift+D: the same mesh in the same place.
+    copy.name = "Cow.001"
+    bpy.context.scene.collection.objects.link(copy)
+    blender_scene.knife()
+    ((name, text),) = check()
+    other = "Cow.001" if name == "Cow" else "Cow"
+    assert name in ("Cow", "Cow.001") and f"region {other!r}" in text, (name, text)
+
+
+def test_nested_regions_pass_and_say_so(addon, tmp_path):
+    scene = blender_scene.empty_scene(str(tmp_path))
+    cube("Cow", size=20.0)
+    cube("Bone", size=5.0)
+    blender_scene.knife()
+    assert check(expect_ok=True) == []
+    assert scene.hapticut.status == "checked: ready to build"
+
+
+def test_a_running_check_can_be_cancelled_and_tells_a_slow_one_what_to_do(addon, tmp_path):
+    from test_addon_cancel import group_members
+    from test_addon_panels import CheckingLayout, draw
+
+    from addon import build_job, ui
+
+    scene = blender_scene.empty_scene(str(tmp_path))
+    cube("Cow", size=20.0)
+    blender_scene.knife()
+    assert bpy.ops.hapticut.check_scene() == {"FINISHED"}
+    job = build_job.running(scene.name)
+    # Neither a second check nor a build starts beside it.
+    with pytest.raises(RuntimeError, match="poll"):
+        bpy.ops.hapticut.tetrahedralize()
+    # A check running long names what it does and suggests decimating.
+    job.started -= build_job.SLOW_CHECK_S + 1
+    assert "Decimate modifier" in build_job.progress_text(job)
+    layout = CheckingLayout()  # The panel shows the check's progress where it was started.
+    draw(ui.HAPTICUT_PT_scene, layout)
+    assert any("Decimate modifier" in text for text in layout.texts), layout.texts
+    assert bpy.ops.hapticut.cancel_build() == {"FINISHED"}
+    assert build_job.running(scene.name) is None
+    assert group_members(job.process.pid) == [] and job.process.poll() is not None
+    assert not os.path.exists(job.job_dir)
+    assert scene.hapticut.status == "check cancelled" and not scene.hapticut.running
+    assert sorted(os.listdir(tmp_path)) == []
+
+
+def test_esc_cancels_a_check_started_from_the_panel(addon, tmp_path):
+    # Background mode runs no modal operators: the operator's modal() is called as Blender would.
+    import types
+
+    from addon import build_job
+    from addon.job_modal import CancelsJobOnEsc
+
+    scene = blender_scene.empty_scene(str(tmp_path))
+    cube("Cow")
+    blender_scene.knife()
+    assert bpy.ops.hapticut.check_scene() == {"FINISHED"}
+    reports = []
+    operator = types.SimpleNamespace(_scene_name=scene.name, report=lambda *a: reports.append(a))
+    other_key = types.SimpleNamespace(type="A", value="PRESS")
+    assert CancelsJobOnEsc.modal(operator, bpy.context, other_key) == {"PASS_THROUGH"}
+    esc = types.SimpleNamespace(type="ESC", value="PRESS")
+    assert CancelsJobOnEsc.modal(operator, bpy.context, esc) == {"CANCELLED"}
+    assert build_job.running(scene.name) is None and reports == [({"WARNING"}, "check cancelled")]
+    assert scene.hapticut.status == "check cancelled"
