@@ -13,12 +13,8 @@ import bpy
 import pytest
 
 DOCS = blender_scene.REPO / "docs" / "addon.md"
-# The lists' headings and the property groups they describe.
-PROPERTY_LISTS = {
-    "Object.hapticut": "HAPTICUT_PG_object",
-    "Scene.hapticut": "HAPTICUT_PG_scene",
-    "Scene.hapticut_live": "HAPTICUT_PG_live",
-}
+# The lists' headings: a Blender type and its property holding the add-on's settings.
+PROPERTY_LISTS = ("Object.hapticut", "Scene.hapticut", "Scene.hapticut_live")
 IDENTIFIER = re.compile(r"`([A-Za-z_][A-Za-z0-9_]*)`")
 
 
@@ -48,18 +44,18 @@ def list_items(section: str) -> dict[str, str]:
     return items
 
 
-def registered_properties(group: str) -> set[str]:
-    # Nested groups' items (custom_parameters' name and value, problems' fields) are named
-    # in the lists too.
+def registered_properties(heading: str) -> set[str]:
+    """The identifiers of the property group at heading ("Scene.hapticut"); nested groups'
+    items (custom_parameters' value, problems' fields) are named in the lists too; every
+    group's built-in ``name`` is not (custom_parameters are looked up by it)."""
+    owner, attribute = heading.split(".")
+    group = getattr(bpy.types, owner).bl_rna.properties[attribute].fixed_type
     names = set()
-    rna = getattr(bpy.types, group).bl_rna
-    for prop in rna.properties:
-        if prop.identifier == "rna_type":
-            continue
+    for prop in group.properties:
         names.add(prop.identifier)
         if prop.type == "COLLECTION":
-            names |= {p.identifier for p in prop.fixed_type.properties} - {"rna_type"}
-    return names
+            names |= {p.identifier for p in prop.fixed_type.properties}
+    return names - {"rna_type", "name"}
 
 
 def test_every_listed_name_is_registered_and_every_registered_one_listed(addon):
@@ -68,10 +64,10 @@ def test_every_listed_name_is_registered_and_every_registered_one_listed(addon):
     registered_ops = {name for name in dir(bpy.ops.hapticut) if not name.startswith("_")}
     assert documented_ops == registered_ops
     items = list_items(section)
-    for heading, group in PROPERTY_LISTS.items():
+    for heading in PROPERTY_LISTS:
         text = items[heading].split(":", 1)[1]
         documented = set(IDENTIFIER.findall(text))
-        assert documented == registered_properties(group), heading
+        assert documented == registered_properties(heading), heading
 
 
 def test_the_recipe_runs_as_a_script(addon, tmp_path, monkeypatch):
