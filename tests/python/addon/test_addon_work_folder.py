@@ -108,7 +108,7 @@ def test_save_as_and_reopen_keep_the_build(addon, data_home, tmp_path):
 
 
 def test_after_reopening_the_status_is_the_build_on_disk(addon, data_home, tmp_path):
-    from addon import building, work_folder
+    from addon import building
 
     scene = cube_scene()
     build(scene)
@@ -125,6 +125,8 @@ def test_after_reopening_the_status_is_the_build_on_disk(addon, data_home, tmp_p
     assert not scene.hapticut.running
     assert exports(tmp_path, "kept")
     # The build removed from disk: the reopened file says so and shows no report.
+    from addon import work_folder
+
     shutil.rmtree(work_folder.build_folder(scene))
     bpy.ops.wm.open_mainfile(filepath=path)
     scene = bpy.context.scene
