@@ -20,6 +20,7 @@ from . import (
     toolkit,
     ui,
     ui_live,
+    work_folder,
 )
 
 classes = (
@@ -38,6 +39,7 @@ def register() -> None:
     properties.attach()
     live_properties.attach()
     live.add_handlers()
+    work_folder.add_handlers()
     if not bpy.app.background:  # Read the material table once, soon after startup.
         bpy.app.timers.register(_read_material_table, first_interval=1.0)
 
@@ -56,6 +58,7 @@ def _read_material_table():
 def unregister() -> None:
     live.shutdown()
     live.remove_handlers()
+    work_folder.remove_handlers()
     if bpy.app.timers.is_registered(_read_material_table):
         bpy.app.timers.unregister(_read_material_table)
     build_job.cancel_all()

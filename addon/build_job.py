@@ -73,16 +73,6 @@ def running(scene_name: str) -> Job | None:
     return _jobs.get(scene_name)
 
 
-def work_directory(scene, blend_path: str) -> str:
-    configured = scene.hapticut.work_directory
-    if configured:
-        import bpy
-
-        return bpy.path.abspath(configured)
-    stem = os.path.splitext(os.path.basename(blend_path))[0] or "untitled"
-    return os.path.join(tempfile.gettempdir(), f"hapticut-{os.getuid()}", stem, scene.name)
-
-
 def new_job_dir(work_dir: str) -> str:
     os.makedirs(work_dir, exist_ok=True)
     return tempfile.mkdtemp(prefix=".job-", dir=work_dir)

@@ -12,7 +12,7 @@ import shutil
 
 import bpy
 
-from . import build_job, checking, exchange, preferences, toolkit
+from . import build_job, checking, exchange, preferences, toolkit, undo_steps, work_folder
 from .preview import show_preview
 
 PREVIEW_FILE = "preview.npz"
@@ -49,7 +49,7 @@ def start_build(context) -> str:
     except toolkit.ToolkitError as error:
         settings.error = str(error)
         raise BuildRefusedError(str(error)) from None
-    work_dir = build_job.work_directory(scene, bpy.data.filepath)
+    work_dir = work_folder.work_directory(scene)
     job_dir = build_job.new_job_dir(work_dir)
     try:
         request, digest = exchange.write_request(
@@ -59,8 +59,8 @@ def start_build(context) -> str:
         shutil.rmtree(job_dir, ignore_errors=True)
         checking.record(scene, [problem])
         raise BuildRefusedError(str(problem)) from None
-    preview = os.path.join(work_dir, build_job.BUILD_FOLDER, PREVIEW_FILE)
-    if digest == settings.build_hash and os.path.isfile(preview):
+    out_dir = os.path.join(work_dir, build_job.BUILD_FOLDER)
+    if digest == work_folder.digest_on_disk(out_dir) and _shown(scene, out_dir, digest):
         shutil.rmtree(job_dir, ignore_errors=True)
         settings.status = "unchanged: not rebuilt"
         return "unchanged"
@@ -91,7 +91,7 @@ def start_check(context) -> list[str]:
         executable = preferences.executable(context)
     except toolkit.ToolkitError as error:
         return checking.record(scene, [exchange.SceneProblemError("", str(error))])
-    work_dir = build_job.work_directory(scene, bpy.data.filepath)
+    work_dir = work_folder.work_directory(scene)
     job_dir = build_job.new_job_dir(work_dir)
     try:
         request, digest = exchange.write_request(
@@ -135,6 +135,8 @@ def update(scene_name: str) -> bool:
     job = build_job.running(scene_name)
     scene = _scene(scene_name)
     if job is not None and scene is not None:
+        # running too: an undo may have restored a step from before the build started.
+        scene.hapticut.running = True
         scene.hapticut.progress, scene.hapticut.stage = job.fraction, job.stage
     _redraw()
     return still_running
@@ -152,7 +154,11 @@ def cancel_build(scene_name: str) -> bool:
     scene = _scene(scene_name)
     if cancelled and scene is not None:
         scene.hapticut.running = False
-        scene.hapticut.status = "cancelled" if job.kind == "build" else f"{job.kind} cancelled"
+        if job.kind == "build":
+            kept = work_folder.built_folder(scene) is not None
+            scene.hapticut.status = "cancelled: the last build stays" if kept else "cancelled"
+        else:
+            scene.hapticut.status = f"{job.kind} cancelled"
         scene.hapticut.progress, scene.hapticut.stage = 0.0, ""
     return cancelled
 
@@ -165,19 +171,44 @@ def _finished(scene_name: str, job: build_job.Job, ok: bool) -> None:
     settings.running = False
     settings.progress, settings.stage = (1.0, "done") if ok else (0.0, "")
     if not ok:
-        settings.status = "failed"
-        settings.error = f"{job.error_object}: {job.error}" if job.error_object else job.error
+        _failed(scene, f"{job.error_object}: {job.error}" if job.error_object else job.error)
         checking.record(scene, [exchange.SceneProblemError(job.error_object, job.error)])
         return
     try:
-        report = show_preview(scene, os.path.join(job.out_dir, PREVIEW_FILE))
+        _show_build(scene, job.out_dir, job.digest)
     except (OSError, ValueError, KeyError) as error:
-        settings.status, settings.error = "failed", f"cannot read the preview: {error}"
+        _failed(scene, f"cannot read the preview: {error}")
         return
-    settings.report_json = json.dumps(report)
-    settings.build_hash = job.digest
     settings.status = f"built in {job.done_event.get('seconds', 0):.1f} s"
     checking.record(scene, [])
+    undo_steps.push("Tetrahedralize preview")
+
+
+def _failed(scene, error: str) -> None:
+    """The build failed: its error, and no report or build of an older scene shown as this
+    one's (the older build stays on disk; an unchanged scene shows it again)."""
+    settings = scene.hapticut
+    settings.status, settings.error = "failed", error
+    settings.report_json, settings.build_hash = "", ""
+
+
+def _shown(scene, out_dir: str, digest: str) -> bool:
+    """The build on disk (the scene's own: its digest) is shown; False when it cannot be."""
+    if digest == scene.hapticut.build_hash:
+        return True
+    try:  # Undone since, or a failed build cleared it: show it again rather than rebuild.
+        _show_build(scene, out_dir, digest)
+    except (OSError, ValueError, KeyError):
+        return False
+    return True
+
+
+def _show_build(scene, out_dir: str, digest: str) -> None:
+    """The build in out_dir becomes the scene's: its preview, report and digest."""
+    report = show_preview(scene, os.path.join(out_dir, PREVIEW_FILE))
+    work_folder.write_digest(out_dir, digest)
+    scene.hapticut.report_json = json.dumps(report)
+    scene.hapticut.build_hash = digest
 
 
 def _checked(scene_name: str, job: build_job.Job, ok: bool) -> None:
@@ -199,10 +230,6 @@ def _checked(scene_name: str, job: build_job.Job, ok: bool) -> None:
 
 
 def scene_file(scene) -> str | None:
-    """The last build's scene file, if there is one."""
-    path = os.path.join(
-        build_job.work_directory(scene, bpy.data.filepath),
-        build_job.BUILD_FOLDER,
-        exchange.SCENE_FILE,
-    )
-    return path if os.path.isfile(path) else None
+    """The scene file of the scene's last build, if it is on disk (work_folder.built_folder)."""
+    folder = work_folder.built_folder(scene)
+    return os.path.join(folder, exchange.SCENE_FILE) if folder else None

@@ -16,7 +16,6 @@ from bpy.app.handlers import persistent
 
 from . import (
     baking,
-    build_job,
     building,
     device_list,
     live_draw,
@@ -25,6 +24,8 @@ from . import (
     stroke_path,
     toolkit,
     toolkit_link,
+    undo_steps,
+    work_folder,
 )
 from .exchange import scene_objects
 from .units import mm_per_unit
@@ -58,7 +59,7 @@ def link(context=None, timeout_s: float = toolkit.QUICK_TIMEOUT_S):
 
 
 def log_path(scene) -> str:
-    return os.path.join(build_job.work_directory(scene, bpy.data.filepath), "servo.log")
+    return os.path.join(work_folder.work_directory(scene), "servo.log")
 
 
 def start(context) -> live_session.Session:
@@ -73,7 +74,7 @@ def start(context) -> live_session.Session:
         modules = link(context)
         path = log_path(scene)
         # Recordings (Record, Simulate Stroke) go to the scene's work folder only.
-        work = build_job.work_directory(scene, bpy.data.filepath)
+        work = work_folder.work_directory(scene)
         _session = live_session.start(
             modules, path, port=live.port, realtime=live.realtime, extra=("--record-dir", work)
         )
@@ -208,7 +209,7 @@ def record_live(scene) -> str:
         session.status = live_session.request(session, "status")
         live.recording_path = session.recording_path
         return ""
-    folder = os.path.join(build_job.work_directory(scene, bpy.data.filepath), "recordings")
+    folder = os.path.join(work_folder.work_directory(scene), "recordings")
     path = os.path.join(folder, time.strftime("live-%Y%m%d-%H%M%S.rec"))
     os.makedirs(folder, exist_ok=True)
     live_session.request(session, "record", path)
@@ -225,7 +226,7 @@ def simulate(context) -> dict:
     began = time.perf_counter()
     path, preview = _built_scene(scene)
     blades = scene_objects(scene, "BLADE")
-    folder = os.path.join(build_job.work_directory(scene, bpy.data.filepath), "stroke")
+    folder = os.path.join(work_folder.work_directory(scene), "stroke")
     bindings = []
     for obj in blades:
         poses = stroke_path.sample_poses(scene, obj, live.rate_Hz)
@@ -276,6 +277,7 @@ def _finish_simulate(session) -> None:
         try:
             baked = baking.bake(scene, session.link, job["record"], session.preview_path)
             figures["bake_s"] = baked["seconds"]
+            undo_steps.push("Bake stroke")
         except baking.BakeError as error:
             scene.hapticut_live.error = str(error)
     figures["total_s"] = time.perf_counter() - job["began"]

@@ -132,8 +132,12 @@ class HAPTICUT_PG_scene(bpy.types.PropertyGroup):
     work_directory: StringProperty(
         name="Work directory",
         subtype="DIR_PATH",
-        description="Where builds go (empty: the temporary directory)",
+        description="Where builds go (empty: a folder of this scene's own in the user's data "
+        "folder, which Save As and reopening keep)",
     )
+    # Names the scene's folder in the user's data folder (work_folder.py): set once, kept by
+    # the .blend, so the build follows the file through Save As.
+    work_id: StringProperty(name="Work folder id")
     # The last build (kept in the .blend).
     build_hash: StringProperty(name="Build hash")
     report_json: StringProperty(name="Report")

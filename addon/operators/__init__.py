@@ -18,6 +18,7 @@ from .simulate_stroke import HAPTICUT_OT_simulate_stroke
 from .start_servo import HAPTICUT_OT_start_servo
 from .stop_servo import HAPTICUT_OT_stop_servo
 from .tetrahedralize import HAPTICUT_OT_tetrahedralize
+from .wait import HAPTICUT_OT_wait
 
 classes = (
     HAPTICUT_OT_check_toolkit,
@@ -38,4 +39,5 @@ classes = (
     HAPTICUT_OT_bake_recording,
     HAPTICUT_OT_clear_bake,
     HAPTICUT_OT_open_servo_log,
+    HAPTICUT_OT_wait,
 )

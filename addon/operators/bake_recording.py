@@ -9,6 +9,7 @@ class HAPTICUT_OT_bake_recording(bpy.types.Operator):
 
     bl_idname = "hapticut.bake_recording"
     bl_label = "Bake"
+    bl_options = {"REGISTER", "UNDO"}
 
     filepath: StringProperty(
         name="Recording", subtype="FILE_PATH", description="Empty: the scene's last recording"

@@ -8,6 +8,7 @@ class HAPTICUT_OT_clear_bake(bpy.types.Operator):
 
     bl_idname = "hapticut.clear_bake"
     bl_label = "Clear"
+    bl_options = {"REGISTER", "UNDO"}
 
     def execute(self, context):
         removed = baking.clear(context.scene)

@@ -16,6 +16,7 @@ class HAPTICUT_OT_import_scene(bpy.types.Operator, ImportHelper):
 
     bl_idname = "hapticut.import_scene"
     bl_label = "Import Scene"
+    bl_options = {"REGISTER", "UNDO"}
 
     filter_glob: StringProperty(default="*.hapticut.msgpack;*.hapticut.json", options={"HIDDEN"})
 

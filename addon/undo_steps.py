@@ -1,0 +1,21 @@
+"""Undo steps for what a timer changes (the preview at the end of a build, the bake at the end
+of a stroke). Blender pushes a step after an operator that has 'UNDO' in its options, but
+Tetrahedralize and Simulate Stroke return long before their timers edit the scene: without a
+step of its own that edit would be undone together with whatever operator came before it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+
+import bpy
+
+
+def push(message: str) -> None:
+    """An undo step named message for the scene as it is now. Background mode keeps no undo
+    stack (``ed.undo`` cannot run there): nothing to push."""
+    if bpy.app.background:
+        return
+    # No undo stack in this context: the edit stays, without a step of its own.
+    with contextlib.suppress(RuntimeError):
+        bpy.ops.ed.undo_push(message=message)
