@@ -301,8 +301,9 @@ MoveContext Proxy::context_for(const Vec3& p, double dt_s, const RuntimeSettings
 [[gnu::always_inline]] inline void Proxy::finish_tick_inline(const Vec3& p, TickResult& result,
                                                              const RuntimeSettings& settings,
                                                              const ForceShading* shading) {
-  // A branch, not std::max: GCC vectorised the max through a 16-byte reload of
-  // a 4-byte store, a store-forwarding stall that cost 15 ns per step.
+  // A branch, not std::max: GCC vectorises the max through a 16-byte reload of
+  // a 4-byte store, a store-forwarding stall on every step (docs/decisions.md,
+  // "Build tuning and the hot path").
   const auto transitions = static_cast<std::uint32_t>(result.transitions);
   counters_.total_transitions += transitions;
   if (transitions > counters_.max_transitions_in_tick) {
@@ -334,8 +335,8 @@ void Proxy::finish_tick(const Vec3& p, TickResult& result, const RuntimeSettings
 }
 
 // A point's tick that the settles (proxy.h) declined: one call, with the
-// walk and the tick's end inline (two calls more per point cost ~40
-// instructions of a ~450-instruction point tick).
+// walk and the tick's end inline, so a point makes no further call
+// (docs/decisions.md, "Build tuning and the hot path").
 void Proxy::tick_walk(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
                       const ForceShading* shading, bool keep_capped_open, TickResult& result) {
   walk_inline(p, context_for(p, dt_s, settings), limit, result);
@@ -633,7 +634,8 @@ Proxy::Outcome Proxy::step_outside(const Vec3& p) {
 // resolved nearest first: a rim the segment passes by outside
 // sends the search on beyond it, up to kRimPassesMax rims; then the safety
 // net. One function with the search inline: a separate search returning a
-// record cost 3 to 5 ns of the 18 an OUTSIDE step takes on the paper's cube.
+// record is a sizeable share of an OUTSIDE step on a small mesh
+// (docs/decisions.md, "Entering the mesh from OUTSIDE").
 Proxy::Outcome Proxy::enter_beyond(const Vec3& q, const Vec3& end, const Vec3& p, double lowest,
                                    int rims_passed) {
   const TetMesh& mesh = space_->mesh();
@@ -698,8 +700,8 @@ Proxy::Outcome Proxy::enter_beyond(const Vec3& q, const Vec3& end, const Vec3& p
     // Every plane q->end enters through gets the triangle test, in scan
     // order: try_face_at keeps the nearest clean hit and the nearest rim hit
     // short of it, and skips a plane beyond both, as the tree's order does.
-    // (Sorting the candidates nearest first cost more than the tests it saved:
-    // on a convex box the entry is the farthest of up to three planes.)
+    // No sort nearest first: on a convex box the entry is the farthest of up
+    // to three planes, so a sort would save no triangle test.
     for (std::size_t k = 0; k < n; ++k) {
       const double s = segment_entry_parameter(before[k], behind[k], eps);
       if (s >= 0.0) try_face_at(static_cast<std::int32_t>(k), s);
@@ -737,7 +739,8 @@ Proxy::Outcome Proxy::enter_beyond(const Vec3& q, const Vec3& end, const Vec3& p
 // point) points strictly out of every closed cone (eq. 11) or wedge (eq. 7)
 // around it; the landed state's own step, which applies the same test to the
 // same p - q, then takes it on. A direction along a face plane between two
-// tets is in their closed cones, so it no longer passes into the mesh.
+// tets is in their closed cones, so it does not pass into the mesh
+// (docs/decisions.md, "Entering through the rim").
 Proxy::Outcome Proxy::enter_through_rim(const FaceRef& face, const std::array<int, 2>& sides,
                                         const Vec3& c, const Vec3& p) {
   const TetMesh& mesh = space_->mesh();

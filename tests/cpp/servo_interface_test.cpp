@@ -1,7 +1,8 @@
-// What the servo needs from the engine (issue 8): settings per tick, an exact
-// cap and a work budget that degrades gracefully, force shading in the blade,
-// a snapshot per tick, shared ownership of the Space, and input checks
-// (blade size, zero quaternion, absurd device samples, set_place).
+// What the servo needs from the engine: settings per tick, an exact cap and a
+// work budget that degrades gracefully, force shading in the blade, a snapshot
+// per tick, shared ownership of the Space, and input checks (blade size, zero
+// quaternion, absurd device samples, set_place). docs/decisions.md has a record
+// for each, from "Transitions per tick and a capped tick" to "Absurd device samples".
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -159,7 +159,7 @@ def measure(
 
 @dataclasses.dataclass(frozen=True)
 class Target:
-    """A target of the issue: which rows it applies to, and whether a row meets it."""
+    """A target of the benchmark: which rows it applies to, and whether a row meets it."""
 
     name: str
     applies: Callable[[Row], bool]

@@ -6,7 +6,7 @@
 // fit_edge: the edge nearest the targets in the springs' metric,
 // sum |x_i - t_i|^2, in closed form. fit_edge_constrained: the same near a
 // base edge, linearised, with contact planes each sample of the edge must
-// stay on the free side of (docs/decisions.md, "The rigid blade's solve").
+// stay on the free side of (docs/decisions.md, "The rigid blade", its solver).
 // Both are deterministic and never allocate.
 #pragma once
 

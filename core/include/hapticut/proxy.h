@@ -41,8 +41,8 @@ struct Transition {
   // The move stayed inside its tet or face, or along its edge: the next call would
   // change nothing (see docs/decisions.md, "Ending a tick"), so the tick ends.
   bool settled = false;
-  // Pads the struct to 8 bytes, returned in one register: at 5 bytes GCC
-  // returned it through memory and a TET move took 19 ns instead of 11.
+  // Pads the struct to 8 bytes so that it is returned in one register, not
+  // through memory (docs/decisions.md, "Build tuning and the hot path").
   std::uint8_t padding0 = 0;
   std::uint8_t padding1 = 0;
   std::uint8_t padding2 = 0;
@@ -138,7 +138,7 @@ class alignas(64) Proxy {
   // Table 2's timing loop (core/python/bind_benchmarks.cpp) restores a start
   // place it checked once through set_place without checking it again: the
   // check is not part of the transition timed, and subtracting it is noisier
-  // than not making it (it was a plain assignment when Table 2 was first measured).
+  // than not making it.
   friend struct TransitionTimingAccess;
   // The test that the inline settles give what the walk gives
   // (tests/cpp/tet_settle_test.cpp) runs tick_walk, tick_in_tet and tick_on_face apart.
@@ -153,7 +153,7 @@ class alignas(64) Proxy {
   // material moves it (free, drag, membrane) to a q' still inside its tet
   // settles there, with the same place, counters and force as the walk
   // (step_tet, then finish_tick) would give, bit for bit, without the walk's
-  // machinery: about a third of a point's instructions (docs/decisions.md,
+  // machinery, which is most of such a tick's cost (docs/decisions.md,
   // "The settle in a tet and the slide on bone, inline"). Returns false,
   // touching nothing, for any other tick (another state, a viscous material,
   // q' leaving the tet, a tick already under way); tick_walk then does it.
@@ -214,7 +214,8 @@ class alignas(64) Proxy {
   // Space pointer, the place, p, the force, the scalar counters up to
   // max_transitions_in_tick) fills the first two cache lines exactly; a
   // 500-point blade's proxies do not fit L1, and each line more per proxy
-  // was a miss more per point and tick (static_assert in proxy.cpp). The Space
+  // is a miss more per point and tick (static_assert in proxy.cpp;
+  // docs/decisions.md, "Build tuning and the hot path"). The Space
   // goes through a plain pointer on the hot path; space_owner_ (last, away
   // from the hot members) keeps it alive.
   const Space* space_;
