@@ -99,7 +99,7 @@ Blade::Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
     trial_points_.assign(n, Vec3{});
     trial_tets_.assign(n, kNoTet);
     targets_.assign(n, Vec3{});
-    holds_.assign(n, MembraneHold{});
+    walls_.assign(n, ProbeWalls::Rigid);
     point_forces_.assign(n, Vec3{});
   }
 }

@@ -6,8 +6,8 @@
 //  1. The point proxies, placed on the last ideal pose, tick toward their
 //     device points as in the paper: where a resisting material (drag,
 //     viscous, membrane) holds one back, its q is the spring's target t_i;
-//     elsewhere t_i is the device point. A membrane holding a point is a wall
-//     for that point's walks below, as bone is.
+//     elsewhere t_i is the device point. A membrane a point reached without
+//     breaking it is a wall for that point's walks, as bone is.
 //  2. The edge nearest the targets (fit_edge) is the first trial.
 //  3. Every point walks from the ideal pose to the trial (probe_segment), then
 //     the stretches between neighbours are walked at the trial. All free:
@@ -87,30 +87,36 @@ bool wedge_contact(const Plane& in, const Plane& out, const Vec3& direction, con
 
 }  // namespace
 
-MembraneHold Blade::membrane_hold(const ProxyPlace& place, const Vec3& device_point,
-                                  std::int32_t start_tet, bool held_by_material) const {
+ProbeWalls Blade::membrane_walls(const ProxyPlace& place, const Vec3& device_point,
+                                 std::int32_t& start_tet) const {
   const Space& space = *space_;
-  MembraneHold hold;
   const auto is_membrane = [&space](std::int32_t t) {
     return t != kNoTet && space.tet_model(t) == MaterialModel::Membrane;
   };
   const bool constrained = place.state == ProxyState::Face || place.state == ProxyState::Edge ||
                            place.state == ProxyState::Vertex;
-  if (constrained && !is_membrane(place.tet) && !is_membrane(start_tet)) {
+  if (constrained) {
     // The point's tick ended on a wall outside every membrane: none let it in.
-    hold.walls = ProbeWalls::RigidAndMembrane;
-    return hold;
+    return !is_membrane(place.tet) && !is_membrane(start_tet) ? ProbeWalls::RigidAndMembrane
+                                                              : ProbeWalls::Rigid;
   }
-  // Held inside a membrane (it broke in, and a face further in, or the
-  // membrane's own stickiness, stopped it): no deeper than its q.
-  const Vec3 pull = place.q - device_point;
-  const double length = norm(pull);
-  if ((constrained || held_by_material) && is_membrane(place.tet) && length > space.tolerance()) {
-    hold.inside = true;
-    const Vec3 normal = pull / length;
-    hold.plane = {normal, dot(normal, place.q)};
+  // Held still in a membrane tet from a point on its outer face (the point had
+  // reached the membrane, not broken it): the walk starts in the tet outside.
+  const double eps = space.tolerance();
+  if (place.state != ProxyState::Tet || place.tet != start_tet || !is_membrane(start_tet) ||
+      !(squared_norm(place.q - device_point) > eps * eps)) {
+    return ProbeWalls::Rigid;
   }
-  return hold;
+  const TetMesh& mesh = space.mesh();
+  for (int f = 0; f < 4; ++f) {
+    const std::int32_t u = mesh.neighbour(start_tet, f);
+    if (is_membrane(u) || (u != kNoTet && space.tet_is_rigid(u))) continue;
+    if (std::abs(mesh.face_plane(start_tet, f).signed_distance(place.q)) <= eps) {
+      start_tet = u;
+      return ProbeWalls::RigidAndMembrane;
+    }
+  }
+  return ProbeWalls::Rigid;
 }
 
 EdgePose Blade::device_edge() const {
@@ -140,22 +146,8 @@ bool Blade::probe_motion(const EdgePose& edge, double& advance, bool add_contact
   bool free = true;
   for (std::size_t i = 0; i < n; ++i) {
     trial_points_[i] = edge.point(fractions_[i], length_mm_);
-    const MembraneHold& hold = holds_[i];
-    SegmentProbe probe =
-        probe_segment(space, ideal_tets_[i], ideal_points_[i], trial_points_[i], hold.walls);
-    if (hold.inside) {
-      const double d0 = std::max(0.0, hold.plane.signed_distance(ideal_points_[i]));
-      const double d1 = hold.plane.signed_distance(trial_points_[i]);
-      if (d1 < -space.tolerance()) {
-        const double h = d0 / (d0 - d1);
-        if (!probe.hit || h < probe.fraction) {
-          probe.hit = true;
-          probe.exhausted = false;
-          probe.fraction = h;
-          probe.contact = hold.plane;
-        }
-      }
-    }
+    const SegmentProbe probe =
+        probe_segment(space, ideal_tets_[i], ideal_points_[i], trial_points_[i], walls_[i]);
     if (probe.hit) {
       free = false;
       advance = std::min(advance, probe.fraction);
@@ -173,10 +165,10 @@ bool Blade::probe_motion(const EdgePose& edge, double& advance, bool add_contact
   for (std::size_t i = 0; i + 1 < n; ++i) {
     // A membrane is a wall between two points it holds; where one of them has
     // broken it, the edge cuts on from there.
-    const ProbeWalls walls = holds_[i].walls == ProbeWalls::RigidAndMembrane &&
-                                     holds_[i + 1].walls == ProbeWalls::RigidAndMembrane
-                                 ? ProbeWalls::RigidAndMembrane
-                                 : ProbeWalls::Rigid;
+    const ProbeWalls walls =
+        walls_[i] == ProbeWalls::RigidAndMembrane && walls_[i + 1] == ProbeWalls::RigidAndMembrane
+            ? ProbeWalls::RigidAndMembrane
+            : ProbeWalls::Rigid;
     const SegmentProbe ahead =
         probe_segment(space, trial_tets_[i], trial_points_[i], trial_points_[i + 1], walls);
     if (!ahead.hit) continue;
@@ -272,10 +264,8 @@ BladeTick Blade::step_rigid(const Pose& pose, double dt_s, const RuntimeSettings
         (place.state == ProxyState::Tet || place.state == ProxyState::Outside) && !r.capped &&
         !r.deferred;
     targets_[i] = held_by_material ? place.q : world_points_[i];
-    // A membrane that holds the point (its tick stopped in the membrane short
-    // of the device point) is as hard as bone for the pose: the spring on the
-    // point, not its neighbours' pull, decides when it breaks.
-    holds_[i] = membrane_hold(place, world_points_[i], ideal_tets_[i], held_by_material);
+    // A membrane the point reached and did not break is as hard as bone.
+    walls_[i] = membrane_walls(place, world_points_[i], ideal_tets_[i]);
   }
   // 2-4. The pose.
   const bool lock = orientation_ == BladeOrientation::Locked;

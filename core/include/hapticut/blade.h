@@ -111,17 +111,6 @@ struct BladeSnapshot {
   std::array<ProxySnapshot, N> points;
 };
 
-// How a membrane the rigid blade has not broken holds one point this tick:
-// held outside it, the membrane's tets are walls for the point's walk; held
-// inside it (broken into, then stopped), the point may go no further toward
-// its device point than `plane` (through q, its normal from the device point
-// to q) allows.
-struct MembraneHold {
-  ProbeWalls walls = ProbeWalls::Rigid;
-  bool inside = false;
-  Plane plane;
-};
-
 class Blade {
  public:
   static constexpr int kMaxPoints = 10000;
@@ -193,8 +182,12 @@ class Blade {
   // Whether every point and every stretch between neighbours of `edge` lies
   // outside rigid material; if so, makes it the ideal pose (seated).
   bool seat_at(const EdgePose& edge);
-  MembraneHold membrane_hold(const ProxyPlace& place, const Vec3& device_point,
-                             std::int32_t start_tet, bool held_by_material) const;
+  // The walls of a point's walks this tick: a membrane is one where the
+  // point's own tick reached it and did not break it (its spring, not its
+  // neighbours' pull, breaks it; once broken in, it resists as a target).
+  // May move start_tet to the tet outside the membrane the point lies on.
+  ProbeWalls membrane_walls(const ProxyPlace& place, const Vec3& device_point,
+                            std::int32_t& start_tet) const;
   // Walks every point from the ideal pose to `edge` and then the stretches
   // between neighbours there; true when nothing met rigid material. `advance`
   // gets the least fraction any point got; contacts found are added when asked.
@@ -231,14 +224,14 @@ class Blade {
   EdgePose ideal_edge_;
   bool seated_ = false;
   // The rigid solve's storage, sized once: the ideal points and the tets that
-  // hold them (kNoTet outside the mesh), a trial pose's, the targets t_i, how
-  // a membrane holds each point and the point forces.
+  // hold them (kNoTet outside the mesh), a trial pose's, the targets t_i, the
+  // walls each point's walks meet and the point forces.
   std::vector<Vec3> ideal_points_;
   std::vector<std::int32_t> ideal_tets_;
   std::vector<Vec3> trial_points_;
   std::vector<std::int32_t> trial_tets_;
   std::vector<Vec3> targets_;
-  std::vector<MembraneHold> holds_;
+  std::vector<ProbeWalls> walls_;
   std::vector<Vec3> point_forces_;
   std::array<EdgeContact, kMaxEdgeContacts> contacts_{};
   int contact_count_ = 0;
