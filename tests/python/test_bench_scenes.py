@@ -3,6 +3,7 @@
 from pathlib import Path
 
 import pytest
+from hapticut import _core
 from hapticut.bench import blade
 
 SOURCE_SCENES = sorted(
@@ -71,3 +72,12 @@ def test_the_blade_table_has_a_row_per_scene_and_coupling(tmp_path):
         for scene in ("one", "one", "grid ~12k tets")
         for coupling in ("rigid", "independent")
     ]
+
+
+def test_the_points_search_stops_at_the_most_a_blade_takes():
+    """A budget every count fits ends the search at the blade's limit, not at a refusal."""
+    paths, _ = blade.example_scenes(None)
+    label, space = next(iter(blade.scenes(paths[:1])))
+    poses = blade.stroke_poses(space)[:40]
+    most = blade.max_points_within(space, poses, budget_ns=1e15, coupling="independent")
+    assert most == _core.BLADE_MAX_POINTS, label

@@ -149,7 +149,8 @@ def time_ticks(
 def max_points_within(
     space: _core.Space, poses: np.ndarray, budget_ns: float = BUDGET_NS, coupling: str = "rigid"
 ) -> int:
-    """Largest blade point count whose median tick fits the budget (bisection on counts)."""
+    """Largest blade point count whose median tick fits the budget (bisection on counts), at
+    most the most a blade takes."""
     middle = len(poses) // 2
     short = poses[max(0, middle - 150) : middle + 150]  # where the blade is in the body
 
@@ -157,9 +158,12 @@ def max_points_within(
         ticks = time_ticks(space, points, short, 3, coupling)["tick_ns"]
         return bool(np.median(ticks) <= budget_ns)
 
+    most = _core.BLADE_MAX_POINTS  # A blade refuses more.
     lo, hi = 50, 50
-    while fits(hi) and hi < 2_000_000:
-        lo, hi = hi, hi * 2
+    while fits(hi):
+        if hi == most:
+            return most
+        lo, hi = hi, min(hi * 2, most)
     while hi - lo > max(8, lo // 50):
         mid = (lo + hi) // 2
         if fits(mid):
