@@ -77,15 +77,15 @@ ENCLOSURES = ("box", "cube", "tetrahedron")
 # "report", then "done") and which meshing it belongs to (2 of 3 when meshing again).
 ProgressCallback = Callable[[float, str], "bool | None"]
 # Defaults relative to the regions' size (their bounding box): see BuildSettings.
-# The air is modelled only as far as the scene needs it (issue 32): a margin of 5% of the
-# regions' largest extent, but at least two tet edges at the surfaces; in the air the tets
-# grow six times as fast as inside the regions, up to three times the far edge.
+# The air is modelled only as far as the scene needs it, so most tets are not air: a margin
+# of 5% of the regions' largest extent, but at least two tet edges at the surfaces; in the
+# air the tets grow six times as fast as inside the regions, up to three times the far edge.
 DEFAULT_MARGIN_RATIO = 0.05
 MARGIN_NEAR_EDGES = 2.0
 DEFAULT_AIR_GRADING = 3.0
 AIR_FAR_RATIO = 3.0
-# 1% of the diagonal (about 1.5 mm on a 100 mm scan): at 0.5% fTetWild took minutes on a
-# 100 mm scan (issue 32); a finer accuracy is one setting away.
+# 1% of the diagonal (about 1.5 mm on a 100 mm scan): a default build of a single scan stays
+# well under a minute; a finer accuracy is one setting away.
 DEFAULT_ACCURACY_RATIO = 0.01
 DEFAULT_FAR_RATIO = 4.0
 # The background grid of the sizing field: at most this many cells along the longest side.
@@ -176,8 +176,8 @@ class BuildSettings:
     air_grading: float = DEFAULT_AIR_GRADING  # Edge growth per mm outside every region.
     adaptive: bool = True
     simplify: bool = True  # Simplify the input surfaces within the accuracy first.
-    # fTetWild's coarsening: on a ~100 mm scan it halves the tets (most of them air) in
-    # about the same time, so the air is a minority (issue 32).
+    # fTetWild's coarsening: it removes mostly air tets at little cost, so the air stays a
+    # minority of the tets.
     coarsen: bool = True
     refine: tuple[RefineZone, ...] = ()
     max_hole_edges: int = 100  # Holes with up to this many boundary edges are closed.
