@@ -49,14 +49,9 @@ def start_build(context) -> str:
     except toolkit.ToolkitError as error:
         settings.error = str(error)
         raise BuildRefusedError(str(error)) from None
-    work_dir = work_folder.work_directory(scene)
-    job_dir = build_job.new_job_dir(work_dir)
     try:
-        request, digest = exchange.write_request(
-            scene, context.evaluated_depsgraph_get(), table, job_dir
-        )
+        work_dir, job_dir, request, digest = _write_request(context, table)
     except exchange.SceneProblemError as problem:
-        shutil.rmtree(job_dir, ignore_errors=True)
         checking.record(scene, [problem])
         raise BuildRefusedError(str(problem)) from None
     out_dir = os.path.join(work_dir, build_job.BUILD_FOLDER)
@@ -91,14 +86,9 @@ def start_check(context) -> list[str]:
         executable = preferences.executable(context)
     except toolkit.ToolkitError as error:
         return checking.record(scene, [exchange.SceneProblemError("", str(error))])
-    work_dir = work_folder.work_directory(scene)
-    job_dir = build_job.new_job_dir(work_dir)
     try:
-        request, digest = exchange.write_request(
-            scene, context.evaluated_depsgraph_get(), table, job_dir
-        )
+        work_dir, job_dir, request, digest = _write_request(context, table)
     except exchange.SceneProblemError as problem:
-        shutil.rmtree(job_dir, ignore_errors=True)
         return checking.record(scene, [problem])
     build_job.start(
         executable,
@@ -112,6 +102,22 @@ def start_check(context) -> list[str]:
     )
     _follow(scene, "checking")
     return []
+
+
+def _write_request(context, table) -> tuple[str, str, str, str]:
+    """The builder's request for the context's scene in a new job directory of its work
+    folder: (work folder, job directory, request, digest). On a SceneProblemError the job
+    directory is removed."""
+    work_dir = work_folder.work_directory(context.scene)
+    job_dir = build_job.new_job_dir(work_dir)
+    try:
+        request, digest = exchange.write_request(
+            context.scene, context.evaluated_depsgraph_get(), table, job_dir
+        )
+    except exchange.SceneProblemError:
+        shutil.rmtree(job_dir, ignore_errors=True)
+        raise
+    return work_dir, job_dir, request, digest
 
 
 def _refuse_while_running(scene_name: str) -> None:
