@@ -23,11 +23,6 @@ def simulating() -> bool:
     return session is not None and session.simulate is not None
 
 
-def busy(scene) -> bool:
-    """The scene's build runs, or a stroke simulates (its bake still to come)."""
-    return build_job.running(scene.name) is not None or simulating()
-
-
 def wait(scene, timeout_s: float) -> float:
     """Follow the build and the stroke until both are over; the seconds waited.
     WaitTimeoutError after timeout_s (nothing is cancelled)."""

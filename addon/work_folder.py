@@ -46,12 +46,10 @@ def _id_shared(scene) -> bool:
 def work_directory(scene) -> str:
     """The scene's work folder; gives the scene its id first when it has none (so call it
     where data may change: an operator, a timer, a handler; never from a panel's draw)."""
-    configured = scene.hapticut.work_directory
-    if configured:
-        return bpy.path.abspath(configured)
-    if not scene.hapticut.work_id or _id_shared(scene):
-        scene.hapticut.work_id = uuid.uuid4().hex
-    return os.path.join(data_root(), scene.hapticut.work_id)
+    settings = scene.hapticut
+    if not settings.work_directory and (not settings.work_id or _id_shared(scene)):
+        settings.work_id = uuid.uuid4().hex
+    return existing_work_directory(scene)
 
 
 def existing_work_directory(scene) -> str | None:
