@@ -34,9 +34,8 @@ inline constexpr int kSegmentProbeMaxSteps = 4096;
 // point has not broken is a wall for the rigid blade).
 enum class ProbeWalls : std::uint8_t { Rigid, RigidAndMembrane };
 
-// start_tet must hold a (within the tolerance) and not be rigid, or be kNoTet
-// with a outside the mesh. Started in a wall tet, the walk may cross that tet
-// and stops where it would enter the next wall tet.
+// start_tet must hold a (within the tolerance) and not be a wall, or be kNoTet
+// with a outside the mesh.
 SegmentProbe probe_segment(const Space& space, std::int32_t start_tet, const Vec3& a, const Vec3& b,
                            ProbeWalls walls = ProbeWalls::Rigid);
 
