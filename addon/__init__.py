@@ -12,6 +12,7 @@ import bpy
 
 from . import (
     build_job,
+    jobs,
     live,
     live_properties,
     operators,
@@ -56,7 +57,9 @@ def _read_material_table():
 
 
 def unregister() -> None:
-    live.shutdown()
+    jobs.cancel_all()
+    jobs.stop_timer()
+    live.stop()
     live.remove_handlers()
     work_folder.remove_handlers()
     if bpy.app.timers.is_registered(_read_material_table):

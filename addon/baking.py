@@ -14,7 +14,7 @@ import bpy
 import mathutils
 import numpy as np
 
-from . import cut_reveal
+from . import cut_reveal, steps
 from .stroke_path import frames_per_second, object_fcurves
 from .units import mm_per_unit
 
@@ -26,6 +26,8 @@ ARROW_COLOUR = (1.0, 0.75, 0.05, 1.0)
 # Automatic arrow length (*Arrow length* 0): the stroke's peak force spans this fraction of the
 # scene's diagonal, so the arrow reads on any scene size without covering it.
 ARROW_SCENE_FRACTION = 0.2
+# The longest a keying step runs before it lets Blender draw.
+STEP_S = 0.02
 
 
 class BakeError(RuntimeError):
@@ -123,18 +125,33 @@ def _arrow_mesh(mm: float):
     return mesh
 
 
-def _keyframes(obj, frames, values: dict) -> None:
-    """Keyframes of obj's properties at the frames (values: path -> (frames, k) array),
-    linear between them. Each key's interpolation is set: the preference for new keys is not
-    honoured by keyframe_insert from Python in every Blender version."""
+def _keyframes_steps(name: str, frames, values: dict) -> steps.Steps[None]:
+    """Keyframes of the object called name at the frames (values: path -> (frames, k)
+    array), linear between them, in steps of at most STEP_S. Each key's interpolation is set:
+    the preference for new keys is not honoured by keyframe_insert from Python in every
+    Blender version."""
+    began = time.perf_counter()
+    obj = _object_named(name)
     for k, frame in enumerate(frames):
         for path, array in values.items():
             setattr(obj, path, array[k])
             obj.keyframe_insert(path, frame=float(frame))
+        if time.perf_counter() - began > STEP_S and k + 1 < len(frames):
+            yield f"keying {name}, frame {int(frame)} of {int(frames[-1])}"
+            began = time.perf_counter()
+            obj = _object_named(name)
     for curve in object_fcurves(obj):
         for key in curve.keyframe_points:
             key.interpolation = "LINEAR"
         curve.update()
+
+
+def _object_named(name: str):
+    """A baked object, looked up again after a step (an undo in between replaces it)."""
+    obj = bpy.data.objects.get(name)
+    if obj is None:
+        raise BakeError(f"the baked object {name!r} is gone: bake again")
+    return obj
 
 
 def scene_diagonal_mm(tets: dict) -> float:
@@ -203,9 +220,17 @@ def ideal_poses(recording, name: str, ticks) -> list[tuple[mathutils.Vector, mat
     return [ideal_pose(poses[k], blade["p"][k], blade["q"][k]) for k in ticks]
 
 
-def bake(scene, link, recording_path: str, preview_path: str) -> dict:
-    """Bake the recording (module doc); its figures for the panel. Clears an earlier bake."""
+def bake_steps(scene_name: str, link, recording_path: str, preview_path: str) -> steps.Steps[dict]:
+    """Bake the recording (module doc) in steps; its figures for the panel. Clears an earlier
+    bake."""
     began = time.perf_counter()
+
+    def scene_now():
+        scene = bpy.data.scenes.get(scene_name)
+        if scene is None:
+            raise BakeError(f"the scene {scene_name!r} is gone")
+        return scene
+
     try:
         recording = link.recording.read_recording(recording_path)
     except (OSError, ValueError) as error:
@@ -214,22 +239,26 @@ def bake(scene, link, recording_path: str, preview_path: str) -> dict:
         raise BakeError(
             f"recording {recording_path} holds {len(recording)} tick(s): nothing to bake"
         )
+    yield "reading the scene's tets"
     tets = load_preview_tets(preview_path)
+    yield "placing the keys"
+    scene = scene_now()
     live = scene.hapticut_live
     mm = mm_per_unit(scene)
     fps = frames_per_second(scene)
+    frame_start, frame_end = scene.frame_start, scene.frame_end
+    substeps, arrow_setting = live.substeps, live.arrow_mm_per_N
     times = record_times(recording)
     # The keys stay in the scene's frame range; what the recording holds after it (a Simulate
     # stroke's stop ramp, a longer live recording) is not baked, and the report says so.
-    frames, nearest = frame_indices(times, fps, scene.frame_start, scene.frame_end)
+    frames, nearest = frame_indices(times, fps, frame_start, frame_end)
     if not len(frames):
         raise BakeError(
-            f"the scene's frame range {scene.frame_start}-{scene.frame_end} is empty: "
-            "nothing to bake"
+            f"the scene's frame range {frame_start}-{frame_end} is empty: nothing to bake"
         )
     baked_ticks = int(nearest[-1]) + 1
-    last_frame_s = (frames[-1] - scene.frame_start) / fps
-    covered = len(frame_indices(times, fps, scene.frame_start)[0])
+    last_frame_s = (frames[-1] - frame_start) / fps
+    covered = len(frame_indices(times, fps, frame_start)[0])
     forces_by_blade = {
         name: recording.blade(name)["block"]["engine_force_N"][nearest]
         for name in recording.blade_names
@@ -237,10 +266,13 @@ def bake(scene, link, recording_path: str, preview_path: str) -> dict:
     peak_force_N = max(
         (float(np.max(np.linalg.norm(f, axis=1))) for f in forces_by_blade.values()), default=0.0
     )
-    mm_per_N = arrow_mm_per_N(live.arrow_mm_per_N, peak_force_N, scene_diagonal_mm(tets))
-    clear(scene)
-    collection = _collection(scene)
+    mm_per_N = arrow_mm_per_N(arrow_setting, peak_force_N, scene_diagonal_mm(tets))
+    yield "indexing the tets"
     locator = link.cut_surface.TetLocator(tets["vertices"], tets["tets"])
+    yield "clearing the last bake"
+    scene = scene_now()
+    clear(scene)
+    _collection(scene)
     figures = {
         "recording": recording_path,
         "ticks": len(recording),
@@ -262,15 +294,19 @@ def bake(scene, link, recording_path: str, preview_path: str) -> dict:
         locations = [location / mm for location, _ in placed]
         rotations = [rotation for _, rotation in placed]
         centres = [mathutils.Vector(blade["q"][k].mean(axis=0)) / mm for k in nearest]
-        ideal = _new_object(collection, f"Ideal {name}", source.data if source else None)
+        ideal = _new_object(
+            _collection(scene_now()), f"Ideal {name}", source.data if source else None
+        )
         ideal["hapticut_blade"] = name
         ideal.rotation_mode = "QUATERNION"
         if source is not None:
             ideal.scale = source.matrix_world.to_scale()
-        _keyframes(ideal, frames, {"location": locations, "rotation_quaternion": rotations})
+        yield from _keyframes_steps(
+            ideal.name, frames, {"location": locations, "rotation_quaternion": rotations}
+        )
         # The force arrow at the proxies' centre.
         forces = forces_by_blade[name]
-        arrow = _new_object(collection, f"Force {name}", _arrow_mesh(mm))
+        arrow = _new_object(_collection(scene_now()), f"Force {name}", _arrow_mesh(mm))
         arrow["hapticut_blade"] = name
         arrow.rotation_mode = "QUATERNION"
         lengths = np.linalg.norm(forces, axis=1) * mm_per_N / mm
@@ -286,26 +322,29 @@ def bake(scene, link, recording_path: str, preview_path: str) -> dict:
             mathutils.Vector((1.0, 1.0, max(s, 1e-6))) if s > 0 else mathutils.Vector((1e-6,) * 3)
             for s in lengths
         ]
-        _keyframes(
-            arrow,
+        yield from _keyframes_steps(
+            arrow.name,
             frames,
             {"location": centres, "rotation_quaternion": arrow_rotations, "scale": scales},
         )
-        # The cut surface.
+        yield f"cutting {name}'s surface"
         surface = link.cut_surface.cut_surface(
             blade["q"][:baked_ticks],
             blade["state"][:baked_ticks],
             times[:baked_ticks],
             fps,
-            scene.frame_start,
+            frame_start,
             tets["vertices"],
             tets["tets"],
             tets["materials"],
             tets["models"],
-            substeps=live.substeps,
+            substeps=substeps,
             locator=locator,
         )
-        cut = _new_object(collection, f"Cut {name}", cut_mesh(f"Cut {name}", surface, mm))
+        yield f"meshing {name}'s cut"
+        cut = _new_object(
+            _collection(scene_now()), f"Cut {name}", cut_mesh(f"Cut {name}", surface, mm)
+        )
         cut["hapticut_blade"] = name
         cut_reveal.add_reveal(cut)
         figures["blades"][name] = {
@@ -313,6 +352,7 @@ def bake(scene, link, recording_path: str, preview_path: str) -> dict:
             "max_force_N": float(np.max(np.linalg.norm(forces, axis=1))),
         }
     figures["seconds"] = time.perf_counter() - began
+    live = scene_now().hapticut_live
     live.bake_report = json.dumps(figures)
     live.recording_path = recording_path
     return figures

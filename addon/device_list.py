@@ -13,10 +13,9 @@ No bpy here.
 from __future__ import annotations
 
 import json
-import subprocess
 from dataclasses import dataclass, field
 
-from . import toolkit
+from . import steps, toolkit
 
 LIST_TIMEOUT_S = 10.0
 BRIDGE_DEFAULT_PORT = 47810
@@ -52,21 +51,18 @@ _listing: dict | None = None
 _generation = 0  # Bumped at every new listing (the panel's items are cached per generation).
 
 
-def run_listing(servo: str, timeout_s: float | None = None, rate_Hz: float = 1000.0) -> dict:
-    """``servo --list-devices --json --rate rate_Hz``, checked; DeviceListError naming what
-    went wrong. The child is killed after timeout_s (LIST_TIMEOUT_S)."""
+def listing_steps(
+    servo: str, timeout_s: float | None = None, rate_Hz: float = 1000.0
+) -> steps.Steps[dict]:
+    """``servo --list-devices --json --rate rate_Hz``, checked, as steps; DeviceListError
+    naming what went wrong. The child is killed after timeout_s (LIST_TIMEOUT_S)."""
     timeout_s = LIST_TIMEOUT_S if timeout_s is None else timeout_s
     command = [servo, "--list-devices", "--json", "--rate", repr(float(rate_Hz))]
     try:
-        done = subprocess.run(
-            command,
-            capture_output=True,
-            text=True,
-            timeout=timeout_s,
-            stdin=subprocess.DEVNULL,
-            env=toolkit.child_environment(),
+        done = yield from steps.child(
+            command, timeout_s, "listing the devices", toolkit.child_environment()
         )
-    except subprocess.TimeoutExpired:
+    except steps.ChildTimeoutError:
         raise DeviceListError(
             f"{servo} --list-devices did not answer within {timeout_s:.3g} s"
         ) from None
@@ -92,13 +88,25 @@ def run_listing(servo: str, timeout_s: float | None = None, rate_Hz: float = 100
     return listing
 
 
-def refresh(servo: str, timeout_s: float | None = None, rate_Hz: float = 1000.0) -> dict:
+def run_listing(servo: str, timeout_s: float | None = None, rate_Hz: float = 1000.0) -> dict:
+    """listing_steps in one call."""
+    return steps.run_to_end(listing_steps(servo, timeout_s, rate_Hz))
+
+
+def refresh_steps(
+    servo: str, timeout_s: float | None = None, rate_Hz: float = 1000.0
+) -> steps.Steps[dict]:
     """Read the listing again at this loop rate and keep it (a failure keeps the previous
     one)."""
     global _listing, _generation
-    _listing = run_listing(servo, timeout_s, rate_Hz)
+    _listing = yield from listing_steps(servo, timeout_s, rate_Hz)
     _generation += 1
     return _listing
+
+
+def refresh(servo: str, timeout_s: float | None = None, rate_Hz: float = 1000.0) -> dict:
+    """refresh_steps in one call."""
+    return steps.run_to_end(refresh_steps(servo, timeout_s, rate_Hz))
 
 
 def cached() -> dict | None:

@@ -1,9 +1,11 @@
 """The live link inside Blender: one session (live_session), the timer that drains its stream
 and sends the viewport poses, the draw handler, Simulate stroke and its bake.
 
+Starting the servo, Go Live and Simulate Stroke wait on other processes: they are steps
+(``steps.py``) run as the add-on's job (``jobs.py``), and ``*_steps`` names them here.
 No thread touches bpy: ``timer()`` runs on the main thread (bpy.app.timers; the tests call it
-themselves, timers do not run in background mode). ``shutdown()`` (unregister, loading
-another file) stops the servo and removes the timer and the draw handler.
+themselves, timers do not run in background mode). ``stop()`` (unregister, loading another
+file) stops the servo and removes the timer and the draw handler.
 """
 
 from __future__ import annotations
@@ -18,9 +20,11 @@ from . import (
     baking,
     building,
     device_list,
+    jobs,
     live_draw,
     live_session,
     preferences,
+    steps,
     stroke_path,
     toolkit,
     toolkit_link,
@@ -51,57 +55,82 @@ def _scene():
     return bpy.data.scenes.get(_scene_name) if _scene_name else None
 
 
-def link(context=None, timeout_s: float = toolkit.QUICK_TIMEOUT_S):
+def link_steps(timeout_s: float = toolkit.QUICK_TIMEOUT_S) -> steps.Steps:
     try:
-        return toolkit_link.link(preferences.executable(context), timeout_s=timeout_s)
+        return (yield from toolkit_link.link_steps(preferences.executable(), timeout_s=timeout_s))
     except toolkit.ToolkitError as error:
         raise live_session.SessionError(str(error)) from None
+
+
+def link(context=None, timeout_s: float = toolkit.QUICK_TIMEOUT_S):
+    """The toolkit's modules (link_steps in one call)."""
+    return steps.run_to_end(link_steps(timeout_s))
 
 
 def log_path(scene) -> str:
     return os.path.join(work_folder.work_directory(scene), "servo.log")
 
 
-def start(context) -> live_session.Session:
+def scene_named(name: str):
+    """The scene a job works for, looked up again after every wait (an undo or a file load
+    in between replaces Blender's data); SessionError once it is gone."""
+    scene = bpy.data.scenes.get(name)
+    if scene is None:
+        raise live_session.SessionError(f"the scene {name!r} is gone")
+    return scene
+
+
+def start_steps(scene_name: str) -> steps.Steps[live_session.Session]:
     """Start the servo (stopping an earlier one); SessionError for the panel."""
     global _session, _scene_name, _last_error
-    scene = context.scene
+    scene = scene_named(scene_name)
     live = scene.hapticut_live
+    port, realtime = live.port, live.realtime
     if _session is not None:
-        stop()
+        yield from stop_steps()
     _last_error = ""
     try:
-        modules = link(context)
+        modules = yield from link_steps()
+        scene = scene_named(scene_name)
         path = log_path(scene)
         # Recordings (Record, Simulate Stroke) go to the scene's work folder only.
         work = work_folder.work_directory(scene)
-        _session = live_session.start(
-            modules, path, port=live.port, realtime=live.realtime, extra=("--record-dir", work)
+        _session = yield from live_session.start_steps(
+            modules, path, port=port, realtime=realtime, extra=("--record-dir", work)
         )
     except live_session.SessionError as error:
-        _last_error = live.error = str(error)
+        _last_error = str(error)
         raise
+    live = scene_named(scene_name).hapticut_live
     live.log_path, live.error = path, ""
-    _scene_name = scene.name
+    _scene_name = scene_name
     _register()
     return _session
 
 
-def refresh_devices(context, rate_Hz: float | None = None) -> dict:
+def start(context) -> live_session.Session:
+    """start_steps in one call."""
+    return steps.run_to_end(start_steps(context.scene.name))
+
+
+def refresh_devices_steps(scene_name: str, rate_Hz: float | None = None) -> steps.Steps[dict]:
     """*Refresh devices*: run the servo's listing at rate_Hz (the panel's rate), its
     stiffness limits at that rate; the panel shows a failure (SessionError). Everything it
     waits for (asking the toolkit for its servo the first time, then the listing) is
     bounded by device_list.LIST_TIMEOUT_S together."""
-    live = context.scene.hapticut_live
+    live = scene_named(scene_name).hapticut_live
     rate_Hz = live.rate_Hz if rate_Hz is None else rate_Hz
     deadline = time.monotonic() + device_list.LIST_TIMEOUT_S
     try:
-        servo = link(context, timeout_s=device_list.LIST_TIMEOUT_S).servo
-        listing = device_list.refresh(servo, max(0.1, deadline - time.monotonic()), rate_Hz)
+        servo = (yield from link_steps(timeout_s=device_list.LIST_TIMEOUT_S)).servo
+        listing = yield from device_list.refresh_steps(
+            servo, max(0.1, deadline - time.monotonic()), rate_Hz
+        )
     except (live_session.SessionError, device_list.DeviceListError) as error:
+        live = scene_named(scene_name).hapticut_live
         live.device_error = f"devices not listed: {error}"
         raise live_session.SessionError(live.device_error) from None
-    live.device_error = ""
+    scene_named(scene_name).hapticut_live.device_error = ""
     return listing
 
 
@@ -121,24 +150,39 @@ def blade_springs(scene, name: str = "") -> int:
     return max(springs, default=1)
 
 
-def check_limits(context, bindings: list[str], settings: dict, rate_Hz: float = 1000.0) -> None:
+def _limit_problems(scene, listing: dict, bindings: list[str], settings: dict, rate_Hz: float):
+    problems = []
+    for text in bindings:
+        name, _, device = text.partition("=")
+        limits = device_list.limits_for(listing, device)
+        springs = blade_springs(scene, name)
+        found = device_list.settings_problems(settings, limits, rate_Hz, springs)
+        problems += [f"{name} ({device}): {problem}" for problem in found]
+    if problems:
+        raise live_session.SessionError("; ".join(problems) + " (lower it in the panel)")
+
+
+def listing_is_current(rate_Hz: float) -> bool:
+    """The kept device listing holds the limits at this rate."""
+    return device_list.cached() is not None and device_list.listed_rate() == float(rate_Hz)
+
+
+def check_limits_steps(
+    scene_name: str, bindings: list[str], settings: dict, rate_Hz: float = 1000.0
+) -> steps.Steps[None]:
     """Refuse settings above a bound device's limits at the servo's rate (SessionError naming
     blade, device and limit); the listing is read first if it was not yet, or again if the
     kept one's stiffness limits are for another rate (the servo's rule, not the add-on's)."""
     if not settings:
         return
-    listing = device_list.cached()
-    if listing is None or device_list.listed_rate() != float(rate_Hz):
-        listing = refresh_devices(context, rate_Hz)
-    problems = []
-    for text in bindings:
-        name, _, device = text.partition("=")
-        limits = device_list.limits_for(listing, device)
-        springs = blade_springs(context.scene, name)
-        found = device_list.settings_problems(settings, limits, rate_Hz, springs)
-        problems += [f"{name} ({device}): {problem}" for problem in found]
-    if problems:
-        raise live_session.SessionError("; ".join(problems) + " (lower it in the panel)")
+    if not listing_is_current(rate_Hz):
+        yield from refresh_devices_steps(scene_name, rate_Hz)
+    _limit_problems(scene_named(scene_name), device_list.cached(), bindings, settings, rate_Hz)
+
+
+def check_limits(context, bindings: list[str], settings: dict, rate_Hz: float = 1000.0) -> None:
+    """check_limits_steps in one call."""
+    steps.run_to_end(check_limits_steps(context.scene.name, bindings, settings, rate_Hz))
 
 
 def requested_settings(live) -> dict:
@@ -160,29 +204,62 @@ def _built_scene(scene) -> tuple[str, str]:
     return path, preview
 
 
-def _ensure_session(context) -> live_session.Session:
+def _ensure_session_steps(scene_name: str) -> steps.Steps[live_session.Session]:
     if _session is None or not _session.alive:
-        return start(context)
+        return (yield from start_steps(scene_name))
     return _session
 
 
-def go_live(context) -> None:
-    """Start (if needed) and run the scene with the panel's devices and settings."""
+def _refuse_at_once(scene, bindings: list[str], settings: dict, rate_Hz: float) -> None:
+    """What Go Live and Simulate Stroke refuse without waiting for anything, in the job's
+    order: settings above the device's limits, then no scene built. When the limits need the
+    device listing read first, the job checks both. SessionError, also on the panel."""
+    if settings and not listing_is_current(rate_Hz):
+        return
+    live = scene.hapticut_live
+    try:
+        if settings:
+            _limit_problems(scene, device_list.cached(), bindings, settings, rate_Hz)
+        _built_scene(scene)
+    except live_session.SessionError as error:
+        live.error = str(error)
+        raise
+
+
+def _panel_error(scene_name: str):
+    def show(message: str) -> None:
+        scene = bpy.data.scenes.get(scene_name)
+        if scene is not None:
+            scene.hapticut_live.error = message
+
+    return show
+
+
+def start_job(name: str, scene_name: str, work: steps.Steps, show_error: bool = True) -> jobs.Job:
+    """Run the work as a job (after those asked for before), its error shown on the scene's
+    live panel (unless the work shows it itself)."""
+    shown = _panel_error(scene_name) if show_error else None
+    return jobs.start(name, scene_name, work, on_error=shown)
+
+
+def go_live(context) -> jobs.Job:
+    """Start the Go Live job (go_live_steps), after what can be refused at once."""
     scene = context.scene
     live = scene.hapticut_live
-    bindings, settings = devices(scene), requested_settings(live)
-    try:
-        check_limits(context, bindings, settings, live.rate_Hz)
-    except live_session.SessionError as error:
-        live.error = str(error)
-        raise
-    session = _ensure_session(context)
-    path, preview = _built_scene(scene)
-    try:
-        live_session.run(session, path, bindings, live.rate_Hz, settings=settings)
-    except live_session.SessionError as error:
-        live.error = str(error)
-        raise
+    _refuse_at_once(scene, devices(scene), requested_settings(live), live.rate_Hz)
+    return start_job("Go Live", scene.name, go_live_steps(scene.name))
+
+
+def go_live_steps(scene_name: str) -> steps.Steps[None]:
+    """Start (if needed) and run the scene with the panel's devices and settings."""
+    scene = scene_named(scene_name)
+    live = scene.hapticut_live
+    bindings, settings, rate_Hz = devices(scene), requested_settings(live), live.rate_Hz
+    yield from check_limits_steps(scene_name, bindings, settings, rate_Hz)
+    path, preview = _built_scene(scene_named(scene_name))
+    session = yield from _ensure_session_steps(scene_name)
+    yield from live_session.run_steps(session, path, bindings, rate_Hz, settings=settings)
+    live = scene_named(scene_name).hapticut_live
     session.preview_path = live.preview_path = preview
     live.error = ""
     if live.force_shading:  # The servo may refuse it (docs/protocol.md): say why, run on.
@@ -218,71 +295,71 @@ def record_live(scene) -> str:
     return path
 
 
-def simulate(context) -> dict:
-    """Sample every blade's animation into a sim path and run it as fast as possible,
-    recording; the timer bakes it when the servo is done."""
+def simulate(context) -> jobs.Job:
+    """Start the Simulate Stroke job (simulate_steps), after what can be refused at once."""
     scene = context.scene
     live = scene.hapticut_live
+    bindings = [f"{obj.name}=sim:" for obj in scene_objects(scene, "BLADE")]
+    _refuse_at_once(scene, bindings, requested_settings(live), live.rate_Hz)
+    return start_job("Simulate Stroke", scene.name, simulate_steps(scene.name))
+
+
+def simulate_steps(scene_name: str) -> steps.Steps[dict]:
+    """Sample every blade's animation into a sim path, run it as fast as possible, recording,
+    follow it to its end (the live timer reads its frames), then bake it if the panel says
+    so; the figures (``last_simulate``)."""
+    global last_simulate
     began = time.perf_counter()
+    scene = scene_named(scene_name)
+    live = scene.hapticut_live
     path, preview = _built_scene(scene)
-    blades = scene_objects(scene, "BLADE")
     folder = os.path.join(work_folder.work_directory(scene), "stroke")
+    rate_Hz, settings = live.rate_Hz, requested_settings(live)
+    hand, bake_after = (1 if live.simulated_hand else 0), live.bake_after_simulate
     bindings = []
-    for obj in blades:
-        poses = stroke_path.sample_poses(scene, obj, live.rate_Hz)
-        file = stroke_path.write_path(poses, os.path.join(folder, f"{obj.name}.path.json"))
-        if "," in file or "=" in obj.name:
-            raise live_session.SessionError(f"{obj.name}: the path {file} cannot hold ',' ")
-        hand = 1 if live.simulated_hand else 0
-        bindings.append(f"{obj.name}=sim:{file},hand={hand},hold_s=0")
+    for name in [obj.name for obj in scene_objects(scene, "BLADE")]:
+        poses = yield from stroke_path.sample_poses_steps(scene_name, name, rate_Hz)
+        file = stroke_path.write_path(poses, os.path.join(folder, f"{name}.path.json"))
+        if "," in file or "=" in name:
+            raise live_session.SessionError(f"{name}: the path {file} cannot hold ',' ")
+        bindings.append(f"{name}=sim:{file},hand={hand},hold_s=0")
     sampled = time.perf_counter()
-    check_limits(context, bindings, requested_settings(live), live.rate_Hz)
-    session = _ensure_session(context)
+    yield from check_limits_steps(scene_name, bindings, settings, rate_Hz)
+    session = yield from _ensure_session_steps(scene_name)
     record = os.path.join(folder, "stroke.rec")
-    live_session.run(
+    yield from live_session.run_steps(
         session,
         path,
         bindings,
-        live.rate_Hz,
+        rate_Hz,
         as_fast_as_possible=True,
         record_path=record,
-        settings=requested_settings(live),
+        settings=settings,
         engage=True,
     )
-    session.preview_path = live.preview_path = preview
-    session.simulate = {
-        "began": began,
-        "sampled_s": sampled - began,
-        "record": record,
-        "scene": scene.name,
-        "bake": live.bake_after_simulate,
-    }
-    return session.simulate
-
-
-def _finish_simulate(session) -> None:
-    """The stroke is done (the servo stopped by itself, the recording is closed): bake."""
-    global last_simulate
-    job, session.simulate = session.simulate, None
-    session.state = "connected"
-    scene = bpy.data.scenes.get(job["scene"])
-    figures = {
-        "servo_s": time.perf_counter() - job["began"] - job["sampled_s"],
-        "sampled_s": job["sampled_s"],
-    }
-    if scene is None:
-        return
-    scene.hapticut_live.recording_path = job["record"]
-    if job["bake"]:
-        try:
-            baked = baking.bake(scene, session.link, job["record"], session.preview_path)
-            figures["bake_s"] = baked["seconds"]
-            undo_steps.push("Bake stroke")
-        except baking.BakeError as error:
-            scene.hapticut_live.error = str(error)
-    figures["total_s"] = time.perf_counter() - job["began"]
+    session.preview_path = scene_named(scene_name).hapticut_live.preview_path = preview
+    session.simulate = {"began": began, "record": record}
+    try:
+        # The live timer follows the stroke (its frames, its status) until the servo stops.
+        while session.status.get("state") != "stopped":
+            if not session.alive:
+                raise live_session.SessionError(session.error or "the servo stopped")
+            yield "simulating the stroke"
+    finally:
+        session.simulate = None
+    if session.state == "simulating":
+        session.state = "connected"
+    figures = {"servo_s": time.perf_counter() - sampled, "sampled_s": sampled - began}
+    scene = scene_named(scene_name)
+    scene.hapticut_live.recording_path = record
+    if bake_after:
+        baked = yield from baking.bake_steps(scene_name, session.link, record, preview)
+        figures["bake_s"] = baked["seconds"]
+        undo_steps.push("Bake stroke")
+    figures["total_s"] = time.perf_counter() - began
     figures["ticks"] = session.status.get("ticks", 0)
     last_simulate = figures
+    return figures
 
 
 def viewport_poses(scene) -> dict[str, list[float]]:
@@ -313,8 +390,6 @@ def timer():
             session.last_status_s = 0.0  # Follow the stroke closely.
         if live_session.tick(session, poses):
             live_draw.invalidate()
-        if session.simulate is not None and session.status.get("state") == "stopped":
-            _finish_simulate(session)
     except Exception as error:  # Never a traceback out of a timer: the panel says it.
         session.error = f"{type(error).__name__}: {error}"
     live_draw.tag_redraw()
@@ -331,23 +406,26 @@ def timer_registered() -> bool:
     return bpy.app.timers.is_registered(timer)
 
 
-def stop() -> None:
-    """Stop the servo; remove the timer and the draw handler."""
+def stop_steps() -> steps.Steps[None]:
+    """Stop the servo (its force ramps to zero, waited for in steps); remove the timer and
+    the draw handler."""
     global _session
     session, _session = _session, None
-    if session is not None:
-        live_session.stop(session)
     if bpy.app.timers.is_registered(timer):
         bpy.app.timers.unregister(timer)
     live_draw.remove_handler()
+    if session is not None:
+        yield from live_session.stop_steps(session)
 
 
-def shutdown() -> None:
-    stop()
+def stop() -> None:
+    """stop_steps in one call (unregister, loading another file: nothing may outlive them)."""
+    steps.run_to_end(stop_steps())
 
 
 @persistent
 def _on_load_pre(*_args) -> None:
+    jobs.cancel_all()
     stop()
 
 

@@ -13,16 +13,21 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
-import socket
 import subprocess
 import time
 from dataclasses import dataclass, field
+
+from . import steps
 
 MAX_DATAGRAMS = 64
 BUDGET_S = 0.002
 STATUS_INTERVAL_S = 0.25
 STARTUP_TIMEOUT_S = 15.0
 REPLY_TIMEOUT_S = 5.0
+# A scene of millions of tets takes the servo seconds to read and check.
+LOAD_TIMEOUT_S = 120.0
+# The servo's stop ramp and its recording's end; then it is killed.
+SHUTDOWN_WAIT_S = 5.0
 MAX_UNANSWERED = 64
 # Exit codes of hapticut-servo (docs/servo.md).
 EXIT_NETWORK = 5
@@ -41,7 +46,7 @@ class Session:
     process: subprocess.Popen
     log_path: str
     client: object  # servo_client.ServoClient
-    state: str = "connected"  # connected, running, simulating, lost, stopped
+    state: str = "connected"  # connected, loading, running, simulating, lost, stopped
     error: str = ""
     frame: object = None  # The newest servo_client.Frame.
     status: dict = field(default_factory=dict)
@@ -76,9 +81,9 @@ def _last_line(path: str) -> str:
     return (errors or lines or [""])[-1]
 
 
-def start(
+def start_steps(
     link, log_path: str, port: int = 0, realtime: bool = True, extra: tuple[str, ...] = ()
-) -> Session:
+) -> steps.Steps[Session]:
     """Start hapticut-servo with a control channel (``port``; 0: any free one), its output in
     log_path; connect and say hello. SessionError naming the problem (port busy, no servo)."""
     os.makedirs(os.path.dirname(log_path) or ".", exist_ok=True)
@@ -121,7 +126,7 @@ def start(
         if time.monotonic() - began > STARTUP_TIMEOUT_S:
             _kill(process)
             raise SessionError(f"the servo did not open its control port in {STARTUP_TIMEOUT_S} s")
-        time.sleep(0.01)
+        yield "starting the servo"
     client = link.servo_client.ServoClient(port=found_port, timeout_s=REPLY_TIMEOUT_S)
     try:
         client.connect()
@@ -130,6 +135,13 @@ def start(
         _kill(process)
         raise SessionError(f"the servo does not answer on port {found_port}: {error}") from None
     return Session(link, process, log_path, client)
+
+
+def start(
+    link, log_path: str, port: int = 0, realtime: bool = True, extra: tuple[str, ...] = ()
+) -> Session:
+    """start_steps in one call."""
+    return steps.run_to_end(start_steps(link, log_path, port, realtime, extra))
 
 
 def _kill(process: subprocess.Popen, grace_s: float = 5.0) -> None:
@@ -172,7 +184,47 @@ def lose(session: Session, why: str) -> None:
     session.client.close()
 
 
-def run(
+def _load_steps(session: Session, **fields) -> steps.Steps[dict]:
+    """The load request, its reply awaited in steps (the servo reads and checks the scene
+    meanwhile); SessionError as ``request`` raises it. The session is ``loading`` meanwhile:
+    ``tick`` leaves the replies to this."""
+    if not session.alive:
+        raise SessionError(session.error or "no servo")
+    client = session.client
+    state, session.state = session.state, "loading"
+    began = time.monotonic()
+    try:
+        wanted = client.send_load(**fields)
+        while True:
+            for reply in client.replies():
+                if reply.get("id") != wanted:
+                    if reply.get("type") == "status" and reply.get("ok"):
+                        session.status, session.status_pending = reply, False
+                    continue
+                session.state = state
+                try:
+                    return client.loaded(reply)
+                except session.link.servo_client.ServoError as error:
+                    raise SessionError(str(error)) from None
+            if session.process.poll() is not None:
+                lose(session, "the servo exited")
+                raise SessionError(session.error)
+            if time.monotonic() - began > LOAD_TIMEOUT_S:
+                lose(session, f"the servo did not load the scene in {LOAD_TIMEOUT_S:g} s")
+                raise SessionError(session.error)
+            yield "loading the scene"
+    except session.link.servo_client.ServoError as error:
+        lose(session, str(error))
+        raise SessionError(str(error)) from None
+    except OSError as error:
+        lose(session, f"the servo stopped answering ({error})")
+        raise SessionError(session.error) from None
+    finally:
+        if session.state == "loading":
+            session.state = state
+
+
+def run_steps(
     session: Session,
     scene_path: str,
     devices: list[str],
@@ -185,9 +237,8 @@ def run(
     """Load the scene with these device bindings, apply the settings, subscribe, start."""
     if session.running:
         request(session, "stop")
-    reply = request(
+    reply = yield from _load_steps(
         session,
-        "load",
         path=scene_path,
         devices=devices,
         rate_Hz=rate_Hz,
@@ -216,11 +267,16 @@ def run(
     return reply
 
 
+def run(session: Session, *args, **kwargs) -> dict:
+    """run_steps in one call."""
+    return steps.run_to_end(run_steps(session, *args, **kwargs))
+
+
 def tick(session: Session, poses: dict[str, list[float]] | None = None) -> bool:
     """The timer's work: drain the stream (bounded), send the viewport poses, refresh the
     status now and then, notice a lost servo. True when a new frame arrived."""
     began = time.perf_counter()
-    if not session.alive:
+    if not session.alive or session.state == "loading":
         return False
     if session.process.poll() is not None:
         lose(session, "the servo exited")
@@ -261,25 +317,24 @@ def tick(session: Session, poses: dict[str, list[float]] | None = None) -> bool:
     return new
 
 
-def stop(session: Session) -> None:
+def stop_steps(session: Session) -> steps.Steps[None]:
     """Shut the servo down (its force ramps to zero) and wait for it; kill it if it hangs."""
     if session.process.poll() is None and session.state != "lost":
         with contextlib.suppress(Exception):
             session.client.request("shutdown")
-    with contextlib.suppress(subprocess.TimeoutExpired):
-        session.process.wait(5.0)
-    _kill(session.process)
-    session.client.close()
-    session.state = "stopped"
+    began = time.monotonic()
+    try:
+        while session.process.poll() is None and time.monotonic() - began < SHUTDOWN_WAIT_S:
+            yield "stopping the servo"
+    finally:
+        _kill(session.process)
+        session.client.close()
+        session.state = "stopped"
 
 
-def port_is_free(port: int) -> bool:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
-        try:
-            probe.bind(("127.0.0.1", port))
-        except OSError:
-            return False
-    return True
+def stop(session: Session) -> None:
+    """stop_steps in one call."""
+    steps.run_to_end(stop_steps(session))
 
 
 def frame_age_s(frame, now_s: float) -> float | None:

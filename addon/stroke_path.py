@@ -11,13 +11,18 @@ from __future__ import annotations
 
 import json
 import os
+import time
 
+import bpy
 import mathutils
 import numpy as np
 
+from . import steps
 from .units import mm_per_unit
 
 SUBFRAMES = 4
+# The longest a step of the sampling runs before it lets Blender draw.
+STEP_S = 0.02
 TRANSFORM_PATHS = (
     "location",
     "rotation_euler",
@@ -107,27 +112,57 @@ def _matrix_from_curves(obj, curves: dict, frame: float):
     return mathutils.Matrix.LocRotScale(location, rotation, None)
 
 
-def sample_poses(scene, obj, rate_Hz: float) -> np.ndarray:
-    """(K, 8): [t_s, x, y, z, qw, qx, qy, qz] from frame_start to frame_end."""
+def sample_poses_steps(scene_name: str, name: str, rate_Hz: float) -> steps.Steps[np.ndarray]:
+    """(K, 8): [t_s, x, y, z, qw, qx, qy, qz] of the object called name from frame_start to
+    frame_end, as steps of at most STEP_S each (the scene and the object are looked up again
+    after each)."""
+
+    def objects():
+        scene = bpy.data.scenes.get(scene_name)
+        obj = scene.objects.get(name) if scene is not None else None
+        if obj is None:
+            raise RuntimeError(f"the blade {name!r} of scene {scene_name!r} is gone")
+        return scene, obj
+
+    scene, obj = objects()
     mm = mm_per_unit(scene)
     fps = frames_per_second(scene)
     first, last = scene.frame_start, max(scene.frame_end, scene.frame_start)
     duration = (last - first) / fps
     rows = []
+    step_began = time.perf_counter()
     if _own_curves_only(obj):
-        curves = {(c.data_path, c.array_index): c for c in object_fcurves(obj)}
         count = int(np.floor(duration * rate_Hz + 1e-9)) + 1
-        for k in range(count):
-            t = k / rate_Hz
-            rows.append([t, *pose_of(_matrix_from_curves(obj, curves, first + t * fps), mm)])
+        k = 0
+        while k < count:
+            scene, obj = objects()
+            curves = {(c.data_path, c.array_index): c for c in object_fcurves(obj)}
+            while k < count and time.perf_counter() - step_began < STEP_S:
+                t = k / rate_Hz
+                rows.append([t, *pose_of(_matrix_from_curves(obj, curves, first + t * fps), mm)])
+                k += 1
+            if k < count:
+                yield f"sampling {name}'s stroke, {k} of {count} ticks"
+                step_began = time.perf_counter()
     else:
         current = scene.frame_current, scene.frame_subframe
-        steps = (last - first) * SUBFRAMES
-        for k in range(steps + 1):
-            frame = first + k / SUBFRAMES
-            scene.frame_set(int(np.floor(frame)), subframe=frame - np.floor(frame))
-            rows.append([(frame - first) / fps, *pose_of(obj.matrix_world, mm)])
-        scene.frame_set(current[0], subframe=current[1])
+        steps_count = (last - first) * SUBFRAMES
+        k = 0
+        try:
+            while k <= steps_count:
+                scene, obj = objects()
+                while k <= steps_count and time.perf_counter() - step_began < STEP_S:
+                    frame = first + k / SUBFRAMES
+                    scene.frame_set(int(np.floor(frame)), subframe=frame - np.floor(frame))
+                    rows.append([(frame - first) / fps, *pose_of(obj.matrix_world, mm)])
+                    k += 1
+                if k <= steps_count:
+                    yield f"sampling {name}'s stroke, frame {first + k // SUBFRAMES} of {last}"
+                    step_began = time.perf_counter()
+        finally:
+            scene = bpy.data.scenes.get(scene_name)
+            if scene is not None:
+                scene.frame_set(current[0], subframe=current[1])
     poses = np.array(rows, np.float64)
     # Keep the quaternions on one hemisphere (the servo interpolates between neighbours).
     for k in range(1, len(poses)):

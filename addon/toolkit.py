@@ -9,7 +9,8 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import subprocess
+
+from . import steps
 
 # What the add-on tells a user who has no toolkit yet (run outside Blender, from a checkout).
 INSTALL_COMMAND = 'python3 -m pip install "./[build]"   (in a Hapticut checkout; docs/addon.md)'
@@ -52,18 +53,16 @@ def last_error_line(text: str) -> str:
     return lines[-1] if lines else "(no error message)"
 
 
-def run_quick(executable: str, *args: str, timeout_s: float = QUICK_TIMEOUT_S) -> str:
-    """A short toolkit command's stdout; ToolkitError with its last error line on failure
-    (the child is killed after timeout_s)."""
+def quick_steps(
+    executable: str, *args: str, timeout_s: float = QUICK_TIMEOUT_S
+) -> steps.Steps[str]:
+    """A short toolkit command's stdout, as steps; ToolkitError with its last error line on
+    failure (the child is killed after timeout_s)."""
     try:
-        done = subprocess.run(
-            [executable, *args],
-            capture_output=True,
-            text=True,
-            timeout=timeout_s,
-            env=child_environment(),
+        done = yield from steps.child(
+            [executable, *args], timeout_s, f"asking the toolkit ({args[0]})", child_environment()
         )
-    except (OSError, subprocess.TimeoutExpired) as error:
+    except (OSError, steps.ChildTimeoutError) as error:
         raise ToolkitError(f"hapticut {' '.join(args)}: {error}") from None
     if done.returncode != 0:
         line = last_error_line(done.stderr)
@@ -72,19 +71,25 @@ def run_quick(executable: str, *args: str, timeout_s: float = QUICK_TIMEOUT_S) -
     return done.stdout
 
 
-def toolkit_version(executable: str) -> str:
+def run_quick(executable: str, *args: str, timeout_s: float = QUICK_TIMEOUT_S) -> str:
+    """quick_steps in one call."""
+    return steps.run_to_end(quick_steps(executable, *args, timeout_s=timeout_s))
+
+
+def version_steps(executable: str) -> steps.Steps[str]:
     """The installed toolkit's version (``hapticut --version`` prints "hapticut 0.1.0")."""
-    return run_quick(executable, "--version").strip().removeprefix("hapticut ").strip()
+    text = yield from quick_steps(executable, "--version")
+    return text.strip().removeprefix("hapticut ").strip()
 
 
 _material_table: dict | None = None
 
 
-def material_table(executable: str, refresh: bool = False) -> dict:
+def material_table_steps(executable: str, refresh: bool = False) -> steps.Steps[dict]:
     """``hapticut materials --json``, run once and kept (refresh=True runs it again)."""
     global _material_table
     if _material_table is None or refresh:
-        text = run_quick(executable, "materials", "--json")
+        text = yield from quick_steps(executable, "materials", "--json")
         try:
             table = json.loads(text)
         except json.JSONDecodeError as error:
@@ -93,6 +98,11 @@ def material_table(executable: str, refresh: bool = False) -> dict:
             raise ToolkitError("hapticut materials --json: not a version 1 material table")
         _material_table = table
     return _material_table
+
+
+def material_table(executable: str, refresh: bool = False) -> dict:
+    """material_table_steps in one call."""
+    return steps.run_to_end(material_table_steps(executable, refresh))
 
 
 def cached_material_table() -> dict | None:

@@ -16,15 +16,17 @@ import os
 import sys
 from types import SimpleNamespace
 
-from . import toolkit
+from . import steps, toolkit
 
 MODULES = ("servo_layout", "servo_client", "recording", "cut_surface")
 
 _link: SimpleNamespace | None = None
 
 
-def toolkit_paths(executable: str, timeout_s: float = toolkit.QUICK_TIMEOUT_S) -> dict:
-    text = toolkit.run_quick(executable, "paths", "--json", timeout_s=timeout_s)
+def toolkit_paths_steps(
+    executable: str, timeout_s: float = toolkit.QUICK_TIMEOUT_S
+) -> steps.Steps[dict]:
+    text = yield from toolkit.quick_steps(executable, "paths", "--json", timeout_s=timeout_s)
     try:
         return json.loads(text)
     except json.JSONDecodeError as error:
@@ -55,15 +57,15 @@ def _package(directory: str):
     return module
 
 
-def link(
+def link_steps(
     executable: str, refresh: bool = False, timeout_s: float = toolkit.QUICK_TIMEOUT_S
-) -> SimpleNamespace:
+) -> steps.Steps[SimpleNamespace]:
     """The modules (``link.servo_client``, ...) and ``link.servo`` (the servo executable);
     toolkit.ToolkitError saying what is missing. Asks the toolkit once (at most timeout_s)."""
     global _link
     if _link is not None and not refresh:
         return _link
-    found = toolkit_paths(executable, timeout_s)
+    found = yield from toolkit_paths_steps(executable, timeout_s)
     if not found.get("servo"):
         raise toolkit.ToolkitError(found.get("servo_error") or "the toolkit has no servo")
     package = _package(found["package"])
@@ -80,3 +82,10 @@ def link(
         servo=found["servo"], package=package, version=found["version"], **modules
     )
     return _link
+
+
+def link(
+    executable: str, refresh: bool = False, timeout_s: float = toolkit.QUICK_TIMEOUT_S
+) -> SimpleNamespace:
+    """link_steps in one call."""
+    return steps.run_to_end(link_steps(executable, refresh, timeout_s))

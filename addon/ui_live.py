@@ -7,7 +7,7 @@ import json
 
 import bpy
 
-from . import device_list, live, live_draw, live_properties, live_session
+from . import device_list, jobs, live, live_draw, live_properties, live_session
 from .ui_common import SidebarSubpanel, draw_properties, draw_status
 
 SESSION_SETTINGS = (
@@ -23,9 +23,11 @@ SESSION_SETTINGS = (
 
 def status_lines(session) -> list[str]:
     """What the panel says about the session (also what the tests read)."""
+    job = jobs.current()
+    doing = [f"{job.name}: {job.stage}"] if job is not None else []
     if session is None:
         error = live.last_error()
-        return [f"not connected: {error}" if error else "not connected"]
+        return [f"not connected: {error}" if error else "not connected", *doing]
     if session.state == "lost":
         return [f"servo lost: {session.error}", "Start to recover"]
     status = session.status
@@ -69,7 +71,7 @@ def status_lines(session) -> list[str]:
             )
     if session.error:
         lines.append(f"error: {session.error}")
-    return lines
+    return lines + doing
 
 
 BAKE_SETTINGS = ("simulated_hand", "bake_after_simulate", "arrow_mm_per_N", "substeps")
@@ -139,6 +141,8 @@ class HAPTICUT_PT_live(SidebarSubpanel, bpy.types.Panel):
         for line in status_lines(session):
             icon = "ERROR" if line.startswith(("servo lost", "error", "not connected:")) else "NONE"
             layout.label(text=line, icon=icon)
+        if jobs.current() is not None:
+            layout.operator("hapticut.cancel_job", icon="CANCEL")
         draw_status(layout, error=settings.error)
         if settings.log_path:
             layout.operator("hapticut.open_servo_log", icon="TEXT")

@@ -45,6 +45,7 @@ def enable_addon() -> None:
     prefs = bpy.context.preferences.addons["addon"].preferences
     prefs.toolkit_path = toolkit_executable()
     assert bpy.ops.hapticut.check_toolkit() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
 
 
 def read_obj(path: Path):
@@ -160,10 +161,8 @@ def simulate_and_bake(scene) -> dict:
 
     began = time.perf_counter()
     assert bpy.ops.hapticut.simulate_stroke() == {"FINISHED"}
-    while live.current().simulate is not None:  # What the live timer does, called here.
-        live.timer()
-        time.sleep(0.002)
-    if scene.hapticut_live.error:
+    # What the timers do in the GUI (they do not run in background mode): the stroke, the bake.
+    if bpy.ops.hapticut.wait() != {"FINISHED"} or scene.hapticut_live.error:
         sys.exit(f"blender_demo: the bake failed: {scene.hapticut_live.error}")
     figures = dict(live.last_simulate, seconds=time.perf_counter() - began)
     live.stop()

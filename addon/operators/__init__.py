@@ -2,6 +2,7 @@
 
 from .bake_recording import HAPTICUT_OT_bake_recording
 from .cancel_build import HAPTICUT_OT_cancel_build
+from .cancel_job import HAPTICUT_OT_cancel_job
 from .check_scene import HAPTICUT_OT_check_scene
 from .check_toolkit import HAPTICUT_OT_check_toolkit
 from .clear_bake import HAPTICUT_OT_clear_bake
@@ -27,6 +28,7 @@ classes = (
     HAPTICUT_OT_set_cutting_edge,
     HAPTICUT_OT_tetrahedralize,
     HAPTICUT_OT_cancel_build,
+    HAPTICUT_OT_cancel_job,
     HAPTICUT_OT_export_scene,
     HAPTICUT_OT_import_scene,
     HAPTICUT_OT_refresh_devices,

@@ -1,11 +1,12 @@
 import bpy
 from bpy.props import StringProperty
 
-from .. import baking, live, live_session
+from .. import baking, jobs, live
 
 
-class HAPTICUT_OT_bake_recording(bpy.types.Operator):
-    """Bake the last recording: the ideal blade's keyframes, the force arrow, the cut surface"""
+class HAPTICUT_OT_bake_recording(jobs.FollowsJob, bpy.types.Operator):
+    """Bake the last recording: the ideal blade's keyframes, the force arrow, the cut surface
+    (in the background, Esc cancels)"""
 
     bl_idname = "hapticut.bake_recording"
     bl_label = "Bake"
@@ -22,14 +23,15 @@ class HAPTICUT_OT_bake_recording(bpy.types.Operator):
         if not path:
             self.report({"ERROR"}, "no recording yet: Simulate Stroke, or Record while live")
             return {"CANCELLED"}
-        try:
-            link = live.link(context)
-            figures = baking.bake(scene, link, path, bpy.path.abspath(settings.preview_path))
-        except (baking.BakeError, live_session.SessionError) as error:
-            settings.error = str(error)
-            self.report({"ERROR"}, str(error))
-            return {"CANCELLED"}
-        self.report({"INFO"}, f"baked {figures['frames']} frames in {figures['seconds']:.1f} s")
-        if figures["truncated"]:
-            self.report({"WARNING"}, figures["truncated"])
+        preview = bpy.path.abspath(settings.preview_path)
+        live.start_job("Bake", scene.name, _bake_steps(scene.name, path, preview))
         return {"FINISHED"}
+
+    def summary(self, figures):
+        done = [("INFO", f"baked {figures['frames']} frames in {figures['seconds']:.1f} s")]
+        return done + ([("WARNING", figures["truncated"])] if figures["truncated"] else [])
+
+
+def _bake_steps(scene_name: str, path: str, preview: str):
+    link = yield from live.link_steps()
+    return (yield from baking.bake_steps(scene_name, link, path, preview))

@@ -1,27 +1,40 @@
 import bpy
 
-from .. import preferences, toolkit
+from .. import jobs, preferences, toolkit
 
 
-class HAPTICUT_OT_check_toolkit(bpy.types.Operator):
+class HAPTICUT_OT_check_toolkit(jobs.FollowsJob, bpy.types.Operator):
     """Find the hapticut toolkit, show its version and read its material table again"""
 
     bl_idname = "hapticut.check_toolkit"
     bl_label = "Check"
 
     def execute(self, context):
-        prefs = preferences.preferences(context)
         try:
             executable = preferences.executable(context)
-            version = toolkit.toolkit_version(executable)
-            toolkit.material_table(executable, refresh=True)
         except toolkit.ToolkitError as error:
-            toolkit.forget_material_table()
-            if prefs is not None:
-                prefs.toolkit_version, prefs.toolkit_error = "", str(error)
+            _show_error(str(error))
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
-        if prefs is not None:
-            prefs.toolkit_version, prefs.toolkit_error = version, ""
-        self.report({"INFO"}, f"hapticut {version} at {executable}")
+        scene = context.scene.name if context.scene else ""
+        jobs.start("Check toolkit", scene, _check_steps(executable), on_error=_show_error)
         return {"FINISHED"}
+
+    def summary(self, result):
+        return [("INFO", result)]
+
+
+def _show_error(message: str) -> None:
+    toolkit.forget_material_table()
+    prefs = preferences.preferences()
+    if prefs is not None:
+        prefs.toolkit_version, prefs.toolkit_error = "", message
+
+
+def _check_steps(executable: str):
+    version = yield from toolkit.version_steps(executable)
+    yield from toolkit.material_table_steps(executable, refresh=True)
+    prefs = preferences.preferences()
+    if prefs is not None:
+        prefs.toolkit_version, prefs.toolkit_error = version, ""
+    return f"hapticut {version} at {executable}"

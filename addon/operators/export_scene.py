@@ -2,7 +2,7 @@ import bpy
 from bpy.props import StringProperty
 from bpy_extras.io_utils import ExportHelper
 
-from .. import building, preferences, toolkit
+from .. import building, jobs, preferences, toolkit
 
 
 class HAPTICUT_OT_export_scene(bpy.types.Operator, ExportHelper):
@@ -18,7 +18,8 @@ class HAPTICUT_OT_export_scene(bpy.types.Operator, ExportHelper):
         return False  # Keep the user's .json or .msgpack ending.
 
     def execute(self, context):
-        source = building.scene_file(context.scene)
+        scene = context.scene
+        source = building.scene_file(scene)
         if source is None:
             self.report({"ERROR"}, "no scene built yet: Tetrahedralize first")
             return {"CANCELLED"}
@@ -28,10 +29,24 @@ class HAPTICUT_OT_export_scene(bpy.types.Operator, ExportHelper):
             )
             return {"CANCELLED"}
         try:
-            toolkit.run_quick(preferences.executable(context), "convert", source, self.filepath)
+            executable = preferences.executable(context)
         except toolkit.ToolkitError as error:
             self.report({"ERROR"}, str(error))
-            context.scene.hapticut.error = str(error)
             return {"CANCELLED"}
-        self.report({"INFO"}, f"scene written to {self.filepath}")
+        work = _export_steps(executable, source, self.filepath)
+        jobs.start("Export scene", scene.name, work, on_error=_scene_error(scene.name))
         return {"FINISHED"}
+
+
+def _scene_error(scene_name: str):
+    def show(message: str) -> None:
+        scene = bpy.data.scenes.get(scene_name)
+        if scene is not None:
+            scene.hapticut.error = message
+
+    return show
+
+
+def _export_steps(executable: str, source: str, path: str):
+    yield from toolkit.quick_steps(executable, "convert", source, path)
+    return path

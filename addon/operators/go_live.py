@@ -1,10 +1,11 @@
 import bpy
 
-from .. import live, live_session
+from .. import jobs, live, live_session
 
 
-class HAPTICUT_OT_go_live(bpy.types.Operator):
-    """Run the built scene on the servo with the panel's device (starts the servo if needed)"""
+class HAPTICUT_OT_go_live(jobs.FollowsJob, bpy.types.Operator):
+    """Run the built scene on the servo with the panel's device (starts the servo if needed;
+    the servo starts and loads the scene in the background, Esc cancels)"""
 
     bl_idname = "hapticut.go_live"
     bl_label = "Go Live"

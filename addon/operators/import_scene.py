@@ -7,8 +7,9 @@ import bpy
 from bpy.props import StringProperty
 from bpy_extras.io_utils import ImportHelper
 
-from .. import preferences, toolkit
+from .. import jobs, preferences, toolkit
 from ..preview import show_preview
+from .export_scene import _scene_error
 
 
 class HAPTICUT_OT_import_scene(bpy.types.Operator, ImportHelper):
@@ -21,20 +22,30 @@ class HAPTICUT_OT_import_scene(bpy.types.Operator, ImportHelper):
     filter_glob: StringProperty(default="*.hapticut.msgpack;*.hapticut.json", options={"HIDDEN"})
 
     def execute(self, context):
-        folder = tempfile.mkdtemp(prefix="hapticut-import-")
-        preview = os.path.join(folder, "preview.npz")
+        scene = context.scene
         try:
             executable = preferences.executable(context)
-            toolkit.run_quick(executable, "preview", self.filepath, "--out", preview)
-            report = show_preview(context.scene, preview)
         except toolkit.ToolkitError as error:
             self.report({"ERROR"}, str(error))
-            context.scene.hapticut.error = str(error)
+            scene.hapticut.error = str(error)
             return {"CANCELLED"}
-        finally:
-            shutil.rmtree(folder, ignore_errors=True)
-        settings = context.scene.hapticut
-        settings.report_json = json.dumps(report)
-        settings.status = f"imported {os.path.basename(self.filepath)}"
-        settings.error = ""
+        work = _import_steps(executable, scene.name, self.filepath)
+        jobs.start("Import scene", scene.name, work, on_error=_scene_error(scene.name))
         return {"FINISHED"}
+
+
+def _import_steps(executable: str, scene_name: str, path: str):
+    folder = tempfile.mkdtemp(prefix="hapticut-import-")
+    preview = os.path.join(folder, "preview.npz")
+    try:
+        yield from toolkit.quick_steps(executable, "preview", path, "--out", preview)
+        scene = bpy.data.scenes.get(scene_name)
+        if scene is None:
+            raise RuntimeError(f"the scene {scene_name!r} is gone")
+        report = show_preview(scene, preview)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+    settings = scene.hapticut
+    settings.report_json = json.dumps(report)
+    settings.status = f"imported {os.path.basename(path)}"
+    settings.error = ""

@@ -1,9 +1,9 @@
 import bpy
 
-from .. import live, live_session
+from .. import jobs, live
 
 
-class HAPTICUT_OT_refresh_devices(bpy.types.Operator):
+class HAPTICUT_OT_refresh_devices(jobs.FollowsJob, bpy.types.Operator):
     """List the devices the servo can drive (hapticut-servo --list-devices --json): the HID
     devices connected, with the profile each matches, the shipped profiles, sim, viewport and
     the UDP bridge, each with its limits (the stiffness limit at the panel's rate)"""
@@ -12,11 +12,12 @@ class HAPTICUT_OT_refresh_devices(bpy.types.Operator):
     bl_label = "Refresh Devices"
 
     def execute(self, context):
-        try:
-            listing = live.refresh_devices(context)
-        except live_session.SessionError as error:
-            self.report({"ERROR"}, str(error))
-            return {"CANCELLED"}
-        found = sum(1 for d in listing["devices"] if d.get("profile"))
-        self.report({"INFO"}, f"{len(listing['devices'])} HID devices, {found} with a profile")
+        scene = context.scene
+        # Its error goes to the device line of the panel (device_error).
+        work = live.refresh_devices_steps(scene.name)
+        live.start_job("Refresh devices", scene.name, work, show_error=False)
         return {"FINISHED"}
+
+    def summary(self, listing):
+        found = sum(1 for d in listing["devices"] if d.get("profile"))
+        return [("INFO", f"{len(listing['devices'])} HID devices, {found} with a profile")]

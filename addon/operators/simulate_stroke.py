@@ -1,11 +1,11 @@
 import bpy
 
-from .. import live, live_session
+from .. import jobs, live, live_session
 
 
-class HAPTICUT_OT_simulate_stroke(bpy.types.Operator):
+class HAPTICUT_OT_simulate_stroke(jobs.FollowsJob, bpy.types.Operator):
     """Run the blades' keyframed animation through the servo as fast as possible, recorded,
-    then bake it"""
+    then bake it (in the background, Esc cancels)"""
 
     bl_idname = "hapticut.simulate_stroke"
     bl_label = "Simulate Stroke"

@@ -1,9 +1,9 @@
 import bpy
 
-from .. import live
+from .. import jobs, live
 
 
-class HAPTICUT_OT_stop_servo(bpy.types.Operator):
+class HAPTICUT_OT_stop_servo(jobs.FollowsJob, bpy.types.Operator):
     """Stop the servo (the force ramps to zero) and the live link"""
 
     bl_idname = "hapticut.stop_servo"
@@ -14,5 +14,7 @@ class HAPTICUT_OT_stop_servo(bpy.types.Operator):
         return live.current() is not None
 
     def execute(self, context):
-        live.stop()
+        # The jobs running and waiting use the servo: they end here.
+        jobs.cancel_all()
+        live.start_job("Stop servo", context.scene.name, live.stop_steps())
         return {"FINISHED"}

@@ -27,6 +27,19 @@ STATE_TET = 0  # ProxyState::Tet (core/include/hapticut/proxy.h)
 INSIDE_TOLERANCE = 1e-9
 
 
+def _inverses(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The inverses of (m, 3, 3) matrices given by their rows, and which are invertible (zero
+    where not). Written out with cross products: LAPACK's batched 3x3 inverse goes through
+    the BLAS threads, which spin for seconds on a machine whose cores are all busy."""
+    r0, r1, r2 = rows[:, 0], rows[:, 1], rows[:, 2]
+    columns = np.stack([np.cross(r1, r2), np.cross(r2, r0), np.cross(r0, r1)], axis=-1)
+    determinants = np.einsum("ki,ki->k", r0, columns[:, :, 0])
+    usable = determinants != 0
+    inverse = np.zeros_like(rows)
+    inverse[usable] = columns[usable] / determinants[usable, None, None]
+    return inverse, usable
+
+
 class TetLocator:
     """The tet holding each point, through a uniform grid of the tets' bounding boxes."""
 
@@ -36,12 +49,8 @@ class TetLocator:
         corners = self.vertices[self.tets]  # (m, 4, 3)
         self.origin = corners[:, 0]
         edges = corners[:, 1:] - corners[:, :1]  # (m, 3, 3): rows b-a, c-a, d-a
-        determinants = np.linalg.det(edges)
-        usable = np.abs(determinants) > 0
-        self.inverse = np.zeros_like(edges)
         # lambda (b, c, d weights) = (x - a) @ inv(edges)
-        self.inverse[usable] = np.linalg.inv(edges[usable])
-        self.usable = usable
+        self.inverse, self.usable = _inverses(edges)
         lo, hi = corners.min(axis=1), corners.max(axis=1)
         self.lo = lo.min(axis=0) if len(lo) else np.zeros(3)
         span = (hi.max(axis=0) - self.lo) if len(hi) else np.ones(3)

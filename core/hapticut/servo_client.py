@@ -111,6 +111,21 @@ def _order_of(data: bytes) -> tuple[int, int] | None:
     return (int(session), int(sequence))
 
 
+def _load_fields(path, scene, devices, rate_Hz, as_fast_as_possible) -> dict:
+    fields: dict = {}
+    if path is not None:
+        fields["path"] = os.fspath(path)
+    if scene is not None:
+        fields["scene"] = scene
+    if devices is not None:
+        fields["devices"] = list(devices)
+    if rate_Hz is not None:
+        fields["rate_Hz"] = rate_Hz
+    if as_fast_as_possible is not None:
+        fields["as_fast_as_possible"] = as_fast_as_possible
+    return fields
+
+
 class ServoClient:
     """The control channel (TCP, length-prefixed JSON) and the stream (UDP)."""
 
@@ -275,18 +290,27 @@ class ServoClient:
         rate_Hz: float | None = None,
         as_fast_as_possible: bool | None = None,
     ) -> dict:
-        fields: dict = {}
-        if path is not None:
-            fields["path"] = os.fspath(path)
-        if scene is not None:
-            fields["scene"] = scene
-        if devices is not None:
-            fields["devices"] = list(devices)
-        if rate_Hz is not None:
-            fields["rate_Hz"] = rate_Hz
-        if as_fast_as_possible is not None:
-            fields["as_fast_as_possible"] = as_fast_as_possible
-        reply = self.request("load", **fields)
+        fields = _load_fields(path, scene, devices, rate_Hz, as_fast_as_possible)
+        return self.loaded(self.request("load", check=False, **fields))
+
+    def send_load(
+        self,
+        path: str | os.PathLike | None = None,
+        scene: dict | None = None,
+        devices: Sequence[str] | None = None,
+        rate_Hz: float | None = None,
+        as_fast_as_possible: bool | None = None,
+    ) -> int:
+        """``load`` without waiting for the servo to read the scene: ``replies`` returns the
+        reply (give it to ``loaded``); the request's id."""
+        fields = _load_fields(path, scene, devices, rate_Hz, as_fast_as_possible)
+        return self.send_request("load", **fields)
+
+    def loaded(self, reply: dict) -> dict:
+        """A load's reply taken: ServoError when it is an error; else the frames' blades are
+        the ones it names."""
+        if not reply.get("ok"):
+            raise ServoError(f"load: {reply.get('error', 'failed')}")
         self.blade_names = [b["name"] for b in reply["blades"]]
         return reply
 

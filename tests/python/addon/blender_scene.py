@@ -43,6 +43,7 @@ def enable_addon():
     prefs = bpy.context.preferences.addons[ADDON_MODULE].preferences
     prefs.toolkit_path = toolkit_executable()
     bpy.ops.hapticut.check_toolkit()
+    bpy.ops.hapticut.wait()
     return prefs
 
 

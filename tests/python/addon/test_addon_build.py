@@ -125,6 +125,7 @@ def test_export_and_reload_with_the_toolkit(built, tmp_path, suffix):
     scene, _, _ = built
     path = str(tmp_path / f"finger{suffix}")
     assert bpy.ops.hapticut.export_scene(filepath=path) == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     contents = probe(path)
     assert contents["materials"] == {
         "air": "free", "skin": "membrane", "soft_tissue": "drag", "bone": "rigid"
@@ -140,6 +141,7 @@ def test_import_shows_a_scene_made_elsewhere(built):
     scene, _, _ = built
     example = str(blender_scene.REPO / "examples" / "finger.hapticut.msgpack")
     assert bpy.ops.hapticut.import_scene(filepath=example) == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     objects = bpy.data.collections["Hapticut Preview"].objects
     names = {o["hapticut_material"] for o in objects}
     assert names == {"skin", "flesh", "bone"}  # The example's own material names.
@@ -154,6 +156,7 @@ def test_import_of_a_broken_file_reports_the_toolkit_error(built, tmp_path):
     broken.write_text('{"format": "hapticut.scene", "version": 1}')
     with pytest.raises(RuntimeError, match="hapticut preview"):
         bpy.ops.hapticut.import_scene(filepath=str(broken))
+        bpy.ops.hapticut.wait()
     assert "hapticut preview" in bpy.context.scene.hapticut.error
 
 

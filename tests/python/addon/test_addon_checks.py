@@ -176,11 +176,13 @@ def test_a_missing_toolkit_names_the_install_command(addon, tmp_path):
     try:
         with pytest.raises(RuntimeError, match="is not an executable"):
             bpy.ops.hapticut.check_toolkit()
+            bpy.ops.hapticut.wait()
         assert toolkit.INSTALL_COMMAND in prefs.toolkit_error
         assert prefs.toolkit_version == ""
     finally:
         prefs.toolkit_path = toolkit_path
         assert bpy.ops.hapticut.check_toolkit() == {"FINISHED"}
+        assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert prefs.toolkit_version and not prefs.toolkit_error
 
 

@@ -58,6 +58,7 @@ def exports(tmp_path, name: str) -> bool:
     path = str(tmp_path / f"{name}.hapticut.msgpack")
     try:
         bpy.ops.hapticut.export_scene(filepath=path)
+        bpy.ops.hapticut.wait()
     except RuntimeError as error:
         assert "no scene built yet" in str(error)
         return False
@@ -69,7 +70,7 @@ def simulate_and_bake(scene) -> dict:
 
     try:
         assert bpy.ops.hapticut.simulate_stroke() == {"FINISHED"}
-        live_support.follow(lambda: live.current().simulate is None, timeout_s=120)
+        assert bpy.ops.hapticut.wait() == {"FINISHED"}
         assert scene.hapticut_live.error == ""
         assert baking.baked_objects(scene)
         return json.loads(scene.hapticut_live.bake_report)
@@ -100,6 +101,7 @@ def test_save_as_and_reopen_keep_the_build(addon, data_home, tmp_path):
     assert exports(tmp_path, "reopened")
     assert bpy.ops.hapticut.clear_bake() == {"FINISHED"}
     assert bpy.ops.hapticut.bake_recording() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert json.loads(scene.hapticut_live.bake_report)["frames"] == baked["frames"]
     # The first file (saved before the stroke) finds the same build.
     bpy.ops.wm.open_mainfile(filepath=first)

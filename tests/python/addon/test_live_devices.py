@@ -44,6 +44,7 @@ def test_the_real_listing_fills_the_menu_and_each_item_makes_its_binding(scene):
 
     settings = scene.hapticut_live
     assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert settings.device_error == ""
     listing = device_list.cached()
     # The servo's own answer, checked against what it was run on: every shipped profile file.
@@ -114,6 +115,7 @@ def test_settings_above_the_devices_limits_are_refused(scene):
 
     settings = scene.hapticut_live
     assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     listing = device_list.cached()
     bridge = next(k for k in listing["kinds"] if k["kind"] == "bridge")["limits"]
     sim = next(k for k in listing["kinds"] if k["kind"] == "sim")["limits"]
@@ -127,6 +129,7 @@ def test_settings_above_the_devices_limits_are_refused(scene):
     settings.stiffness_N_per_mm = 2 * bridge["max_stiffness_N_per_mm"]
     with pytest.raises(RuntimeError, match="stiffness .* is above the device's"):
         bpy.ops.hapticut.go_live()
+        bpy.ops.hapticut.wait()
     assert live.current() is None  # Refused before any servo started.
     assert f"{bridge['max_stiffness_N_per_mm']:g} N/mm" in settings.error
     assert any("Go Live refuses it" in text for text in panel_texts())
@@ -144,6 +147,7 @@ def test_settings_above_the_devices_limits_are_refused(scene):
     assert any("read at 1000 Hz: Refresh devices for 500 Hz" in t for t in panel_texts())
     with pytest.raises(RuntimeError, match="stiffness .* is above the device's") as refused:
         bpy.ops.hapticut.go_live()
+        bpy.ops.hapticut.wait()
     assert live.current() is None
     assert device_list.listed_rate() == 500.0
     slow = next(k for k in device_list.cached()["kinds"] if k["kind"] == "bridge")["limits"]
@@ -167,6 +171,7 @@ def test_settings_above_the_devices_limits_are_refused(scene):
     settings.max_force_N = 0.75 * bridge["max_force_N"]
     with pytest.raises(RuntimeError, match="max force .* is above the device's"):
         bpy.ops.hapticut.go_live()
+        bpy.ops.hapticut.wait()
     settings.max_force_N = 0.0
     # A stiffness limit of its own: known at a rate only to the servo, whose "set" refuses a
     # stiffness above it (test_servo_stiffness_limit.py); the add-on claims no limit there.
@@ -182,6 +187,7 @@ def test_settings_above_the_devices_limits_are_refused(scene):
     settings.max_force_N = sim["max_force_N"] + 1
     with pytest.raises(RuntimeError, match="max force .* is above the device's"):
         bpy.ops.hapticut.go_live()
+        bpy.ops.hapticut.wait()
     settings.max_force_N = sim["max_force_N"]
     live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
     # An input-only device renders no force: its force limit does not apply.
@@ -199,6 +205,7 @@ def test_a_rigid_blades_stiffness_is_its_points_springs(scene):
 
     settings = scene.hapticut_live
     assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     bridge = next(k for k in device_list.cached()["kinds"] if k["kind"] == "bridge")["limits"]
     limit = bridge["max_stiffness_N_per_mm_at_rate"]
     knife = bpy.data.objects["Knife"]
@@ -227,6 +234,7 @@ def test_a_servo_that_fails_to_list_is_said_so_in_the_panel(scene, tmp_path, mon
 
     settings = scene.hapticut_live
     assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     listed = device_list.cached()
     link = toolkit_link.link(blender_scene.toolkit_executable())
     monkeypatch.setattr(device_list, "LIST_TIMEOUT_S", 0.5)
@@ -245,6 +253,7 @@ def test_a_servo_that_fails_to_list_is_said_so_in_the_panel(scene, tmp_path, mon
         monkeypatch.setattr(link, "servo", servo)
         with pytest.raises(RuntimeError, match="devices not listed"):
             bpy.ops.hapticut.refresh_devices()
+            bpy.ops.hapticut.wait()
         assert message in settings.device_error, settings.device_error
         assert settings.device_error in panel_texts()
         # The listing read before stays, and so does the menu made of it.
@@ -255,6 +264,7 @@ def test_a_servo_that_fails_to_list_is_said_so_in_the_panel(scene, tmp_path, mon
     settings.stiffness_N_per_mm = 0.5
     with pytest.raises(RuntimeError, match="devices not listed"):
         bpy.ops.hapticut.go_live()
+        bpy.ops.hapticut.wait()
     settings.stiffness_N_per_mm = 0.0
     # A toolkit that hangs when asked where its servo is: the same bound.
     monkeypatch.setattr(toolkit_link, "_link", None)
@@ -263,10 +273,12 @@ def test_a_servo_that_fails_to_list_is_said_so_in_the_panel(scene, tmp_path, mon
     try:
         with pytest.raises(RuntimeError, match="devices not listed: hapticut paths"):
             bpy.ops.hapticut.refresh_devices()
+            bpy.ops.hapticut.wait()
         assert "timed out after 0.5 seconds" in settings.device_error, settings.device_error
     finally:
         prefs.toolkit_path = saved
     monkeypatch.undo()
     assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert settings.device_error == ""
     print(json.dumps({"devices": len(device_list.cached()["devices"])}))

@@ -81,7 +81,9 @@ def test_draw_builds_once_per_frame_draws_the_frame_and_records_its_age(finger, 
     from addon import live, live_draw, live_session, ui_live
 
     assert bpy.ops.hapticut.start_servo() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert bpy.ops.hapticut.go_live() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     session = live.current()
     live_support.follow(lambda: session.frame is not None and session.status.get("ticks", 0) > 50)
     live_draw.invalidate()
@@ -134,4 +136,5 @@ def test_draw_builds_once_per_frame_draws_the_frame_and_records_its_age(finger, 
         "redraw delay is in it)"
     )
     assert bpy.ops.hapticut.stop_servo() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert not live_draw.handler_added()

@@ -35,10 +35,12 @@ def test_start_go_live_status_and_stop(finger):
 
     assert ui_live.status_lines(None)[0].startswith("not connected")
     assert bpy.ops.hapticut.start_servo() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     session = live.current()
     assert session is not None and live.timer_registered() and live_draw.handler_added()
     assert os.path.isfile(finger.hapticut_live.log_path)
     assert bpy.ops.hapticut.go_live() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert [b["kind"] for b in session.blades] == ["viewport"]
     live_support.follow(lambda: session.frame is not None and session.status.get("ticks", 0) > 50)
     lines = ui_live.status_lines(session)
@@ -60,6 +62,7 @@ def test_start_go_live_status_and_stop(finger):
     live_support.follow(lambda: session.status.get("engaged") is True)
     pid = session.process.pid
     assert bpy.ops.hapticut.stop_servo() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert live.current() is None and not live.timer_registered()
     assert not live_draw.handler_added()
     assert not alive(pid)
@@ -80,6 +83,7 @@ def test_a_busy_port_is_said_so(finger):
         try:
             with pytest.raises(RuntimeError, match="busy"):
                 bpy.ops.hapticut.start_servo()
+                bpy.ops.hapticut.wait()
         finally:
             finger.hapticut_live.port = 0
     assert live.current() is None
@@ -97,6 +101,7 @@ def test_a_missing_toolkit_names_the_install_command(finger):
     try:
         with pytest.raises(RuntimeError, match="install"):
             bpy.ops.hapticut.start_servo()
+            bpy.ops.hapticut.wait()
         assert toolkit.INSTALL_COMMAND in finger.hapticut_live.error
         assert live.current() is None
     finally:
@@ -107,6 +112,7 @@ def test_the_servo_killed_mid_session_shows_as_lost_and_start_recovers(finger):
     from addon import live, ui_live
 
     assert bpy.ops.hapticut.go_live() == {"FINISHED"}  # Starts the servo too.
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     session = live.current()
     live_support.follow(lambda: session.frame is not None)
     os.kill(session.process.pid, signal.SIGKILL)
@@ -117,7 +123,9 @@ def test_the_servo_killed_mid_session_shows_as_lost_and_start_recovers(finger):
     assert lines[0].startswith("servo lost: the servo exited (code -9)")
     assert lines[1] == "Start to recover"
     assert bpy.ops.hapticut.start_servo() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert bpy.ops.hapticut.go_live() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     recovered = live.current()
     assert recovered is not session and recovered.alive
     live_support.follow(lambda: recovered.frame is not None)
@@ -131,11 +139,13 @@ def test_unregister_and_loading_a_file_remove_timer_handler_and_servo(finger, tm
     path = str(tmp_path / "live.blend")
     bpy.ops.wm.save_as_mainfile(filepath=path)
     assert bpy.ops.hapticut.start_servo() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     pid = live.current().process.pid
     bpy.ops.wm.open_mainfile(filepath=path)  # Loading another file stops everything.
     assert live.current() is None and not live.timer_registered()
     assert not live_draw.handler_added() and not alive(pid)
     assert bpy.ops.hapticut.start_servo() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     pid = live.current().process.pid
     blender_scene.disable_addon()
     try:
@@ -177,6 +187,7 @@ def test_force_shading_asked_for_is_applied_by_the_servo(finger):
 
     finger.hapticut_live.force_shading = True
     assert bpy.ops.hapticut.go_live() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert finger.hapticut_live.error == ""
     session = live.current()
     live_support.follow(lambda: session.frame is not None)
@@ -201,6 +212,7 @@ def test_the_live_panels_draw_in_every_state(finger):
         assert "not connected" in texts()
     finger.hapticut_live.device_mode = "VIEWPORT"
     assert bpy.ops.hapticut.go_live() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     session = live.current()
     live_support.follow(lambda: session.frame is not None and session.status.get("blades"))
     assert any(text.startswith("connected (running)") for text in texts())
@@ -223,6 +235,7 @@ def test_a_hid_profile_chosen_with_no_such_device_connected_says_so(finger):
     from addon import device_list, live, ui_live
 
     assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     listing = device_list.cached()
     absent = next(
         p["name"]
@@ -233,6 +246,7 @@ def test_a_hid_profile_chosen_with_no_such_device_connected_says_so(finger):
     try:
         with pytest.raises(RuntimeError, match=f"no device matches profile '{absent}'"):
             bpy.ops.hapticut.go_live()
+            bpy.ops.hapticut.wait()
         assert f"device 'Knife=hid:{absent}'" in finger.hapticut_live.error
         # The servo stays up and says nothing is running; another device runs at once.
         session = live.current()
@@ -240,6 +254,7 @@ def test_a_hid_profile_chosen_with_no_such_device_connected_says_so(finger):
         assert ui_live.status_lines(session)[0].startswith("connected")
         finger.hapticut_live.device_mode = "VIEWPORT"
         assert bpy.ops.hapticut.go_live() == {"FINISHED"}
+        assert bpy.ops.hapticut.wait() == {"FINISHED"}
         assert [b["kind"] for b in live.current().blades] == ["viewport"]
     finally:
         finger.hapticut_live.device_mode = "VIEWPORT"

@@ -22,7 +22,7 @@ def baked(addon, tmp_path_factory):
     scene = live_support.finger_with_stroke(tmp_path_factory.mktemp("live-finger"))
     began = time.perf_counter()
     assert bpy.ops.hapticut.simulate_stroke() == {"FINISHED"}
-    live_support.follow(lambda: live.current().simulate is None, timeout_s=120)
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     seconds = time.perf_counter() - began
     figures = live.last_simulate
     print(
@@ -239,6 +239,7 @@ def test_clear_removes_the_bake_and_bake_remakes_it_from_the_recording(baked):
     assert "Hapticut Cut Reveal" not in bpy.data.node_groups
     assert bpy.data.objects["Knife"].data.name in bpy.data.meshes  # The blade's mesh stays.
     assert bpy.ops.hapticut.bake_recording() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert len(baking.baked_objects(baked)) == 3
 
 
@@ -253,11 +254,13 @@ def test_a_truncated_recording_bakes_its_whole_records_and_says_so(baked, tmp_pa
     cut = tmp_path / "cut.rec"
     cut.write_bytes(data[: records_start + keep * complete.records.itemsize])
     assert bpy.ops.hapticut.bake_recording(filepath=str(cut)) == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     report = json.loads(baked.hapticut_live.bake_report)
     problem = live.link().recording.read_recording(cut).problem
     assert report["ticks"] == keep and report["truncated"] == problem
     assert problem.startswith(f"recording {str(cut)!r} is truncated") and f"{keep} whole" in problem
     assert bpy.ops.hapticut.bake_recording(filepath=original) == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert json.loads(baked.hapticut_live.bake_report)["truncated"] == ""
 
 

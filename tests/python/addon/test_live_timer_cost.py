@@ -40,6 +40,7 @@ def test_the_timer_is_bounded_while_frames_stream_at_120_hz(finger, tmp_path, po
         check=True,
     )
     assert bpy.ops.hapticut.start_servo() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     session = live.current()
     live_session.run(session, path, ["Knife=viewport"], 1000.0)  # Streams at 120 Hz.
     live_support.follow(lambda: session.frame is not None)

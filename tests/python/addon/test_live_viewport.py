@@ -18,6 +18,7 @@ def live_finger(addon, tmp_path_factory):
     scene = live_support.finger_with_stroke(tmp_path_factory.mktemp("live-finger"))
     scene.hapticut_live.device_mode = "VIEWPORT"
     assert bpy.ops.hapticut.go_live() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert bpy.ops.hapticut.engage_servo(engaged=True) == {"FINISHED"}
     yield scene
     live.stop()
@@ -108,6 +109,7 @@ def test_record_while_live_then_bake(live_finger):
     assert bpy.ops.hapticut.record_live() == {"FINISHED"}  # Stops recording.
     assert live_finger.hapticut_live.recording_path == path
     assert bpy.ops.hapticut.bake_recording() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
     rec = live.link().recording.read_recording(path)
     # About 1.4 s at 1 kHz, recorded by the servo (not the 120 Hz stream; a loaded machine
     # skips late ticks).
