@@ -20,7 +20,7 @@
 #include <memory>
 
 #include "devices/device.h"
-#include "passivity_hook.h"
+#include "passivity.h"
 
 namespace hapticut::servo {
 

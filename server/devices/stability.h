@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "devices/device.h"
-#include "devices/passivity.h"
+#include "passivity.h"
 
 namespace hapticut::servo {
 
