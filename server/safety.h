@@ -72,7 +72,7 @@ inline constexpr double kStiffnessLimitRate_Hz = 1000.0;
 // and Schenkel), so at a slower rate the same margin needs k lowered in
 // proportion to the rate; a faster rate does not raise it (the profile states
 // only 1 kHz). docs/servo.md, "Stiffness limit". Inline, so that the
-// stability bench (server/devices/stability.cpp), which does not link the
+// stability bench (server/bench/stability.cpp), which does not link the
 // servo, runs the same rule.
 inline double stiffness_limit(const DeviceLimits& device, double rate_Hz) {
   if (!(device.max_stiffness_N_per_mm > 0.0) || !(rate_Hz > 0.0)) return 0.0;

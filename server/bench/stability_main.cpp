@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "bench/stability.h"
 #include "devices/profile.h"
-#include "devices/stability.h"
 #include "safety.h"
 
 namespace {

@@ -1,5 +1,5 @@
 // The stability bench (`hapticut bench stability`, docs/stability.md): the
-// closed loop of a virtual hand (virtual_hand.h) pressing on a rigid block
+// closed loop of a virtual hand (devices/virtual_hand.h) pressing on a rigid block
 // ("bone") through the real engine (a Proxy on a Space), with a link delay
 // and a servo rate, with and without the passivity controller. It measures
 // the energy the loop gives the hand: the work of the rendered force on the

@@ -1,6 +1,6 @@
 // The stability bench's closed loop (stability.h) with and without the
 // passivity controller.
-#include "devices/stability.h"
+#include "bench/stability.h"
 
 #include <gtest/gtest.h>
 

@@ -5,7 +5,7 @@
 
 #include <stdexcept>
 
-#include "devices/stability.h"
+#include "bench/stability.h"
 #include "safety.h"
 #include "test_profiles.h"
 
