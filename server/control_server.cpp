@@ -15,9 +15,9 @@
 #include <limits>
 #include <string_view>
 
-#include "clock.h"
 #include "hapticut/scene_io.h"
-#include "realtime.h"
+#include "rt/clock.h"
+#include "rt/realtime.h"
 
 namespace hapticut::servo {
 

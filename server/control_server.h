@@ -24,8 +24,8 @@
 #include <vector>
 
 #include "control_message.h"
-#include "histogram.h"
 #include "protocol.h"
+#include "rt/histogram.h"
 #include "servo.h"
 
 namespace hapticut::servo {

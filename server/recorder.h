@@ -11,8 +11,8 @@
 #include <thread>
 
 #include "devices/recording_file.h"
+#include "rt/spsc_ring.h"
 #include "servo_loop.h"
-#include "spsc_ring.h"
 
 namespace hapticut::servo {
 

@@ -7,11 +7,11 @@
 #include <future>
 
 #include "client_files.h"
-#include "clock.h"
 #include "devices/viewport_device.h"
 #include "hapticut/scene_io.h"
 #include "protocol.h"
-#include "realtime.h"
+#include "rt/clock.h"
+#include "rt/realtime.h"
 
 namespace hapticut::servo {
 

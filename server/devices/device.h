@@ -4,7 +4,7 @@
 // write() once per tick on the real-time thread; they must not block,
 // allocate, lock or log. A backend that talks to hardware or a socket does
 // its I/O on its own thread at its own rate and hands the newest sample over
-// through a LatestValue (latest_value.h); read() then only copies it.
+// through a LatestValue (rt/latest_value.h); read() then only copies it.
 #pragma once
 
 #include <cstdint>

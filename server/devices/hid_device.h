@@ -29,7 +29,7 @@
 #include "devices/hid_transport.h"
 #include "devices/pose_mapping.h"
 #include "devices/profile.h"
-#include "latest_value.h"
+#include "rt/latest_value.h"
 
 namespace hapticut::servo {
 
