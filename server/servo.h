@@ -13,7 +13,7 @@
 
 #include "control_message.h"
 #include "options.h"
-#include "recorder.h"
+#include "recording/recorder.h"
 #include "servo_loop.h"
 #include "session.h"
 

@@ -11,10 +11,10 @@
 #include "client_files.h"
 #include "devices/device.h"
 #include "devices/device_factory.h"
-#include "devices/recording_file.h"
 #include "hapticut/blade.h"
 #include "hapticut/scene.h"
 #include "hapticut/space.h"
+#include "recording/recording_file.h"
 #include "safety.h"
 #include "stream_frame.h"
 
