@@ -54,7 +54,7 @@ struct StabilityRow {
   double link_delay_s = 0.0;
   double stiffness_N_per_mm = 1.0;
   // The servo's limit at this rate for the grid's device (stiffness_limit,
-  // server/safety.h; 0: none known) and whether the stiffness is above it
+  // server/devices/device.h; 0: none known) and whether the stiffness is above it
   // (the servo would lower such a scene stiffness and refuse such a set).
   double limit_N_per_mm = 0.0;
   bool above_limit = false;

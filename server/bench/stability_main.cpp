@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "bench/stability.h"
+#include "devices/device.h"
 #include "devices/profile.h"
-#include "safety.h"
 
 namespace {
 
