@@ -65,7 +65,7 @@ TEST(ServoStiffness, SceneStiffnessAboveTheLimitIsLoweredInTheTick) {
 
 std::string command_error(Servo& servo, const nlohmann::json& message) {
   try {
-    servo.command(parse_control_message(message.dump()));
+    servo.set_parameters(parse_control_message(message.dump()).body);
   } catch (const CommandError& e) {
     return e.what();
   }
