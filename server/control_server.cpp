@@ -15,9 +15,9 @@
 #include <limits>
 #include <string_view>
 
-#include "clock.h"
 #include "hapticut/scene_io.h"
-#include "realtime.h"
+#include "rt/clock.h"
+#include "rt/realtime.h"
 
 namespace hapticut::servo {
 
@@ -370,34 +370,78 @@ nlohmann::json ControlServer::hello(Client& client, const ControlJson& message) 
 }
 
 nlohmann::json ControlServer::dispatch(Client& client, const ControlMessage& request) {
+  using Handler = nlohmann::json (*)(ControlServer&, Client&, const ControlJson&);
+  struct Command {
+    std::string_view type;
+    Handler handle;
+  };
+  // Every message type of the control channel (docs/protocol.md) and what
+  // answers it: the connection's own commands here, the servo's in Servo.
+  static const std::array<Command, 12> kCommands{{
+      {"hello", [](ControlServer& s, Client& c, const ControlJson& m) { return s.hello(c, m); }},
+      {"subscribe",
+       [](ControlServer& s, Client& c, const ControlJson& m) { return s.subscribe(c, m); }},
+      {"unsubscribe",
+       [](ControlServer& s, Client& c, const ControlJson&) { return s.unsubscribe(c); }},
+      {"status", [](ControlServer& s, Client&, const ControlJson&) { return s.status(); }},
+      {"set", [](ControlServer& s, Client& c, const ControlJson& m) { return s.set(c, m); }},
+      {"load",
+       [](ControlServer& s, Client&, const ControlJson& m) { return s.servo_.load_command(m); }},
+      {"start",
+       [](ControlServer& s, Client&, const ControlJson&) { return s.servo_.start_command(); }},
+      {"stop",
+       [](ControlServer& s, Client&, const ControlJson&) { return s.servo_.stop_command(); }},
+      {"engage",
+       [](ControlServer& s, Client&, const ControlJson& m) { return s.servo_.engage_command(m); }},
+      {"record",
+       [](ControlServer& s, Client&, const ControlJson& m) { return s.servo_.record_command(m); }},
+      {"pose",
+       [](ControlServer& s, Client&, const ControlJson& m) { return s.servo_.pose_command(m); }},
+      {"shutdown",
+       [](ControlServer& s, Client&, const ControlJson&) {
+         s.servo_.request_shutdown();
+         return nlohmann::json::object();
+       }},
+  }};
   const std::string& type = request.type;
-  const ControlJson& message = request.body;
-  if (type == "hello") return hello(client, message);
-  if (!client.hello) {
+  const Command* found = nullptr;
+  for (const Command& command : kCommands) {
+    if (command.type == type) found = &command;
+  }
+  if (!client.hello && type != "hello") {
     ++counters_.out_of_order;
     throw CommandError("\"" + type +
                        "\" before \"hello\" (send hello with the protocol version first)");
   }
-  if (type == "subscribe") {
-    const double rate = has_field(message, "rate_Hz")
-                            ? number_field(message, "rate_Hz", kMinStreamRate_Hz, kMaxStreamRate_Hz)
-                            : options_.stream_rate_Hz;
-    const auto port = static_cast<int>(integer_field(message, "port", 1, 65535));
-    set_subscription(client, port, rate);
-    update_stream_interval();
-    return {{"port", port}, {"rate_Hz", rate}, {"stream_source_port", stream_port_}};
-  }
-  if (type == "unsubscribe") {
-    set_subscription(client, 0, 0.0);
-    update_stream_interval();
-    return nlohmann::json::object();
-  }
-  if (type == "status") {
-    nlohmann::json status = servo_.status();
-    status["protocol"] = counters_json();
-    return status;
-  }
-  if (type == "set" && has_field(message, "stream_rate_Hz")) {
+  if (found == nullptr) throw CommandError("unknown message type " + quoted_excerpt(type));
+  return found->handle(*this, client, request.body);
+}
+
+nlohmann::json ControlServer::subscribe(Client& client, const ControlJson& message) {
+  const double rate = has_field(message, "rate_Hz")
+                          ? number_field(message, "rate_Hz", kMinStreamRate_Hz, kMaxStreamRate_Hz)
+                          : options_.stream_rate_Hz;
+  const auto port = static_cast<int>(integer_field(message, "port", 1, 65535));
+  set_subscription(client, port, rate);
+  update_stream_interval();
+  return {{"port", port}, {"rate_Hz", rate}, {"stream_source_port", stream_port_}};
+}
+
+nlohmann::json ControlServer::unsubscribe(Client& client) {
+  set_subscription(client, 0, 0.0);
+  update_stream_interval();
+  return nlohmann::json::object();
+}
+
+nlohmann::json ControlServer::status() {
+  nlohmann::json status = servo_.status();
+  status["protocol"] = counters_json();
+  return status;
+}
+
+// The stream's rate is the connection's, the rest the servo's.
+nlohmann::json ControlServer::set(Client& client, const ControlJson& message) {
+  if (has_field(message, "stream_rate_Hz")) {
     const double rate =
         number_field(message, "stream_rate_Hz", kMinStreamRate_Hz, kMaxStreamRate_Hz);
     if (!client.subscribed) throw CommandError("stream_rate_Hz: not subscribed");
@@ -407,7 +451,7 @@ nlohmann::json ControlServer::dispatch(Client& client, const ControlMessage& req
     }
     update_stream_interval();
   }
-  return servo_.command(request);
+  return servo_.set_parameters(message);
 }
 
 std::size_t ControlServer::free_slot() const {

@@ -24,8 +24,8 @@
 #include <vector>
 
 #include "control_message.h"
-#include "histogram.h"
 #include "protocol.h"
+#include "rt/histogram.h"
 #include "servo.h"
 
 namespace hapticut::servo {
@@ -98,6 +98,10 @@ class ControlServer {
   void handle(Client& client, const std::string& text);
   nlohmann::json dispatch(Client& client, const ControlMessage& request);
   nlohmann::json hello(Client& client, const ControlJson& message);
+  nlohmann::json subscribe(Client& client, const ControlJson& message);
+  nlohmann::json unsubscribe(Client& client);
+  nlohmann::json status();
+  nlohmann::json set(Client& client, const ControlJson& message);
   void send_frames();
   void drain_stray_datagrams();
   void update_stream_interval();

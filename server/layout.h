@@ -7,7 +7,7 @@
 //
 // A frame:  FrameHeader, then per blade: BladeBlock, points block.
 // A record: RecordHeader, then per blade: BladeBlock, points block.
-// A recording ends with one RecordingTrailer (devices/recording_file.h).
+// A recording ends with one RecordingTrailer (recording/recording_file.h).
 // Points block of a blade with N points: q (N x 3 f64), p (N x 3 f64),
 // state (N x u8), zero padding to a multiple of 8 bytes.
 #pragma once

@@ -12,8 +12,8 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
-#include "clock.h"
 #include "control_server.h"
+#include "rt/clock.h"
 #ifdef HAPTICUT_WITH_DEVICES
 #include "devices/bridge_device.h"
 #include "devices/hid_device.h"
@@ -21,10 +21,10 @@
 #include "devices/sim_device.h"
 #include "devices/viewport_device.h"
 #include "hapticut/scene_io.h"
-#include "histogram.h"
 #include "layout.h"
 #include "options.h"
-#include "realtime.h"
+#include "rt/histogram.h"
+#include "rt/realtime.h"
 #include "servo.h"
 
 namespace hapticut::servo {

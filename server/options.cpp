@@ -209,7 +209,7 @@ Options parse_options(int argc, const char* const* argv) {
       o.priority = static_cast<int>(p);
     } else if (arg == "--cpu") {
       const double cpu = number(arg, value());
-      // CPU_SETSIZE: the CPUs a cpu_set_t can name (realtime.cpp pins with one).
+      // CPU_SETSIZE: the CPUs a cpu_set_t can name (rt/realtime.cpp pins with one).
       if (cpu < 0 || cpu >= CPU_SETSIZE || cpu != std::floor(cpu)) {
         throw UsageError("--cpu: a CPU number 0 to " + std::to_string(CPU_SETSIZE - 1));
       }

@@ -20,7 +20,7 @@
 #include <memory>
 
 #include "devices/device.h"
-#include "passivity_hook.h"
+#include "passivity.h"
 
 namespace hapticut::servo {
 
@@ -62,22 +62,6 @@ struct SafetySettings {
 
 // Limits in force: the device's, lowered (never raised) by `requested`.
 SafetySettings limit_to_device(const SafetySettings& requested, const DeviceLimits& device);
-
-// The rate a device's max_stiffness_N_per_mm is stated for (device.h).
-inline constexpr double kStiffnessLimitRate_Hz = 1000.0;
-
-// The coupling stiffness limit of `device` at a servo rate (N/mm; 0: none
-// known): its max_stiffness_N_per_mm times min(1, rate_Hz / 1000). A sampled
-// spring k stays passive while the device's damping exceeds k T / 2 (Colgate
-// and Schenkel), so at a slower rate the same margin needs k lowered in
-// proportion to the rate; a faster rate does not raise it (the profile states
-// only 1 kHz). docs/servo.md, "Stiffness limit". Inline, so that the
-// stability bench (server/devices/stability.cpp), which does not link the
-// servo, runs the same rule.
-inline double stiffness_limit(const DeviceLimits& device, double rate_Hz) {
-  if (!(device.max_stiffness_N_per_mm > 0.0) || !(rate_Hz > 0.0)) return 0.0;
-  return device.max_stiffness_N_per_mm * std::min(1.0, rate_Hz / kStiffnessLimitRate_Hz);
-}
 
 // The coupling stiffness a blade steps with: `requested`, lowered to `limit`
 // when a limit is known (limit > 0). Never raises it.

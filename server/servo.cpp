@@ -7,11 +7,11 @@
 #include <future>
 
 #include "client_files.h"
-#include "clock.h"
 #include "devices/viewport_device.h"
 #include "hapticut/scene_io.h"
 #include "protocol.h"
-#include "realtime.h"
+#include "rt/clock.h"
+#include "rt/realtime.h"
 
 namespace hapticut::servo {
 
@@ -556,32 +556,17 @@ nlohmann::json Servo::pose_command(const ControlJson& message) {
   return nlohmann::json::object();
 }
 
-nlohmann::json Servo::command(const ControlMessage& request) {
-  const std::string& type = request.type;
-  const ControlJson& message = request.body;
-  if (type == "load") return load_command(message);
-  if (type == "start") {
-    start();
-    return {{"session", shared_->session.load()}};
-  }
-  if (type == "stop") {
-    nlohmann::json stats = stop();
-    return {{"stats", stats}};
-  }
-  if (type == "engage") {
-    const bool engaged = boolean_field(message, "engaged");
-    shared_->engaged.store(engaged);
-    return {{"engaged", engaged}};
-  }
-  if (type == "set") return set_parameters(message);
-  if (type == "status") return status();
-  if (type == "record") return record_command(message);
-  if (type == "pose") return pose_command(message);
-  if (type == "shutdown") {
-    request_shutdown();
-    return nlohmann::json::object();
-  }
-  throw CommandError("unknown message type " + quoted_excerpt(type));
+nlohmann::json Servo::start_command() {
+  start();
+  return {{"session", shared_->session.load()}};
+}
+
+nlohmann::json Servo::stop_command() { return {{"stats", stop()}}; }
+
+nlohmann::json Servo::engage_command(const ControlJson& message) {
+  const bool engaged = boolean_field(message, "engaged");
+  shared_->engaged.store(engaged);
+  return {{"engaged", engaged}};
 }
 
 }  // namespace hapticut::servo

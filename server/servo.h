@@ -13,7 +13,7 @@
 
 #include "control_message.h"
 #include "options.h"
-#include "recorder.h"
+#include "recording/recorder.h"
 #include "servo_loop.h"
 #include "session.h"
 
@@ -37,9 +37,17 @@ class Servo {
   // run's statistics (null when nothing ran).
   nlohmann::json stop();
 
-  // One control message (already parsed); the reply without "id". Throws
-  // CommandError with the reason when it cannot be done.
-  nlohmann::json command(const ControlMessage& message);
+  // The servo's control commands, each given its message (already parsed)
+  // and returning the reply without "id"; the control server's table
+  // (ControlServer::dispatch) names which message type calls which. Each
+  // throws CommandError with the reason when it cannot be done.
+  nlohmann::json load_command(const ControlJson& message);
+  nlohmann::json start_command();
+  nlohmann::json stop_command();
+  nlohmann::json engage_command(const ControlJson& message);
+  nlohmann::json set_parameters(const ControlJson& message);
+  nlohmann::json record_command(const ControlJson& message);
+  nlohmann::json pose_command(const ControlJson& message);
 
   LoopShared& shared() { return *shared_; }
   nlohmann::json status();
@@ -49,10 +57,6 @@ class Servo {
   bool run_ended() const { return run_ended_.load(); }
 
  private:
-  nlohmann::json set_parameters(const ControlJson& message);
-  nlohmann::json load_command(const ControlJson& message);
-  nlohmann::json record_command(const ControlJson& message);
-  nlohmann::json pose_command(const ControlJson& message);
   nlohmann::json finish_run_locked();
   nlohmann::json stats_locked() const;
   void housekeeping();

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "clock.h"
+#include "rt/clock.h"
 
 namespace hapticut::servo {
 

@@ -12,11 +12,11 @@
 #include <atomic>
 #include <cstdint>
 
-#include "histogram.h"
-#include "latest_value.h"
+#include "rt/histogram.h"
+#include "rt/latest_value.h"
+#include "rt/spsc_ring.h"
+#include "rt/triple_buffer.h"
 #include "session.h"
-#include "spsc_ring.h"
-#include "triple_buffer.h"
 
 namespace hapticut::servo {
 

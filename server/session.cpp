@@ -6,9 +6,7 @@
 
 #include "devices/viewport_device.h"
 #include "hapticut/scene_io.h"
-#ifdef HAPTICUT_WITH_DEVICES
-#include "passivity_adapter.h"
-#endif
+#include "passivity.h"
 
 namespace hapticut::servo {
 
@@ -124,14 +122,12 @@ Session::Session(const SessionConfig& config) {
     binding.springs = rendered_springs(binding.blade->coupling(), binding.blade->point_count());
     binding.max_stiffness_N_per_mm =
         point_stiffness_limit(binding.device_max_stiffness_N_per_mm, binding.springs);
-#ifdef HAPTICUT_WITH_DEVICES
     // Passivity for every device that renders force (docs/stability.md).
     if (config.passivity && binding.device->limits().has_force_output) {
       binding.safety->set_passivity(
           make_passivity_controller(config.passivity_link_delay_s, rate_Hz_));
       binding.passivity = true;
     }
-#endif
     binding.frame = BladeFrame(blade_spec.points);
     bindings_.push_back(std::move(binding));
   }

@@ -11,10 +11,10 @@
 #include "client_files.h"
 #include "devices/device.h"
 #include "devices/device_factory.h"
-#include "devices/recording_file.h"
 #include "hapticut/blade.h"
 #include "hapticut/scene.h"
 #include "hapticut/space.h"
+#include "recording/recording_file.h"
 #include "safety.h"
 #include "stream_frame.h"
 
@@ -46,7 +46,7 @@ struct Binding {
   std::unique_ptr<Blade> blade;
   std::unique_ptr<SafetyChannel> safety;
   SafetySettings requested;  // Before the device's limits.
-  // The device's stiffness limit at the session's rate (stiffness_limit, safety.h;
+  // The device's stiffness limit at the session's rate (stiffness_limit, devices/device.h;
   // 0: none known), on what the blade renders at its tool: springs x k.
   double device_max_stiffness_N_per_mm = 0.0;
   int springs = 1;  // rendered_springs: the blade's point count when rigid, else 1.

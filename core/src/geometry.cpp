@@ -2,9 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <limits>
-
-#include "hapticut/tet_mesh.h"
 
 namespace hapticut {
 
@@ -35,52 +32,11 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
   return a + ab * (vb * denom) + ac * (vc * denom);
 }
 
-double distance_to_tet(const TetMesh& mesh, std::int32_t t, const Vec3& x) {
-  if (mesh.outside_distance(t, x) <= 0.0) return 0.0;
-  const auto& tet = mesh.tet(t);
-  double best = std::numeric_limits<double>::infinity();
-  for (int f = 0; f < 4; ++f) {
-    std::array<Vec3, 3> corner;
-    for (int v = 0, n = 0; v < 4; ++v) {
-      if (v != f) corner[n++] = mesh.vertex(tet[v]);
-    }
-    best = std::min(best, norm(closest_point_on_triangle(x, corner[0], corner[1], corner[2]) - x));
-  }
-  return best;
-}
-
-bool lies_in_mesh_interior(const TetMesh& mesh, const Vec3& x, double margin) {
-  bool near_tet = false;
-  bool near_boundary = false;
-  mesh.tet_tree().for_each_containing(x, margin, [&](std::int32_t t) {
-    // A plane distance never exceeds the Euclidean one: past margin, t is too far.
-    if (near_boundary || mesh.outside_distance(t, x) > margin) return;
-    const auto& tet = mesh.tet(t);
-    for (int f = 0; f < 4 && !near_boundary; ++f) {
-      if (mesh.neighbour(t, f) != kNoTet) continue;
-      std::array<Vec3, 3> corner;
-      for (int v = 0, n = 0; v < 4; ++v) {
-        if (v != f) corner[n++] = mesh.vertex(tet[v]);
-      }
-      near_boundary =
-          norm(closest_point_on_triangle(x, corner[0], corner[1], corner[2]) - x) <= margin;
-    }
-    near_tet = near_tet || distance_to_tet(mesh, t, x) <= margin;
-  });
-  return near_tet && !near_boundary;
-}
-
 Aabb grown(const Aabb& box, double pad) {
   Aabb out = box;
   out.lo -= Vec3{pad, pad, pad};
   out.hi += Vec3{pad, pad, pad};
   return out;
-}
-
-Aabb mesh_box(const TetMesh& mesh, double pad) {
-  Aabb box;
-  for (const Vec3& v : mesh.vertices()) box.grow(v);
-  return grown(box, pad);
 }
 
 Aabb reach_box(const Aabb& tight_box) {

@@ -1,5 +1,7 @@
 #include "hapticut/scene.h"
 
+#include "hapticut/parameter_range.h"
+
 namespace hapticut {
 
 const char* material_model_name(MaterialModel model) {
@@ -38,6 +40,16 @@ std::optional<BladeOrientation> blade_orientation_from_name(std::string_view nam
     if (name == blade_orientation_name(orientation)) return orientation;
   }
   return std::nullopt;
+}
+
+void check_safety_limits(const SafetyLimits& limits) {
+  check_in_range(setting_range::kMaxForce, limits.max_force_N, "max_force_N");
+  check_in_range(setting_range::kMaxTorque, limits.max_torque_N_mm, "max_torque_N_mm");
+  check_in_range(setting_range::kRampTime, limits.ramp_time_s, "ramp_time_s");
+  check_in_range(setting_range::kMaxTransitions, limits.max_transitions_per_tick,
+                 "max_transitions_per_tick");
+  check_in_range(setting_range::kCappedTickForce, limits.capped_tick_force_N,
+                 "capped_tick_force_N");
 }
 
 }  // namespace hapticut

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <string>
 
@@ -377,6 +378,47 @@ std::size_t TetMesh::memory_bytes() const {
          boundary_planes_.capacity() * sizeof(Plane) +
          boundary_side_planes_.capacity() * sizeof(Plane) + boundary_tree_.memory_bytes() +
          tet_tree_.memory_bytes();
+}
+
+double distance_to_tet(const TetMesh& mesh, std::int32_t t, const Vec3& x) {
+  if (mesh.outside_distance(t, x) <= 0.0) return 0.0;
+  const auto& tet = mesh.tet(t);
+  double best = std::numeric_limits<double>::infinity();
+  for (int f = 0; f < 4; ++f) {
+    std::array<Vec3, 3> corner;
+    for (int v = 0, n = 0; v < 4; ++v) {
+      if (v != f) corner[n++] = mesh.vertex(tet[v]);
+    }
+    best = std::min(best, norm(closest_point_on_triangle(x, corner[0], corner[1], corner[2]) - x));
+  }
+  return best;
+}
+
+bool lies_in_mesh_interior(const TetMesh& mesh, const Vec3& x, double margin) {
+  bool near_tet = false;
+  bool near_boundary = false;
+  mesh.tet_tree().for_each_containing(x, margin, [&](std::int32_t t) {
+    // A plane distance never exceeds the Euclidean one: past margin, t is too far.
+    if (near_boundary || mesh.outside_distance(t, x) > margin) return;
+    const auto& tet = mesh.tet(t);
+    for (int f = 0; f < 4 && !near_boundary; ++f) {
+      if (mesh.neighbour(t, f) != kNoTet) continue;
+      std::array<Vec3, 3> corner;
+      for (int v = 0, n = 0; v < 4; ++v) {
+        if (v != f) corner[n++] = mesh.vertex(tet[v]);
+      }
+      near_boundary =
+          norm(closest_point_on_triangle(x, corner[0], corner[1], corner[2]) - x) <= margin;
+    }
+    near_tet = near_tet || distance_to_tet(mesh, t, x) <= margin;
+  });
+  return near_tet && !near_boundary;
+}
+
+Aabb mesh_box(const TetMesh& mesh, double pad) {
+  Aabb box;
+  for (const Vec3& v : mesh.vertices()) box.grow(v);
+  return grown(box, pad);
 }
 
 }  // namespace hapticut

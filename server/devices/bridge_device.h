@@ -20,7 +20,7 @@
 #include "devices/bridge_datagram.h"
 #include "devices/device.h"
 #include "devices/device_options.h"
-#include "latest_value.h"
+#include "rt/latest_value.h"
 
 namespace hapticut::servo {
 

@@ -4,9 +4,10 @@
 // write() once per tick on the real-time thread; they must not block,
 // allocate, lock or log. A backend that talks to hardware or a socket does
 // its I/O on its own thread at its own rate and hands the newest sample over
-// through a LatestValue (latest_value.h); read() then only copies it.
+// through a LatestValue (rt/latest_value.h); read() then only copies it.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -53,6 +54,22 @@ struct DeviceLimits {
   Vec3 workspace_min_mm;                // Samples outside [min, max] are device faults.
   Vec3 workspace_max_mm;
 };
+
+// The rate a device's max_stiffness_N_per_mm is stated for.
+inline constexpr double kStiffnessLimitRate_Hz = 1000.0;
+
+// The coupling stiffness limit of `device` at a servo rate (N/mm; 0: none
+// known): its max_stiffness_N_per_mm times min(1, rate_Hz / 1000). A sampled
+// spring k stays passive while the device's damping exceeds k T / 2 (Colgate
+// and Schenkel), so at a slower rate the same margin needs k lowered in
+// proportion to the rate; a faster rate does not raise it (the profile states
+// only 1 kHz). docs/servo.md, "Stiffness limit". Beside the limits it reads,
+// inline, so that the servo's safety layer, the device listing and the
+// stability bench (which links no servo) run the same rule.
+inline double stiffness_limit(const DeviceLimits& device, double rate_Hz) {
+  if (!(device.max_stiffness_N_per_mm > 0.0) || !(rate_Hz > 0.0)) return 0.0;
+  return device.max_stiffness_N_per_mm * std::min(1.0, rate_Hz / kStiffnessLimitRate_Hz);
+}
 
 class Device {
  public:

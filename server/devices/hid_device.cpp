@@ -11,8 +11,6 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "safety.h"  // stiffness_limit: the servo's rule, inline.
-
 namespace hapticut::servo {
 namespace {
 

@@ -29,7 +29,7 @@
 #include "devices/hid_transport.h"
 #include "devices/pose_mapping.h"
 #include "devices/profile.h"
-#include "latest_value.h"
+#include "rt/latest_value.h"
 
 namespace hapticut::servo {
 
@@ -165,7 +165,7 @@ struct DeviceKindInfo {
 // binding ("hid:<profile>" or null)}], "profiles": [{name, model, binding, limits}], "kinds":
 // [{kind, binding, limits}]}; limits: has_force_output, max_force_N, max_torque_N_mm,
 // max_stiffness_N_per_mm (as stated, for 1 kHz; 0: none known),
-// max_stiffness_N_per_mm_at_rate (the servo's limit at rate_Hz: stiffness_limit, safety.h;
+// max_stiffness_N_per_mm_at_rate (the servo's limit at rate_Hz: stiffness_limit, device.h;
 // 0: none known), workspace_min_mm, workspace_max_mm. rate_Hz must be positive (the
 // command line checks its range).
 std::string format_device_list_json(const std::vector<HidDeviceRow>& rows,

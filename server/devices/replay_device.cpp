@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <cstring>
 
-#include "devices/recording_file.h"
+#include "recording/recording_file.h"
 
 namespace hapticut::servo {
 

@@ -7,7 +7,7 @@
 
 #include "devices/device_args.h"
 #include "devices/device_factory.h"
-#include "latest_value.h"
+#include "rt/latest_value.h"
 
 namespace hapticut::servo {
 

@@ -1,12 +1,12 @@
 // The devices of server/devices wired into the servo: their rows in the
 // device table, their errors as DeviceError naming the binding, their limits
-// in the safety clamp, and the Hannaford-Ryu controller behind the passivity hook.
+// in the safety clamp, and the Hannaford-Ryu controller in the safety layer.
 #include <gtest/gtest.h>
 
 #include <string>
 
 #include "devices/device_factory.h"
-#include "passivity_adapter.h"
+#include "passivity.h"
 #include "safety.h"
 
 namespace hapticut::servo {

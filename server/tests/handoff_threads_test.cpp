@@ -10,9 +10,9 @@
 #include <memory>
 #include <thread>
 
-#include "latest_value.h"
-#include "spsc_ring.h"
-#include "triple_buffer.h"
+#include "rt/latest_value.h"
+#include "rt/spsc_ring.h"
+#include "rt/triple_buffer.h"
 
 namespace hapticut::servo {
 namespace {

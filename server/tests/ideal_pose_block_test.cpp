@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "devices/recording_file.h"
 #include "hapticut/scene_io.h"
+#include "recording/recording_file.h"
 #include "servo_loop.h"
 #include "session.h"
 

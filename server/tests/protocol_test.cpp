@@ -3,9 +3,9 @@
 
 #include <gtest/gtest.h>
 
-#include "histogram.h"
-#include "spsc_ring.h"
-#include "triple_buffer.h"
+#include "rt/histogram.h"
+#include "rt/spsc_ring.h"
+#include "rt/triple_buffer.h"
 
 namespace hapticut::servo {
 namespace {

@@ -1,6 +1,6 @@
 // The recording reader: a complete file (trailer) against files cut short
 // at every kind of place, and files it must refuse.
-#include "devices/recording_file.h"
+#include "recording/recording_file.h"
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>

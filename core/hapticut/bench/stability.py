@@ -1,6 +1,6 @@
 """``hapticut bench stability``: the passivity controller's table (docs/stability.md).
 
-The bench itself is C++ (server/devices/stability.cpp): a virtual hand presses
+The bench itself is C++ (server/bench/stability.cpp): a virtual hand presses
 on bone through the engine at servo rates of 250 Hz to 1 kHz and link delays of
 0 to 5 ms, without and with the passivity controller: first at the stiffnesses
 the servo allows a device at each rate (its stiffness limit), then a stress

@@ -103,7 +103,7 @@ struct BladeSnapshotHeader {
 };
 
 // A whole tick in one trivially copyable value, for a blade of at most N
-// points: what the servo thread publishes (server/latest_value.h) and another
+// points: what the servo thread publishes (server/rt/latest_value.h) and another
 // thread reads.
 template <std::size_t N>
 struct BladeSnapshot {

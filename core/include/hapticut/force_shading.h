@@ -10,7 +10,7 @@
 #include <memory>
 #include <vector>
 
-#include "hapticut/proxy.h"
+#include "hapticut/proxy_place.h"
 #include "hapticut/space.h"
 
 namespace hapticut {

@@ -15,8 +15,6 @@
 
 namespace hapticut {
 
-class TetMesh;
-
 // An oriented plane: signed_distance(x) = dot(normal, x) - offset, normal unit
 // and pointing out of the tet that owns it (eq. 2: outside when >= 0).
 struct Plane {
@@ -130,23 +128,10 @@ constexpr bool slide_reaches_edge(double end_distance, double target_along, doub
   return end_distance >= -eps && end_distance <= eps && target_along >= -eps;
 }
 
-// ---- Mesh queries of the OUTSIDE state ----------------------------------------
-
-// Euclidean distance from x to tet t (0 inside or on it).
-double distance_to_tet(const TetMesh& mesh, std::int32_t t, const Vec3& x);
-
-// Whether x lies in the mesh farther than margin from its boundary: within
-// margin of some tet and of no boundary triangle. An OUTSIDE proxy must never
-// be there (the OUTSIDE safety net and Proxy::check_invariants). Exact
-// distances, so a point on an interior face or vertex counts as inside and a
-// point near a sharp outer corner does not.
-bool lies_in_mesh_interior(const TetMesh& mesh, const Vec3& x, double margin);
+// ---- Boxes of the OUTSIDE state ----------------------------------------------
 
 // The box grown by pad on every side.
 Aabb grown(const Aabb& box, double pad);
-
-// The box of the mesh's vertices grown by pad on every side.
-Aabb mesh_box(const TetMesh& mesh, double pad);
 
 // The mesh's box (mesh_box with no pad) grown by its own diagonal on every
 // side: every point of the mesh is farther than one diagonal from the outside

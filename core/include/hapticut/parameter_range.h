@@ -8,8 +8,6 @@
 #include <string>
 #include <string_view>
 
-#include "hapticut/scene.h"
-
 namespace hapticut {
 
 struct ParameterRange {
@@ -101,9 +99,5 @@ inline constexpr ParameterRange kCappedTickForce{
     "capped_tick_force_N", "N", 0.0, true, 100.0, 1.0, "per-point force limit on a capped tick"};
 
 }  // namespace setting_range
-
-// Throws std::invalid_argument naming the first limit outside its range; the
-// servo's safety layer takes only checked limits (Space::from_scene calls it).
-void check_safety_limits(const SafetyLimits& limits);
 
 }  // namespace hapticut

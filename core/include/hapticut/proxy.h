@@ -12,23 +12,10 @@
 #include "hapticut/aabb_tree.h"
 #include "hapticut/geometry.h"
 #include "hapticut/material.h"
+#include "hapticut/proxy_place.h"
 #include "hapticut/space.h"
 
 namespace hapticut {
-
-enum class ProxyState : std::uint8_t { Tet = 0, Face = 1, Edge = 2, Vertex = 3, Outside = 4 };
-inline constexpr int kProxyStateCount = 5;
-const char* proxy_state_name(ProxyState state);
-
-// Where the proxy is: its state, the tet that owns the state (ALGORITHM.md,
-// "Every constrained state is owned by a tet") and which of that tet's faces
-// (0-3), edges (0-5) or vertices (0-3) constrains it.
-struct ProxyPlace {
-  ProxyState state = ProxyState::Outside;
-  std::int32_t tet = kNoTet;
-  std::int8_t local = 0;
-  Vec3 q;
-};
 
 // One call of Proxy::transition: the state before and after, whether the new
 // state is owned by another tet than before ("neighbour" in Table 2), and

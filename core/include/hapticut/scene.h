@@ -44,6 +44,11 @@ struct SafetyLimits {
   double capped_tick_force_N = 1.0;   // Per-point force limit on a capped tick.
 };
 
+// Throws std::invalid_argument naming the first limit outside its range
+// (parameter_range.h); the servo's safety layer takes only checked limits
+// (Space::from_scene calls it).
+void check_safety_limits(const SafetyLimits& limits);
+
 struct Scene {
   int version = kSceneFormatVersion;
   double stiffness_N_per_mm = 0.1;  // Coupling k in f = k (q - p), eq. (15).

@@ -236,4 +236,19 @@ class TetMesh {
   MeshStats stats_;
 };
 
+// ---- Mesh queries of the OUTSIDE state ----------------------------------------
+
+// Euclidean distance from x to tet t (0 inside or on it).
+double distance_to_tet(const TetMesh& mesh, std::int32_t t, const Vec3& x);
+
+// Whether x lies in the mesh farther than margin from its boundary: within
+// margin of some tet and of no boundary triangle. An OUTSIDE proxy must never
+// be there (the OUTSIDE safety net and Proxy::check_invariants). Exact
+// distances, so a point on an interior face or vertex counts as inside and a
+// point near a sharp outer corner does not.
+bool lies_in_mesh_interior(const TetMesh& mesh, const Vec3& x, double margin);
+
+// The box of the mesh's vertices grown by pad on every side.
+Aabb mesh_box(const TetMesh& mesh, double pad);
+
 }  // namespace hapticut

@@ -9,7 +9,6 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
-#include "safety.h"
 #include "scripted_hid_transport.h"
 #include "test_profiles.h"
 

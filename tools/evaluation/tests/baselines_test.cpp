@@ -8,6 +8,7 @@
 #include "hapticut/baselines/god_object.h"
 #include "hapticut/baselines/voxel_proxy.h"
 #include "hapticut/force_shading.h"
+#include "hapticut/proxy.h"
 #include "test_support.h"
 
 namespace hapticut {

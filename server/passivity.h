@@ -23,17 +23,37 @@
 //   what a spring seen delay + 1 ticks late adds on the hand's way out. It
 //   acts smoothly, before the reactive damping above has to cut the force.
 //
-// The servo's safety layer runs one per force device through its passivity
-// hook: observe() and reset() have that interface's signatures, so an adapter
-// (or deriving from the hook's interface) is all the wiring it needs.
+// The safety layer (SafetyChannel::set_passivity) holds one per force device
+// behind PassivityController; the session plugs one into every device with
+// force output unless --no-passivity.
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <memory>
 
 #include "hapticut/vec3.h"
 
 namespace hapticut::servo {
+
+// Where a per-device passivity controller plugs into the safety layer. The
+// controller sees the force about to be rendered and the device point's
+// velocity each tick and returns the force to render instead (an observer
+// that damps out energy the loop would add).
+// Real-time thread: no allocation, lock or system call.
+class PassivityController {
+ public:
+  virtual ~PassivityController() = default;
+  PassivityController() = default;
+  PassivityController(const PassivityController&) = delete;
+  PassivityController& operator=(const PassivityController&) = delete;
+
+  // force_N: the clamped engine force; velocity_mm_per_s: the tool origin's
+  // velocity from the last two samples; dt_s: the tick's duration.
+  virtual Vec3 observe(const Vec3& force_N, const Vec3& velocity_mm_per_s, double dt_s) = 0;
+  // After a fault or a new start: forget the energy seen so far.
+  virtual void reset() {}
+};
 
 struct PassivitySettings {
   bool enabled = true;
@@ -46,7 +66,7 @@ struct PassivitySettings {
   double max_damping_N_s_per_mm = 0.5;
 };
 
-class HannafordRyuPassivity {
+class HannafordRyuPassivity final : public PassivityController {
  public:
   static constexpr double kMaxLinkDelayTicks = 62.0;
 
@@ -55,9 +75,9 @@ class HannafordRyuPassivity {
   // One tick: the force the environment asks for (N, on the hand), the
   // hand's velocity measured over the last tick (mm/s) and the tick (s).
   // Returns the force to render. Non-finite input: zero force, nothing counted.
-  Vec3 observe(const Vec3& force_N, const Vec3& velocity_mm_per_s, double dt_s);
+  Vec3 observe(const Vec3& force_N, const Vec3& velocity_mm_per_s, double dt_s) override;
 
-  void reset();
+  void reset() override;
   // W: energy taken from the hand so far (mJ = N mm); >= 0 while passive.
   double observed_energy_mJ() const { return observed_energy_mJ_; }
   double last_damping_N_s_per_mm() const { return last_damping_; }
@@ -79,5 +99,9 @@ class HannafordRyuPassivity {
   Vec3 last_asked_N_;                // The force asked for last tick.
   double stiffness_N_per_mm_ = 0.0;  // The environment's, as last measured.
 };
+
+// link_delay_s: the device link's delay beyond the one-tick hold (0 for a
+// local device), turned into ticks at rate_Hz and capped at the controller's maximum.
+std::unique_ptr<PassivityController> make_passivity_controller(double link_delay_s, double rate_Hz);
 
 }  // namespace hapticut::servo

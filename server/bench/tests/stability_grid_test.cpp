@@ -1,12 +1,12 @@
 // The stability bench's grids (stability.h): the main grid follows the
-// servo's stiffness limit per rate (stiffness_limit, server/safety.h), and
+// servo's stiffness limit per rate (stiffness_limit, server/devices/device.h), and
 // with the controller none of its rows gives the hand energy.
 #include <gtest/gtest.h>
 
 #include <stdexcept>
 
-#include "devices/stability.h"
-#include "safety.h"
+#include "bench/stability.h"
+#include "devices/device.h"
 #include "test_profiles.h"
 
 namespace hapticut::servo {

@@ -1,5 +1,5 @@
 // The stability bench (`hapticut bench stability`, docs/stability.md): the
-// closed loop of a virtual hand (virtual_hand.h) pressing on a rigid block
+// closed loop of a virtual hand (devices/virtual_hand.h) pressing on a rigid block
 // ("bone") through the real engine (a Proxy on a Space), with a link delay
 // and a servo rate, with and without the passivity controller. It measures
 // the energy the loop gives the hand: the work of the rendered force on the
@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "devices/device.h"
-#include "devices/passivity.h"
+#include "passivity.h"
 
 namespace hapticut::servo {
 
@@ -54,7 +54,7 @@ struct StabilityRow {
   double link_delay_s = 0.0;
   double stiffness_N_per_mm = 1.0;
   // The servo's limit at this rate for the grid's device (stiffness_limit,
-  // server/safety.h; 0: none known) and whether the stiffness is above it
+  // server/devices/device.h; 0: none known) and whether the stiffness is above it
   // (the servo would lower such a scene stiffness and refuse such a set).
   double limit_N_per_mm = 0.0;
   bool above_limit = false;

@@ -1,4 +1,4 @@
-#include "realtime.h"
+#include "rt/realtime.h"
 
 #include <pthread.h>
 #include <sched.h>

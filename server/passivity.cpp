@@ -1,4 +1,4 @@
-#include "devices/passivity.h"
+#include "passivity.h"
 
 #include <algorithm>
 #include <cmath>
@@ -142,6 +142,14 @@ Vec3 HannafordRyuPassivity::observe(const Vec3& force_N, const Vec3& velocity_mm
   if (alpha <= 0.0) return render(force);
   last_damping_ += alpha;
   return render(force - velocity_next * alpha);
+}
+
+std::unique_ptr<PassivityController> make_passivity_controller(double link_delay_s,
+                                                               double rate_Hz) {
+  PassivitySettings settings;
+  settings.link_delay_ticks =
+      std::clamp(link_delay_s * rate_Hz, 0.0, HannafordRyuPassivity::kMaxLinkDelayTicks);
+  return std::make_unique<HannafordRyuPassivity>(settings);
 }
 
 }  // namespace hapticut::servo

@@ -1,4 +1,4 @@
-#include "devices/stability.h"
+#include "bench/stability.h"
 
 #include <algorithm>
 #include <cmath>

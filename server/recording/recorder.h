@@ -1,5 +1,5 @@
 // Recorder: writes the records the loop pushes into its ring to a recording
-// file (devices/recording_file.h) on its own thread, so the tick never waits
+// file (recording/recording_file.h) on its own thread, so the tick never waits
 // for the disk. A full ring drops records (the loop counts them).
 #pragma once
 
@@ -10,9 +10,9 @@
 #include <string>
 #include <thread>
 
-#include "devices/recording_file.h"
+#include "recording/recording_file.h"
+#include "rt/spsc_ring.h"
 #include "servo_loop.h"
-#include "spsc_ring.h"
 
 namespace hapticut::servo {
 

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
+#include "bench/stability.h"
+#include "devices/device.h"
 #include "devices/profile.h"
-#include "devices/stability.h"
-#include "safety.h"
 
 namespace {
 
