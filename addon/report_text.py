@@ -47,3 +47,31 @@ def report_lines(report: dict) -> list[str]:
     if timings:
         lines.append("time: " + ", ".join(f"{k} {v:.1f} s" for k, v in timings.items()))
     return lines
+
+
+# What the panel says each build setting costs, beside the last build's figures.
+SETTING_COSTS = (
+    "Edge near: the tets at the surfaces; half of it gives about 4-8x the tets and the time",
+    "Edge far: the tets away from them, mostly air; larger is cheaper",
+    "Accuracy: how far surfaces may move; tighter keeps thin features, costs more tets",
+)
+FIRST_TRY = (
+    "0 derives a setting from the regions: accuracy 1 % of their diagonal, edge near their "
+    "mean edge, edge far 4x near; a ~100 mm object builds in under a minute"
+)
+
+
+def cost_lines(report: dict) -> list[str]:
+    """What the build settings cost: the last build's resolved settings and figures, then
+    what each setting trades (before any build: what 0 means)."""
+    settings = report.get("settings", {})
+    if not settings:
+        return [FIRST_TRY, *SETTING_COSTS]
+    total = report.get("timings_s", {}).get("total")
+    took = f" in {total:.1f} s" if total is not None else ""
+    return [
+        f"last build: accuracy {settings.get('accuracy_mm', 0):.2g} mm, edges "
+        f"{settings.get('edge_near_mm', 0):.2g} / {settings.get('edge_far_mm', 0):.2g} mm: "
+        f"{report.get('tets', 0):,} tets{took}",
+        *SETTING_COSTS,
+    ]

@@ -7,7 +7,7 @@ import json
 import bpy
 
 from . import build_job, toolkit
-from .report_text import report_lines
+from .report_text import cost_lines, report_lines
 from .ui_common import SidebarPanel, SidebarSubpanel, draw_properties, draw_status
 
 
@@ -131,6 +131,11 @@ class HAPTICUT_PT_build(SidebarSubpanel, bpy.types.Panel):
             settings,
             ("accuracy", "edge_near", "edge_far", "enclosure", "coarsen", "work_directory"),
         )
+        costs = layout.column(align=True)
+        costs.scale_y = 0.8
+        report = json.loads(settings.report_json) if settings.report_json else {}
+        for line in cost_lines(report):
+            costs.label(text=line)
         if settings.running:
             draw_job(layout, settings, build_job.running(context.scene.name))
         else:

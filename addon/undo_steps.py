@@ -1,7 +1,8 @@
-"""Undo steps for what a timer changes (the preview at the end of a build, the bake at the end
-of a stroke). Blender pushes a step after an operator that has 'UNDO' in its options, but
-Tetrahedralize and Simulate Stroke return long before their timers edit the scene: without a
-step of its own that edit would be undone together with whatever operator came before it.
+"""Undo steps for what a timer changes (the preview at the end of a build or an import, a
+bake). Blender pushes a step after an operator that has 'UNDO' in its options, but
+Tetrahedralize, Import Scene, Simulate Stroke and Bake return long before their timers edit
+the scene: without a step of its own that edit would be undone together with whatever
+operator came before it.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 import bpy
 from bpy.props import StringProperty
 
-from .. import baking, jobs, live
+from .. import baking, jobs, live, undo_steps
 
 
 class HAPTICUT_OT_bake_recording(jobs.FollowsJob, bpy.types.Operator):
@@ -10,7 +10,8 @@ class HAPTICUT_OT_bake_recording(jobs.FollowsJob, bpy.types.Operator):
 
     bl_idname = "hapticut.bake_recording"
     bl_label = "Bake"
-    bl_options = {"REGISTER", "UNDO"}
+    # No UNDO: the bake changes the scene later, from the job, which pushes its own step.
+    bl_options = {"REGISTER"}
 
     filepath: StringProperty(
         name="Recording", subtype="FILE_PATH", description="Empty: the scene's last recording"
@@ -34,4 +35,6 @@ class HAPTICUT_OT_bake_recording(jobs.FollowsJob, bpy.types.Operator):
 
 def _bake_steps(scene_name: str, path: str, preview: str):
     link = yield from live.link_steps()
-    return (yield from baking.bake_steps(scene_name, link, path, preview))
+    figures = yield from baking.bake_steps(scene_name, link, path, preview)
+    undo_steps.push("Bake")
+    return figures

@@ -7,7 +7,7 @@ import bpy
 from bpy.props import StringProperty
 from bpy_extras.io_utils import ImportHelper
 
-from .. import jobs, preferences, toolkit
+from .. import jobs, preferences, toolkit, undo_steps
 from ..preview import show_preview
 from .export_scene import _scene_error
 
@@ -17,7 +17,8 @@ class HAPTICUT_OT_import_scene(bpy.types.Operator, ImportHelper):
 
     bl_idname = "hapticut.import_scene"
     bl_label = "Import Scene"
-    bl_options = {"REGISTER", "UNDO"}
+    # No UNDO: the preview appears later, from the job, which pushes its own step.
+    bl_options = {"REGISTER"}
 
     filter_glob: StringProperty(default="*.hapticut.msgpack;*.hapticut.json", options={"HIDDEN"})
 
@@ -49,3 +50,4 @@ def _import_steps(executable: str, scene_name: str, path: str):
     settings.report_json = json.dumps(report)
     settings.status = f"imported {os.path.basename(path)}"
     settings.error = ""
+    undo_steps.push("Import scene")

@@ -50,7 +50,9 @@ constexpr std::array<MaterialModelSpec, 5> kModels{{
 constexpr std::array<PresetValue, 1> kSoftTissueValues{{{"drag_distance_mm", 2.0}}};
 constexpr std::array<PresetValue, 2> kFatValues{
     {{"viscosity_N_s_per_mm", 0.002}, {"max_lag_mm", 10.0}}};
-constexpr std::array<PresetValue, 1> kSkinValues{{{"break_force_N", 1.5}}};
+// A point's own spring breaks the skin (eq. (15)): at the default stiffness, a push of a few
+// mm, so a first stroke at the default settings cuts through.
+constexpr std::array<PresetValue, 1> kSkinValues{{{"break_force_N", 0.3}}};
 
 constexpr std::array<MaterialPreset, 5> kPresets{{
     {"air", "Air", MaterialModel::Free, {}},

@@ -17,7 +17,7 @@ HERE = Path(__file__).resolve().parent
 # on its origin): above the finger, its edge over the proximal bone (x -36 to -9) and the
 # flesh beyond; down into the bone (its surface is 3.5 mm from the axis), then across and
 # out. The skin is a membrane that gives way at 0.5 N a point (a 5 mm lag at 0.1 N/mm; the
-# preset's 1.5 N would need a push deeper than the finger).
+# preset's breaks sooner).
 KNIFE_X = -22.0
 DEEPEST_Z = -3.0
 SKIN_BREAK_FORCE_N = 0.5

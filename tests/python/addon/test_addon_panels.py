@@ -40,6 +40,9 @@ class CheckingLayout:
     def row(self, **options):
         return self
 
+    def column(self, **options):
+        return self
+
 
 def draw(panel_class, layout) -> None:
     panel = types.SimpleNamespace(layout=layout)

@@ -187,12 +187,12 @@ def test_undo_steps(addon, data_home, monkeypatch):
     checked, and the steps pushed where a timer edits the scene are recorded."""
     from addon import undo_steps
 
-    for name in ("bake_recording", "clear_bake", "import_scene", "set_cutting_edge"):
+    for name in ("clear_bake", "set_cutting_edge"):
         options = getattr(bpy.types, f"HAPTICUT_OT_{name}").bl_options
         assert {"REGISTER", "UNDO"} <= set(options), name
-    # Operators that start background work push no step of their own: the preview and the
-    # stroke's bake come later, from a timer, which pushes one.
-    for name in ("tetrahedralize", "simulate_stroke"):
+    # Operators that start background work push no step of their own: the preview, the
+    # import and the bakes come later, from a timer, which pushes one.
+    for name in ("tetrahedralize", "simulate_stroke", "bake_recording", "import_scene"):
         options = getattr(getattr(bpy.types, f"HAPTICUT_OT_{name}"), "bl_options", set())
         assert "UNDO" not in options, name
     pushed = []
@@ -202,3 +202,6 @@ def test_undo_steps(addon, data_home, monkeypatch):
     assert pushed == ["Tetrahedralize preview"]
     simulate_and_bake(scene)
     assert pushed == ["Tetrahedralize preview", "Bake stroke"]
+    assert bpy.ops.hapticut.bake_recording() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
+    assert pushed == ["Tetrahedralize preview", "Bake stroke", "Bake"]
