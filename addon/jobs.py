@@ -61,6 +61,18 @@ def last() -> Job | None:
     return current() or _last
 
 
+def shows_error_in(scene_name: str, settings: str):
+    """An on_error that puts the message into the scene's ``error`` of its settings group
+    (``hapticut`` for the build panel, ``hapticut_live`` for the live one)."""
+
+    def show(message: str) -> None:
+        scene = bpy.data.scenes.get(scene_name)
+        if scene is not None:
+            getattr(scene, settings).error = message
+
+    return show
+
+
 def start(
     name: str, scene_name: str, steps: Steps, on_error: Callable[[str], None] | None = None
 ) -> Job:

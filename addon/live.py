@@ -226,19 +226,10 @@ def _refuse_at_once(scene, bindings: list[str], settings: dict, rate_Hz: float) 
         raise
 
 
-def _panel_error(scene_name: str):
-    def show(message: str) -> None:
-        scene = bpy.data.scenes.get(scene_name)
-        if scene is not None:
-            scene.hapticut_live.error = message
-
-    return show
-
-
 def start_job(name: str, scene_name: str, work: steps.Steps, show_error: bool = True) -> jobs.Job:
     """Run the work as a job (after those asked for before), its error shown on the scene's
     live panel (unless the work shows it itself)."""
-    shown = _panel_error(scene_name) if show_error else None
+    shown = jobs.shows_error_in(scene_name, "hapticut_live") if show_error else None
     return jobs.start(name, scene_name, work, on_error=shown)
 
 

@@ -34,17 +34,10 @@ class HAPTICUT_OT_export_scene(bpy.types.Operator, ExportHelper):
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         work = _export_steps(executable, source, self.filepath)
-        jobs.start("Export scene", scene.name, work, on_error=_scene_error(scene.name))
+        jobs.start(
+            "Export scene", scene.name, work, on_error=jobs.shows_error_in(scene.name, "hapticut")
+        )
         return {"FINISHED"}
-
-
-def _scene_error(scene_name: str):
-    def show(message: str) -> None:
-        scene = bpy.data.scenes.get(scene_name)
-        if scene is not None:
-            scene.hapticut.error = message
-
-    return show
 
 
 def _export_steps(executable: str, source: str, path: str):

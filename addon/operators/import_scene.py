@@ -9,7 +9,6 @@ from bpy_extras.io_utils import ImportHelper
 
 from .. import jobs, preferences, toolkit, undo_steps
 from ..preview import show_preview
-from .export_scene import _scene_error
 
 
 class HAPTICUT_OT_import_scene(bpy.types.Operator, ImportHelper):
@@ -31,7 +30,9 @@ class HAPTICUT_OT_import_scene(bpy.types.Operator, ImportHelper):
             scene.hapticut.error = str(error)
             return {"CANCELLED"}
         work = _import_steps(executable, scene.name, self.filepath)
-        jobs.start("Import scene", scene.name, work, on_error=_scene_error(scene.name))
+        jobs.start(
+            "Import scene", scene.name, work, on_error=jobs.shows_error_in(scene.name, "hapticut")
+        )
         return {"FINISHED"}
 
 
