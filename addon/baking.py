@@ -358,7 +358,8 @@ def bake_steps(scene_name: str, link, recording_path: str, preview_path: str) ->
     return figures
 
 
-def baked_objects(scene=None) -> list:
+def baked_objects() -> list:
+    """Every object a bake made, in any scene (their collection is shared)."""
     return [o for o in bpy.data.objects if o.get(TAG)]
 
 
@@ -366,7 +367,7 @@ def clear(scene) -> int:
     """Remove every object a bake made, their meshes (not a blade's), actions and the
     collection; the number of objects removed."""
     removed = 0
-    for obj in baked_objects(scene):
+    for obj in baked_objects():
         data = obj.data
         action = obj.animation_data.action if obj.animation_data else None
         bpy.data.objects.remove(obj)

@@ -95,7 +95,7 @@ def test_the_recipe_runs_as_a_script(addon, tmp_path, monkeypatch):
     # Simulated, baked when done, baked again from the recording.
     assert namespace["baked"]["frames"] >= scene.frame_end - scene.frame_start + 1
     assert os.path.isfile(scene.hapticut_live.recording_path)
-    names = {o.name for o in baking.baked_objects(scene)}
+    names = {o.name for o in baking.baked_objects()}
     assert names == {"Ideal Plane", "Force Plane", "Cut Plane"}
     again = json.loads(scene.hapticut_live.bake_report)
     assert again["frames"] == namespace["baked"]["frames"]

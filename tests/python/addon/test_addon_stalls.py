@@ -91,7 +91,7 @@ def test_no_operator_holds_the_ui(finger, tmp_path):
     live_support.follow(lambda: session.status.get("recording", {}).get("written", 0) > 100)
     run("record_live")
     run("simulate_stroke")
-    assert baking.baked_objects(scene) and scene.hapticut_live.error == ""
+    assert baking.baked_objects() and scene.hapticut_live.error == ""
     run("bake_recording")
     run("clear_bake")
     run("stop_servo")

@@ -72,7 +72,7 @@ def simulate_and_bake(scene) -> dict:
         assert bpy.ops.hapticut.simulate_stroke() == {"FINISHED"}
         assert bpy.ops.hapticut.wait() == {"FINISHED"}
         assert scene.hapticut_live.error == ""
-        assert baking.baked_objects(scene)
+        assert baking.baked_objects()
         return json.loads(scene.hapticut_live.bake_report)
     finally:
         live.stop()

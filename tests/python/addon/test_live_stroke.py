@@ -31,7 +31,7 @@ def baked(addon, tmp_path_factory):
         f"{figures['servo_s']:.2f} s, bake {figures.get('bake_s', 0):.2f} s)"
     )
     assert scene.hapticut_live.error == ""
-    assert baking.baked_objects(scene)
+    assert baking.baked_objects()
     yield scene
     live.stop()
 
@@ -234,13 +234,13 @@ def test_clear_removes_the_bake_and_bake_remakes_it_from_the_recording(baked):
     from addon import baking
 
     assert bpy.ops.hapticut.clear_bake() == {"FINISHED"}
-    assert not baking.baked_objects(baked)
+    assert not baking.baked_objects()
     assert "Hapticut Bake" not in bpy.data.collections
     assert "Hapticut Cut Reveal" not in bpy.data.node_groups
     assert bpy.data.objects["Knife"].data.name in bpy.data.meshes  # The blade's mesh stays.
     assert bpy.ops.hapticut.bake_recording() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
-    assert len(baking.baked_objects(baked)) == 3
+    assert len(baking.baked_objects()) == 3
 
 
 def test_a_truncated_recording_bakes_its_whole_records_and_says_so(baked, tmp_path):
