@@ -95,13 +95,22 @@ def _end(job: Job, state: str, error: str = "") -> None:
     job.state, job.error = state, error
     job.seconds = time.perf_counter() - job.started
     _queue.remove(job)
+    job.steps = None  # What the steps held (Blender data, a session) goes with them.
     _last = job
     if error and job.on_error is not None:
         job.on_error(error)
 
 
 def advance() -> bool:
-    """Run the running job's next step; False when no job is left."""
+    """Run the running job's next step; False when no job is left (then the timer is
+    removed: nothing of the add-on stays registered with Blender without work)."""
+    running = _advance()
+    if not running:
+        stop_timer()
+    return running
+
+
+def _advance() -> bool:
     job = current()
     if job is None:
         return False
@@ -144,7 +153,7 @@ def cancel_all() -> None:
 
 def timer():
     """bpy.app.timers callback: one step; the next interval, None once no job runs."""
-    return INTERVAL_S if advance() else None
+    return INTERVAL_S if _advance() else None
 
 
 def stop_timer() -> None:
