@@ -88,11 +88,6 @@ def listing_steps(
     return listing
 
 
-def run_listing(servo: str, timeout_s: float | None = None, rate_Hz: float = 1000.0) -> dict:
-    """listing_steps in one call."""
-    return steps.run_to_end(listing_steps(servo, timeout_s, rate_Hz))
-
-
 def refresh_steps(
     servo: str, timeout_s: float | None = None, rate_Hz: float = 1000.0
 ) -> steps.Steps[dict]:
@@ -102,11 +97,6 @@ def refresh_steps(
     _listing = yield from listing_steps(servo, timeout_s, rate_Hz)
     _generation += 1
     return _listing
-
-
-def refresh(servo: str, timeout_s: float | None = None, rate_Hz: float = 1000.0) -> dict:
-    """refresh_steps in one call."""
-    return steps.run_to_end(refresh_steps(servo, timeout_s, rate_Hz))
 
 
 def cached() -> dict | None:

@@ -62,7 +62,7 @@ def link_steps(timeout_s: float = toolkit.QUICK_TIMEOUT_S) -> steps.Steps:
         raise live_session.SessionError(str(error)) from None
 
 
-def link(context=None, timeout_s: float = toolkit.QUICK_TIMEOUT_S):
+def link(timeout_s: float = toolkit.QUICK_TIMEOUT_S):
     """The toolkit's modules (link_steps in one call)."""
     return steps.run_to_end(link_steps(timeout_s))
 
@@ -106,11 +106,6 @@ def start_steps(scene_name: str) -> steps.Steps[live_session.Session]:
     _scene_name = scene_name
     _register()
     return _session
-
-
-def start(context) -> live_session.Session:
-    """start_steps in one call."""
-    return steps.run_to_end(start_steps(context.scene.name))
 
 
 def refresh_devices_steps(scene_name: str, rate_Hz: float | None = None) -> steps.Steps[dict]:

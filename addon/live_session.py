@@ -137,13 +137,6 @@ def start_steps(
     return Session(link, process, log_path, client)
 
 
-def start(
-    link, log_path: str, port: int = 0, realtime: bool = True, extra: tuple[str, ...] = ()
-) -> Session:
-    """start_steps in one call."""
-    return steps.run_to_end(start_steps(link, log_path, port, realtime, extra))
-
-
 def _kill(process: subprocess.Popen, grace_s: float = 5.0) -> None:
     if process.poll() is None:
         with contextlib.suppress(ProcessLookupError):
@@ -330,11 +323,6 @@ def stop_steps(session: Session) -> steps.Steps[None]:
         _kill(session.process)
         session.client.close()
         session.state = "stopped"
-
-
-def stop(session: Session) -> None:
-    """stop_steps in one call."""
-    steps.run_to_end(stop_steps(session))
 
 
 def frame_age_s(frame, now_s: float) -> float | None:

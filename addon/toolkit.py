@@ -71,11 +71,6 @@ def quick_steps(
     return done.stdout
 
 
-def run_quick(executable: str, *args: str, timeout_s: float = QUICK_TIMEOUT_S) -> str:
-    """quick_steps in one call."""
-    return steps.run_to_end(quick_steps(executable, *args, timeout_s=timeout_s))
-
-
 def version_steps(executable: str) -> steps.Steps[str]:
     """The installed toolkit's version (``hapticut --version`` prints "hapticut 0.1.0")."""
     text = yield from quick_steps(executable, "--version")
