@@ -197,6 +197,43 @@ def test_a_meshing_that_stays_beyond_the_accuracy_is_refused_in_strict_mode(monk
         )
 
 
+def _labels_empty_for(monkeypatch, meshings: int) -> None:
+    """The first ``meshings`` meshings label no tet inside any region, as when fTetWild merges
+    a region's surfaces (its output differs between runs; this makes it happen on demand)."""
+    label, calls = builder._label, []
+
+    def emptied(*args):
+        inside, tet_materials = label(*args)
+        calls.append(1)
+        if len(calls) > meshings:
+            return inside, tet_materials
+        return np.zeros_like(inside), np.zeros_like(tet_materials)
+
+    monkeypatch.setattr(builder, "_label", emptied)
+
+
+def test_a_meshing_that_leaves_a_region_without_tets_is_made_again(monkeypatch):
+    _labels_empty_for(monkeypatch, 1)
+    seen: list[str] = []
+    scene = build(
+        [Region("ball", *icosphere(10.0, 2), BONE)],
+        settings=BuildSettings(accuracy_mm=1.0),
+        progress=lambda f, m: seen.append(m),
+    )
+    report = scene.metadata["build_report"]
+    attempts = report["meshing_attempts"]
+    assert attempts[0] == {"envelope_mm": pytest.approx(0.4), "no_tet_inside": ["ball"]}
+    assert attempts[1]["envelope_mm"] == pytest.approx(0.2)
+    assert report["tets_per_region"]["ball"] > 0
+    assert any("no tet inside ball (meshing 2 of 3)" in m for m in seen)
+
+
+def test_a_region_left_without_tets_by_every_meshing_is_an_error(monkeypatch):
+    _labels_empty_for(monkeypatch, builder.MESHING_ATTEMPTS)
+    with pytest.raises(BuildError, match=r"'ball': no tet lies inside this region after 3 mesh"):
+        build([Region("ball", *icosphere(10.0, 2), BONE)], settings=BuildSettings(accuracy_mm=1.0))
+
+
 def test_regions_sharing_a_material_share_its_entry():
     left = Region("left", *icosphere(5.0, 1, centre=(-10, 0, 0)), BONE)
     right = Region("right", *icosphere(5.0, 1, centre=(10, 0, 0)), BONE)

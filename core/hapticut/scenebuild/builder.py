@@ -471,6 +471,24 @@ def build(
         inside, tet_materials = _label(
             vertices, tets, regions, surfaces, volumes, materials, lengths, steps, report
         )
+        emptied = [r.name for r, held in zip(regions, inside, strict=True) if not held.any()]
+        if emptied:
+            # fTetWild merged a region's surfaces (it is thinner than twice the envelope here,
+            # or this run's output happened to): no meshing without its tets is usable.
+            report.meshing_attempts.append(
+                {"envelope_mm": round(lengths.envelope_mm, 6), "no_tet_inside": emptied}
+            )
+            if attempt == MESHING_ATTEMPTS:
+                if not meshings:
+                    raise _emptied_error(emptied[0], attempt, lengths)
+                break  # The best of the earlier meshings is kept.
+            lengths = replace(lengths, envelope_mm=lengths.envelope_mm / 2)
+            report.settings["envelope_mm"] = round(lengths.envelope_mm, 6)
+            steps.again(
+                f"meshing again with a {lengths.envelope_mm:.3g} mm envelope: no tet inside "
+                f"{emptied[0]} (meshing {attempt + 1} of {MESHING_ATTEMPTS})"
+            )
+            continue
         misses = _measure_deviation(
             vertices, tets, inside, regions, repaired, lengths, settings, steps, report
         )
@@ -988,6 +1006,16 @@ def _refine_zones(
             if feature["meshed_finer"]:
                 zones.extend(RefineZone(tuple(p), tuple(p), width, edge) for p in points.tolist())
     return tuple(zones)
+
+
+def _emptied_error(name: str, attempts: int, lengths: Lengths) -> BuildError:
+    """No meshing left the region any tet."""
+    return BuildError(
+        name,
+        f"no tet lies inside this region after {attempts} meshings down to a "
+        f"{lengths.envelope_mm:.3g} mm envelope: it is thinner than twice the envelope "
+        "(40% of accuracy_mm); lower accuracy_mm",
+    )
 
 
 def _keep_best(
