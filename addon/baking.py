@@ -8,14 +8,18 @@ for the cut surface: ``hapticut.cut_surface``), never from the live stream.
 from __future__ import annotations
 
 import json
+import os
+import shutil
+import tempfile
 import time
 
 import bpy
 import mathutils
 import numpy as np
 
-from . import cut_reveal, steps
+from . import cut_reveal, steps, toolkit
 from .stroke_path import frames_per_second, object_fcurves
+from .toolkit import last_error_line
 from .units import mm_per_unit
 
 COLLECTION = "Hapticut Bake"
@@ -28,6 +32,8 @@ ARROW_COLOUR = (1.0, 0.75, 0.05, 1.0)
 ARROW_SCENE_FRACTION = 0.2
 # The longest a keying step runs before it lets Blender draw.
 STEP_S = 0.02
+# The most the cut surfaces' child may take (a long stroke through a large scene).
+CUT_TIMEOUT_S = 600.0
 
 
 class BakeError(RuntimeError):
@@ -190,15 +196,9 @@ def cut_mesh(name: str, surface, mm: float):
     return mesh
 
 
-def load_preview_tets(path: str) -> dict:
+def load_preview_tets(link, path: str) -> dict:
     try:
-        with np.load(path) as data:
-            return {
-                "vertices": data["tet_vertices"],
-                "tets": data["tets"],
-                "materials": data["tet_materials"],
-                "models": [str(m) for m in data["material_models"]],
-            }
+        return link.cut_surface.preview_tets(path)
     except (OSError, KeyError, ValueError) as error:
         raise BakeError(
             f"the scene's tets cannot be read from {path} ({error}): tetrahedralize again"
@@ -240,7 +240,7 @@ def bake_steps(scene_name: str, link, recording_path: str, preview_path: str) ->
             f"recording {recording_path} holds {len(recording)} tick(s): nothing to bake"
         )
     yield "reading the scene's tets"
-    tets = load_preview_tets(preview_path)
+    tets = load_preview_tets(link, preview_path)
     yield "placing the keys"
     scene = scene_now()
     live = scene.hapticut_live
@@ -267,12 +267,6 @@ def bake_steps(scene_name: str, link, recording_path: str, preview_path: str) ->
         (float(np.max(np.linalg.norm(f, axis=1))) for f in forces_by_blade.values()), default=0.0
     )
     mm_per_N = arrow_mm_per_N(arrow_setting, peak_force_N, scene_diagonal_mm(tets))
-    yield "indexing the tets"
-    locator = link.cut_surface.TetLocator(tets["vertices"], tets["tets"])
-    yield "clearing the last bake"
-    scene = scene_now()
-    clear(scene)
-    _collection(scene)
     figures = {
         "recording": recording_path,
         "ticks": len(recording),
@@ -287,61 +281,38 @@ def bake_steps(scene_name: str, link, recording_path: str, preview_path: str) ->
         "truncated": recording.problem,
         "blades": {},
     }
+    folder = tempfile.mkdtemp(prefix="hapticut-cut-")
+    cuts_path = os.path.join(folder, "cuts.npz")
+    # A child computes the cut surfaces while the keys are placed.
+    cutting = None
+    try:
+        cutting = steps.started(
+            _cut_child(link.executable, recording_path, preview_path, cuts_path, fps,
+                       frame_start, substeps, baked_ticks)
+        )  # fmt: skip
+        yield "clearing the last bake"
+        scene = scene_now()
+        clear(scene)
+        _collection(scene)
+        for name in recording.blade_names:
+            yield from _key_blade_steps(
+                scene_now, recording, name, frames, nearest, forces_by_blade[name], mm, mm_per_N
+            )
+        done = yield from cutting
+        if done.returncode != 0:
+            line = last_error_line(done.stderr)
+            raise BakeError(f"the cut surfaces were not computed: {line}")
+        try:
+            surfaces = link.cut_surface.read_cut_surfaces(cuts_path)
+        except (OSError, KeyError, ValueError) as error:
+            raise BakeError(f"the cut surfaces cannot be read ({error})") from None
+    finally:
+        if cutting is not None:
+            cutting.close()  # Kills the child when the bake ends early.
+        shutil.rmtree(folder, ignore_errors=True)
     for name in recording.blade_names:
-        blade = recording.blade(name)
-        source = bpy.data.objects.get(name)
-        placed = ideal_poses(recording, name, nearest)
-        locations = [location / mm for location, _ in placed]
-        rotations = [rotation for _, rotation in placed]
-        centres = [mathutils.Vector(blade["q"][k].mean(axis=0)) / mm for k in nearest]
-        ideal = _new_object(
-            _collection(scene_now()), f"Ideal {name}", source.data if source else None
-        )
-        ideal["hapticut_blade"] = name
-        ideal.rotation_mode = "QUATERNION"
-        if source is not None:
-            ideal.scale = source.matrix_world.to_scale()
-        yield from _keyframes_steps(
-            ideal.name, frames, {"location": locations, "rotation_quaternion": rotations}
-        )
-        # The force arrow at the proxies' centre.
-        forces = forces_by_blade[name]
-        arrow = _new_object(_collection(scene_now()), f"Force {name}", _arrow_mesh(mm))
-        arrow["hapticut_blade"] = name
-        arrow.rotation_mode = "QUATERNION"
-        lengths = np.linalg.norm(forces, axis=1) * mm_per_N / mm
-        z = mathutils.Vector((0, 0, 1))
-        arrow_rotations = [
-            z.rotation_difference(mathutils.Vector(f))
-            if np.linalg.norm(f) > 0
-            else mathutils.Quaternion()
-            for f in forces
-        ]
-        # Zero force: a flat arrow (hidden), never a zero scale.
-        scales = [
-            mathutils.Vector((1.0, 1.0, max(s, 1e-6))) if s > 0 else mathutils.Vector((1e-6,) * 3)
-            for s in lengths
-        ]
-        yield from _keyframes_steps(
-            arrow.name,
-            frames,
-            {"location": centres, "rotation_quaternion": arrow_rotations, "scale": scales},
-        )
-        yield f"cutting {name}'s surface"
-        surface = link.cut_surface.cut_surface(
-            blade["q"][:baked_ticks],
-            blade["state"][:baked_ticks],
-            times[:baked_ticks],
-            fps,
-            frame_start,
-            tets["vertices"],
-            tets["tets"],
-            tets["materials"],
-            tets["models"],
-            substeps=substeps,
-            locator=locator,
-        )
         yield f"meshing {name}'s cut"
+        surface = surfaces[name]
         cut = _new_object(
             _collection(scene_now()), f"Cut {name}", cut_mesh(f"Cut {name}", surface, mm)
         )
@@ -349,13 +320,79 @@ def bake_steps(scene_name: str, link, recording_path: str, preview_path: str) ->
         cut_reveal.add_reveal(cut)
         figures["blades"][name] = {
             "cut_faces": len(surface.faces),
-            "max_force_N": float(np.max(np.linalg.norm(forces, axis=1))),
+            "max_force_N": float(np.max(np.linalg.norm(forces_by_blade[name], axis=1))),
         }
     figures["seconds"] = time.perf_counter() - began
     live = scene_now().hapticut_live
     live.bake_report = json.dumps(figures)
     live.recording_path = recording_path
     return figures
+
+
+def _cut_child(
+    executable: str,
+    recording_path: str,
+    preview_path: str,
+    out: str,
+    fps: float,
+    frame_start: int,
+    substeps: int,
+    ticks: int,
+) -> steps.Steps[steps.ChildResult]:
+    """``hapticut cut-surface``: the cut surfaces of the recording's first ticks, into out."""
+    command = [executable, "cut-surface", recording_path, preview_path, "--out", out]
+    command += ["--fps", repr(float(fps)), "--frame-start", str(frame_start)]
+    command += ["--substeps", str(substeps), "--ticks", str(max(ticks, 2))]
+    try:
+        return (
+            yield from steps.child(
+                command, CUT_TIMEOUT_S, "cutting the surfaces", toolkit.child_environment()
+            )
+        )
+    except (OSError, steps.ChildTimeoutError) as error:
+        raise BakeError(f"the cut surfaces were not computed: {error}") from None
+
+
+def _key_blade_steps(
+    scene_now, recording, name: str, frames, nearest, forces, mm: float, mm_per_N: float
+) -> steps.Steps[None]:
+    """The blade's ideal blade and its force arrow, keyed at the frames."""
+    blade = recording.blade(name)
+    source = bpy.data.objects.get(name)
+    placed = ideal_poses(recording, name, nearest)
+    locations = [location / mm for location, _ in placed]
+    rotations = [rotation for _, rotation in placed]
+    centres = [mathutils.Vector(blade["q"][k].mean(axis=0)) / mm for k in nearest]
+    ideal = _new_object(_collection(scene_now()), f"Ideal {name}", source.data if source else None)
+    ideal["hapticut_blade"] = name
+    ideal.rotation_mode = "QUATERNION"
+    if source is not None:
+        ideal.scale = source.matrix_world.to_scale()
+    yield from _keyframes_steps(
+        ideal.name, frames, {"location": locations, "rotation_quaternion": rotations}
+    )
+    # The force arrow at the proxies' centre.
+    arrow = _new_object(_collection(scene_now()), f"Force {name}", _arrow_mesh(mm))
+    arrow["hapticut_blade"] = name
+    arrow.rotation_mode = "QUATERNION"
+    lengths = np.linalg.norm(forces, axis=1) * mm_per_N / mm
+    z = mathutils.Vector((0, 0, 1))
+    arrow_rotations = [
+        z.rotation_difference(mathutils.Vector(f))
+        if np.linalg.norm(f) > 0
+        else mathutils.Quaternion()
+        for f in forces
+    ]
+    # Zero force: a flat arrow (hidden), never a zero scale.
+    scales = [
+        mathutils.Vector((1.0, 1.0, max(s, 1e-6))) if s > 0 else mathutils.Vector((1e-6,) * 3)
+        for s in lengths
+    ]
+    yield from _keyframes_steps(
+        arrow.name,
+        frames,
+        {"location": centres, "rotation_quaternion": arrow_rotations, "scale": scales},
+    )
 
 
 def baked_objects() -> list:

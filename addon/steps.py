@@ -46,6 +46,29 @@ def run_to_end(steps: Steps[T], wait_s: float = WAIT_S) -> T:
         time.sleep(wait_s)
 
 
+def started(later: Steps[T]) -> Steps[T]:
+    """The steps with their first step run now (a child started, say), the rest to run with
+    ``yield from`` later; closing them ends them as closing the original would."""
+    try:
+        first = next(later)
+    except StopIteration as done:
+        return _ended(done.value)
+    return _resumed(first, later)
+
+
+def _ended(value: T) -> Steps[T]:
+    return value
+    yield  # A generator that ends at once with the value.
+
+
+def _resumed(first: str, rest: Steps[T]) -> Steps[T]:
+    try:
+        yield first
+        return (yield from rest)
+    finally:
+        rest.close()
+
+
 def child(
     command: list[str], timeout_s: float, what: str, env: dict[str, str] | None = None
 ) -> Steps[ChildResult]:

@@ -60,7 +60,8 @@ def _package(directory: str):
 def link_steps(
     executable: str, refresh: bool = False, timeout_s: float = toolkit.QUICK_TIMEOUT_S
 ) -> steps.Steps[SimpleNamespace]:
-    """The modules (``link.servo_client``, ...) and ``link.servo`` (the servo executable);
+    """The modules (``link.servo_client``, ...), ``link.servo`` (the servo executable) and
+    ``link.executable`` (the toolkit's, for its children);
     toolkit.ToolkitError saying what is missing. Asks the toolkit once (at most timeout_s)."""
     global _link
     if _link is not None and not refresh:
@@ -79,7 +80,11 @@ def link_steps(
                 f"reinstall it: {toolkit.INSTALL_COMMAND}"
             ) from None
     _link = SimpleNamespace(
-        servo=found["servo"], package=package, version=found["version"], **modules
+        servo=found["servo"],
+        executable=executable,
+        package=package,
+        version=found["version"],
+        **modules,
     )
     return _link
 

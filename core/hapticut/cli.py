@@ -16,6 +16,7 @@ COMMAND_MODULES = (
     "materials",
     "build_request",
     "preview",
+    "cut_surface",
     "convert",
     "serve",
     "paths",

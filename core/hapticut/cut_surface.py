@@ -13,10 +13,15 @@ From a servo recording's proxies ``q`` (ticks, N, 3) and states, and the scene's
 Then every face whose centre or edge midpoint lies outside cuttable material is dropped (a
 flat quad between two points beside a curved bone would clip the bone's surface). So no
 face lies in rigid material (its proxies stop on its surface) or in air, at those samples.
+
+A bake computes them in a child process (``hapticut cut-surface``, ``recording_cut_surfaces``)
+and reads its file back (``read_cut_surfaces``): on a large scene the computation takes
+longer than Blender's UI may wait.
 """
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -269,3 +274,70 @@ def cut_surface(
     )
     surface = sweep(q, states, rows, row_frames, cutting)
     return keep_inside_cuttable(surface, locator, tet_materials, material_models)
+
+
+def preview_tets(path: str | os.PathLike) -> dict:
+    """The tets a preview file holds (hapticut.preview): vertices, tets, materials, models."""
+    with np.load(path) as data:
+        return {
+            "vertices": data["tet_vertices"],
+            "tets": data["tets"],
+            "materials": data["tet_materials"],
+            "models": [str(m) for m in data["material_models"]],
+        }
+
+
+def recording_cut_surfaces(
+    recording, tets: dict, fps: float, frame_start: int, substeps: int, ticks: int
+) -> dict[str, CutSurface]:
+    """Each blade's cut surface over the recording's first ``ticks`` records (a
+    hapticut.recording.Recording; ``tets`` as preview_tets gives them)."""
+    times = np.asarray(recording.ticks["time_s"], np.float64)[:ticks]
+    times = times - times[0] if len(times) else times
+    locator = TetLocator(tets["vertices"], tets["tets"])
+    surfaces = {}
+    for name in recording.blade_names:
+        blade = recording.blade(name)
+        surfaces[name] = cut_surface(
+            blade["q"][:ticks],
+            blade["state"][:ticks],
+            times,
+            fps,
+            frame_start,
+            tets["vertices"],
+            tets["tets"],
+            tets["materials"],
+            tets["models"],
+            substeps=substeps,
+            locator=locator,
+        )
+    return surfaces
+
+
+def write_cut_surfaces(path: str | os.PathLike, surfaces: dict[str, CutSurface]) -> None:
+    """The surfaces as .npz: ``names``, then ``vertices_i``, ``faces_i``, ``face_frames_i``,
+    ``cutting_i`` and ``row_ticks_i`` for the i-th name."""
+    arrays: dict[str, np.ndarray] = {"names": np.array(list(surfaces), dtype=str)}
+    for i, surface in enumerate(surfaces.values()):
+        arrays[f"vertices_{i}"] = surface.vertices
+        arrays[f"faces_{i}"] = surface.faces
+        arrays[f"face_frames_{i}"] = surface.face_frames
+        arrays[f"cutting_{i}"] = surface.cutting
+        arrays[f"row_ticks_{i}"] = surface.row_ticks
+    with open(path, "wb") as out:
+        np.savez(out, **arrays)
+
+
+def read_cut_surfaces(path: str | os.PathLike) -> dict[str, CutSurface]:
+    """What write_cut_surfaces wrote."""
+    with np.load(path) as data:
+        return {
+            str(name): CutSurface(
+                data[f"vertices_{i}"],
+                data[f"faces_{i}"],
+                data[f"face_frames_{i}"],
+                data[f"cutting_{i}"],
+                data[f"row_ticks_{i}"],
+            )
+            for i, name in enumerate(data["names"])
+        }

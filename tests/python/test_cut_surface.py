@@ -48,9 +48,15 @@ def stroke_poses(rate_Hz: float) -> list:
 @pytest.fixture(scope="module")
 def stroke_recording(tmp_path_factory):
     folder = tmp_path_factory.mktemp("cut")
+    record = folder / "stroke.rec"
+    stroke_recording_to(record, folder)
+    return read_recording(record)
+
+
+def stroke_recording_to(record: Path, folder: Path) -> None:
+    """The servo's recording of STROKE through the finger, at record."""
     path = folder / "stroke.path.json"
     path.write_text(json.dumps({"poses": stroke_poses(1000.0)}))
-    record = folder / "stroke.rec"
     servo = ServoProcess(
         [
             str(FINGER),
@@ -66,7 +72,6 @@ def stroke_recording(tmp_path_factory):
         control=False,
     ).start()
     assert servo.wait(120) == 0, servo.stderr_lines
-    return read_recording(record)
 
 
 def test_the_cut_surface_of_a_servo_stroke_is_in_cuttable_material_only(finger, stroke_recording):
@@ -140,3 +145,59 @@ def test_the_preview_holds_the_tets_the_bake_locates_in(finger):
     assert np.array_equal(arrays["tet_materials"], scene.tet_materials)
     assert np.array_equal(arrays["tet_vertices"], scene.vertices)
     assert arrays["tets"].dtype == np.int32
+
+
+def test_the_cut_surface_command_writes_what_the_function_computes(finger, tmp_path):
+    """``hapticut cut-surface`` (the bake's child) on a servo recording and the scene's
+    preview: the file holds each blade's surface as cut_surface computes it."""
+    from hapticut.cli import main
+    from hapticut.preview import write_preview
+
+    scene, _ = finger
+    record = tmp_path / "stroke.rec"
+    stroke_recording_to(record, tmp_path)
+    preview = tmp_path / "finger.npz"
+    write_preview(scene, preview)
+    out = tmp_path / "cuts.npz"
+    args = [str(record), str(preview), "--out", str(out), "--fps", "24", "--ticks", "900"]
+    assert main(["cut-surface", *args]) == 0
+    surfaces = cut_surface.read_cut_surfaces(out)
+    assert list(surfaces) == ["scalpel"]
+    rec = read_recording(record)
+    expected = cut_surface.recording_cut_surfaces(
+        rec, cut_surface.preview_tets(preview), 24.0, 1, 2, 900
+    )["scalpel"]
+    got = surfaces["scalpel"]
+    assert len(got.faces) > 20
+    for field in ("vertices", "faces", "face_frames", "cutting", "row_ticks"):
+        assert np.array_equal(getattr(got, field), getattr(expected, field)), field
+    # Fewer ticks, fewer rows: the bake cuts only what it keys.
+    assert got.row_ticks.max() < 900 < len(rec)
+
+
+@pytest.mark.parametrize(
+    ("extra", "problem"),
+    [
+        (["--fps", "0"], "--fps must be a positive number"),
+        (["--fps", "nan"], "--fps must be a positive number"),
+        (["--fps", "24", "--substeps", "0"], "--substeps must be at least 1"),
+        (["--fps", "24", "--ticks", "1"], "--ticks must be at least 2"),
+    ],
+)
+def test_the_cut_surface_command_names_a_bad_number(tmp_path, capsys, extra, problem):
+    from hapticut.cli import main
+
+    out = tmp_path / "cuts.npz"
+    assert main(["cut-surface", "r.rec", "p.npz", "--out", str(out), *extra]) == 2
+    assert problem in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_the_cut_surface_command_names_a_file_it_cannot_read(tmp_path, capsys):
+    from hapticut.cli import main
+
+    missing = tmp_path / "missing.rec"
+    out = tmp_path / "cuts.npz"
+    assert main(["cut-surface", str(missing), "p.npz", "--out", str(out), "--fps", "24"]) == 1
+    assert str(missing) in capsys.readouterr().err
+    assert not out.exists()

@@ -135,7 +135,7 @@ def test_the_keys_stay_in_the_frame_range_and_the_panel_says_what_is_not_baked(b
 def test_the_force_arrow_is_scaled_to_the_scene(baked):
     """Automatic (Arrow length 0, the default): the peak force's arrow spans
     ARROW_SCENE_FRACTION of the scene's diagonal, whatever the scene's size."""
-    from addon import baking
+    from addon import baking, live
     from addon.units import mm_per_unit
 
     mm = mm_per_unit(baked)
@@ -162,7 +162,9 @@ def test_the_force_arrow_is_scaled_to_the_scene(baked):
     assert baked.hapticut_live.arrow_mm_per_N == 0.0
     assert max(lengths_mm) == pytest.approx(
         baking.ARROW_SCENE_FRACTION
-        * baking.scene_diagonal_mm(baking.load_preview_tets(baked.hapticut_live.preview_path)),
+        * baking.scene_diagonal_mm(
+            baking.load_preview_tets(live.link(), baked.hapticut_live.preview_path)
+        ),
         rel=0.05,
     )
 
