@@ -1,5 +1,6 @@
 """The live link inside Blender: one session (live_session), the timer that drains its stream
-and sends the viewport poses, the draw handler, Simulate stroke and its bake.
+and sends the viewport poses, the draw handler (Simulate stroke, above this and the bake:
+``simulate.py``).
 
 Starting the servo, Go Live and Simulate Stroke wait on other processes: they are steps
 (``steps.py``) run as the add-on's job (``jobs.py``), and ``*_steps`` names them here.
@@ -17,7 +18,6 @@ import bpy
 from bpy.app.handlers import persistent
 
 from . import (
-    baking,
     building,
     device_list,
     jobs,
@@ -28,7 +28,6 @@ from . import (
     stroke_path,
     toolkit,
     toolkit_link,
-    undo_steps,
     work_folder,
 )
 from .exchange import scene_objects
@@ -39,8 +38,6 @@ TIMER_INTERVAL_S = 1.0 / 120.0
 _session: live_session.Session | None = None
 _scene_name = ""
 _last_error = ""
-# Figures of the last Simulate stroke (for the measurements).
-last_simulate: dict = {}
 
 
 def current() -> live_session.Session | None:
@@ -191,7 +188,7 @@ def requested_settings(live) -> dict:
     return settings
 
 
-def _built_scene(scene) -> tuple[str, str]:
+def built_scene(scene) -> tuple[str, str]:
     path = building.scene_file(scene)
     if path is None:
         raise live_session.SessionError("no scene built yet: Tetrahedralize first")
@@ -199,13 +196,13 @@ def _built_scene(scene) -> tuple[str, str]:
     return path, preview
 
 
-def _ensure_session_steps(scene_name: str) -> steps.Steps[live_session.Session]:
+def ensure_session_steps(scene_name: str) -> steps.Steps[live_session.Session]:
     if _session is None or not _session.alive:
         return (yield from start_steps(scene_name))
     return _session
 
 
-def _refuse_at_once(scene, bindings: list[str], settings: dict, rate_Hz: float) -> None:
+def refuse_at_once(scene, bindings: list[str], settings: dict, rate_Hz: float) -> None:
     """What Go Live and Simulate Stroke refuse without waiting for anything, in the job's
     order: settings above the device's limits, then no scene built. When the limits need the
     device listing read first, the job checks both. SessionError, also on the panel."""
@@ -215,7 +212,7 @@ def _refuse_at_once(scene, bindings: list[str], settings: dict, rate_Hz: float) 
     try:
         if settings:
             _limit_problems(scene, device_list.cached(), bindings, settings, rate_Hz)
-        _built_scene(scene)
+        built_scene(scene)
     except live_session.SessionError as error:
         live.error = str(error)
         raise
@@ -232,7 +229,7 @@ def go_live(context) -> jobs.Job:
     """Start the Go Live job (go_live_steps), after what can be refused at once."""
     scene = context.scene
     live = scene.hapticut_live
-    _refuse_at_once(scene, devices(scene), requested_settings(live), live.rate_Hz)
+    refuse_at_once(scene, devices(scene), requested_settings(live), live.rate_Hz)
     return start_job("Go Live", scene.name, go_live_steps(scene.name))
 
 
@@ -242,8 +239,8 @@ def go_live_steps(scene_name: str) -> steps.Steps[None]:
     live = scene.hapticut_live
     bindings, settings, rate_Hz = devices(scene), requested_settings(live), live.rate_Hz
     yield from check_limits_steps(scene_name, bindings, settings, rate_Hz)
-    path, preview = _built_scene(scene_named(scene_name))
-    session = yield from _ensure_session_steps(scene_name)
+    path, preview = built_scene(scene_named(scene_name))
+    session = yield from ensure_session_steps(scene_name)
     yield from live_session.run_steps(session, path, bindings, rate_Hz, settings=settings)
     live = scene_named(scene_name).hapticut_live
     session.preview_path = live.preview_path = preview
@@ -279,73 +276,6 @@ def record_live(scene) -> str:
     session.recording_path = path
     session.status = live_session.request(session, "status")
     return path
-
-
-def simulate(context) -> jobs.Job:
-    """Start the Simulate Stroke job (simulate_steps), after what can be refused at once."""
-    scene = context.scene
-    live = scene.hapticut_live
-    bindings = [f"{obj.name}=sim:" for obj in scene_objects(scene, "BLADE")]
-    _refuse_at_once(scene, bindings, requested_settings(live), live.rate_Hz)
-    return start_job("Simulate Stroke", scene.name, simulate_steps(scene.name))
-
-
-def simulate_steps(scene_name: str) -> steps.Steps[dict]:
-    """Sample every blade's animation into a sim path, run it as fast as possible, recording,
-    follow it to its end (the live timer reads its frames), then bake it if the panel says
-    so; the figures (``last_simulate``)."""
-    global last_simulate
-    began = time.perf_counter()
-    scene = scene_named(scene_name)
-    live = scene.hapticut_live
-    path, preview = _built_scene(scene)
-    folder = os.path.join(work_folder.work_directory(scene), "stroke")
-    rate_Hz, settings = live.rate_Hz, requested_settings(live)
-    hand, bake_after = (1 if live.simulated_hand else 0), live.bake_after_simulate
-    bindings = []
-    for name in [obj.name for obj in scene_objects(scene, "BLADE")]:
-        poses = yield from stroke_path.sample_poses_steps(scene_name, name, rate_Hz)
-        file = stroke_path.write_path(poses, os.path.join(folder, f"{name}.path.json"))
-        if "," in file or "=" in name:
-            raise live_session.SessionError(f"{name}: the path {file} cannot hold ',' ")
-        bindings.append(f"{name}=sim:{file},hand={hand},hold_s=0")
-    sampled = time.perf_counter()
-    yield from check_limits_steps(scene_name, bindings, settings, rate_Hz)
-    session = yield from _ensure_session_steps(scene_name)
-    record = os.path.join(folder, "stroke.rec")
-    yield from live_session.run_steps(
-        session,
-        path,
-        bindings,
-        rate_Hz,
-        as_fast_as_possible=True,
-        record_path=record,
-        settings=settings,
-        engage=True,
-    )
-    session.preview_path = scene_named(scene_name).hapticut_live.preview_path = preview
-    session.simulate = {"began": began, "record": record}
-    try:
-        # The live timer follows the stroke (its frames, its status) until the servo stops.
-        while session.status.get("state") != "stopped":
-            if not session.alive:
-                raise live_session.SessionError(session.error or "the servo stopped")
-            yield "simulating the stroke"
-    finally:
-        session.simulate = None
-    if session.state == "simulating":
-        session.state = "connected"
-    figures = {"servo_s": time.perf_counter() - sampled, "sampled_s": sampled - began}
-    scene = scene_named(scene_name)
-    scene.hapticut_live.recording_path = record
-    if bake_after:
-        baked = yield from baking.bake_steps(scene_name, session.link, record, preview)
-        figures["bake_s"] = baked["seconds"]
-        undo_steps.push("Bake stroke")
-    figures["total_s"] = time.perf_counter() - began
-    figures["ticks"] = session.status.get("ticks", 0)
-    last_simulate = figures
-    return figures
 
 
 def viewport_poses(scene) -> dict[str, list[float]]:
@@ -385,7 +315,7 @@ def timer():
 def _register() -> None:
     if not bpy.app.timers.is_registered(timer):
         bpy.app.timers.register(timer, first_interval=TIMER_INTERVAL_S)
-    live_draw.add_handler()
+    live_draw.add_handler(current)
 
 
 def timer_registered() -> bool:

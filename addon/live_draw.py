@@ -11,7 +11,7 @@ import time
 import bpy
 import numpy as np
 
-from . import live, live_session, stroke_path
+from . import live_session, stroke_path
 from .units import mm_per_unit
 
 PROXY_COLOUR = (0.1, 0.9, 1.0, 1.0)
@@ -128,10 +128,11 @@ def _build(frame, scene):
     }
 
 
-def draw() -> None:
-    """The draw handler (POST_VIEW): the cached batches of the newest frame."""
+def draw(current) -> None:
+    """The draw handler (POST_VIEW): the cached batches of the newest frame of the session
+    ``current()`` gives (the live link's: it passes its own, so this module needs none)."""
     global _batches, _drawn_sequence, draws
-    session = live.current()
+    session = current()
     if session is None or session.frame is None:
         return
     import gpu
@@ -153,10 +154,11 @@ def draw() -> None:
     draws += 1
 
 
-def add_handler() -> None:
+def add_handler(current) -> None:
+    """Draw the frames of the session current() gives, in every 3D view."""
     global _handler
     if _handler is None:
-        _handler = bpy.types.SpaceView3D.draw_handler_add(draw, (), "WINDOW", "POST_VIEW")
+        _handler = bpy.types.SpaceView3D.draw_handler_add(draw, (current,), "WINDOW", "POST_VIEW")
 
 
 def remove_handler() -> None:

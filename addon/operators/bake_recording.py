@@ -1,7 +1,7 @@
 import bpy
 from bpy.props import StringProperty
 
-from .. import baking, jobs, live, undo_steps
+from .. import baking, jobs, preferences, toolkit_link, undo_steps
 
 
 class HAPTICUT_OT_bake_recording(jobs.FollowsJob, bpy.types.Operator):
@@ -25,7 +25,8 @@ class HAPTICUT_OT_bake_recording(jobs.FollowsJob, bpy.types.Operator):
             self.report({"ERROR"}, "no recording yet: Simulate Stroke, or Record while live")
             return {"CANCELLED"}
         preview = bpy.path.abspath(settings.preview_path)
-        live.start_job("Bake", scene.name, _bake_steps(scene.name, path, preview))
+        shown = jobs.shows_error_in(scene.name, "hapticut_live")
+        jobs.start("Bake", scene.name, _bake_steps(scene.name, path, preview), on_error=shown)
         return {"FINISHED"}
 
     def summary(self, figures):
@@ -34,7 +35,7 @@ class HAPTICUT_OT_bake_recording(jobs.FollowsJob, bpy.types.Operator):
 
 
 def _bake_steps(scene_name: str, path: str, preview: str):
-    link = yield from live.link_steps()
+    link = yield from toolkit_link.link_steps(preferences.executable())
     figures = yield from baking.bake_steps(scene_name, link, path, preview)
     undo_steps.push("Bake")
     return figures

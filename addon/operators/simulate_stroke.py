@@ -1,6 +1,6 @@
 import bpy
 
-from .. import jobs, live, live_session
+from .. import jobs, live_session, simulate
 
 
 class HAPTICUT_OT_simulate_stroke(jobs.FollowsJob, bpy.types.Operator):
@@ -12,7 +12,7 @@ class HAPTICUT_OT_simulate_stroke(jobs.FollowsJob, bpy.types.Operator):
 
     def execute(self, context):
         try:
-            live.simulate(context)
+            simulate.simulate(context)
         except live_session.SessionError as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}

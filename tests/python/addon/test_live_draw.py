@@ -92,9 +92,10 @@ def test_draw_builds_once_per_frame_draws_the_frame_and_records_its_age(finger, 
     began = time.perf_counter()
     while time.perf_counter() - began < 1.0:
         live.timer()  # Takes the newest frame and tags a redraw, as bpy.app.timers runs it.
-        live_draw.draw()  # The redraw that follows.
+        live_draw.draw(live.current)  # The redraw that follows.
         sequences.add(session.frame.sequence)
-        live_draw.draw()  # A second redraw of the same frame (another view, an overlay).
+        # A second redraw of the same frame (another view, an overlay).
+        live_draw.draw(live.current)
         time.sleep(0.004)
     builds = live_draw.builds - builds0
     # One build per new frame drawn, none for a redraw of a frame already built.

@@ -17,14 +17,14 @@ CUTTABLE = {"drag", "viscous", "membrane"}
 
 @pytest.fixture(scope="module")
 def baked(addon, tmp_path_factory):
-    from addon import baking, live
+    from addon import baking, live, simulate
 
     scene = live_support.finger_with_stroke(tmp_path_factory.mktemp("live-finger"))
     began = time.perf_counter()
     assert bpy.ops.hapticut.simulate_stroke() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
     seconds = time.perf_counter() - began
-    figures = live.last_simulate
+    figures = simulate.last_simulate
     print(
         f"\nSimulate stroke to a baked animation ({figures['ticks']} ticks, "
         f"{scene.frame_end - scene.frame_start} frames): {seconds:.2f} s (servo "
