@@ -177,17 +177,50 @@ def lose(session: Session, why: str) -> None:
     session.client.close()
 
 
+# Session states while a request's reply is awaited in steps: ``tick`` leaves the replies to
+# the steps then.
+AWAITING = ("loading", "stopping")
+
+
 def _load_steps(session: Session, **fields) -> steps.Steps[dict]:
     """The load request, its reply awaited in steps (the servo reads and checks the scene
-    meanwhile); SessionError as ``request`` raises it. The session is ``loading`` meanwhile:
-    ``tick`` leaves the replies to this."""
+    meanwhile); SessionError as ``request`` raises it."""
+    return (
+        yield from _reply_steps(
+            session, lambda client: client.send_load(**fields), "loading", "loading the scene",
+            session.client.loaded, LOAD_TIMEOUT_S,
+        )
+    )  # fmt: skip
+
+
+def _stop_run_steps(session: Session) -> steps.Steps[dict]:
+    """The stop request (the servo ramps the force down before it answers), awaited in
+    steps."""
+
+    def stopped(reply: dict) -> dict:
+        if not reply.get("ok"):
+            raise session.link.servo_client.ServoError(f"stop: {reply.get('error', 'failed')}")
+        return reply
+
+    return (
+        yield from _reply_steps(
+            session, lambda client: client.send_request("stop"), "stopping",
+            "stopping the run", stopped, LOAD_TIMEOUT_S,
+        )
+    )  # fmt: skip
+
+
+def _reply_steps(session: Session, send, state_while: str, what: str, taken, timeout_s: float):
+    """The request send(client) sends (its id), its reply awaited in steps yielding ``what``
+    and given to taken(reply); the session is in state_while meanwhile. SessionError as
+    ``request`` raises it."""
     if not session.alive:
         raise SessionError(session.error or "no servo")
     client = session.client
-    state, session.state = session.state, "loading"
+    state, session.state = session.state, state_while
     began = time.monotonic()
     try:
-        wanted = client.send_load(**fields)
+        wanted = send(client)
         while True:
             for reply in client.replies():
                 if reply.get("id") != wanted:
@@ -196,16 +229,16 @@ def _load_steps(session: Session, **fields) -> steps.Steps[dict]:
                     continue
                 session.state = state
                 try:
-                    return client.loaded(reply)
+                    return taken(reply)
                 except session.link.servo_client.ServoError as error:
                     raise SessionError(str(error)) from None
             if session.process.poll() is not None:
                 lose(session, "the servo exited")
                 raise SessionError(session.error)
-            if time.monotonic() - began > LOAD_TIMEOUT_S:
-                lose(session, f"the servo did not load the scene in {LOAD_TIMEOUT_S:g} s")
+            if time.monotonic() - began > timeout_s:
+                lose(session, f"the servo did not answer ({what}) in {timeout_s:g} s")
                 raise SessionError(session.error)
-            yield "loading the scene"
+            yield what
     except session.link.servo_client.ServoError as error:
         lose(session, str(error))
         raise SessionError(str(error)) from None
@@ -213,7 +246,7 @@ def _load_steps(session: Session, **fields) -> steps.Steps[dict]:
         lose(session, f"the servo stopped answering ({error})")
         raise SessionError(session.error) from None
     finally:
-        if session.state == "loading":
+        if session.state == state_while:
             session.state = state
 
 
@@ -229,7 +262,7 @@ def run_steps(
 ) -> dict:
     """Load the scene with these device bindings, apply the settings, subscribe, start."""
     if session.running:
-        request(session, "stop")
+        yield from _stop_run_steps(session)
     reply = yield from _load_steps(
         session,
         path=scene_path,
@@ -269,7 +302,7 @@ def tick(session: Session, poses: dict[str, list[float]] | None = None) -> bool:
     """The timer's work: drain the stream (bounded), send the viewport poses, refresh the
     status now and then, notice a lost servo. True when a new frame arrived."""
     began = time.perf_counter()
-    if not session.alive or session.state == "loading":
+    if not session.alive or session.state in AWAITING:
         return False
     if session.process.poll() is not None:
         lose(session, "the servo exited")
