@@ -46,21 +46,6 @@ def record_times(recording) -> np.ndarray:
     return times - times[0] if len(times) else times
 
 
-def frame_indices(
-    times: np.ndarray, fps: float, frame_start: int, frame_end: int | None = None
-) -> tuple[np.ndarray, np.ndarray]:
-    """(the scene frames the recording covers, up to frame_end when given; the record nearest
-    each)."""
-    count = int(np.floor(times[-1] * fps + 1e-9)) + 1 if len(times) else 0
-    if frame_end is not None:
-        count = min(count, max(frame_end - frame_start + 1, 0))
-    wanted = np.arange(count) / fps
-    index = np.clip(np.searchsorted(times, wanted), 0, max(len(times) - 1, 0))
-    before = np.clip(index - 1, 0, None)
-    index = np.where(np.abs(times[before] - wanted) < np.abs(times[index] - wanted), before, index)
-    return frame_start + np.arange(count), index
-
-
 def ideal_pose(pose, p, q) -> tuple[mathutils.Vector, mathutils.Quaternion]:
     """A pose (mm) for independent points, which have none of their own: the device's rotation
     turned so the edge lies along the proxies, moved so the edge's centre is the proxies'
@@ -251,14 +236,14 @@ def bake_steps(scene_name: str, link, recording_path: str, preview_path: str) ->
     times = record_times(recording)
     # The keys stay in the scene's frame range; what the recording holds after it (a Simulate
     # stroke's stop ramp, a longer live recording) is not baked, and the report says so.
-    frames, nearest = frame_indices(times, fps, frame_start, frame_end)
+    frames, nearest = link.cut_surface.frame_ticks(times, fps, frame_start, frame_end)
     if not len(frames):
         raise BakeError(
             f"the scene's frame range {frame_start}-{frame_end} is empty: nothing to bake"
         )
     baked_ticks = int(nearest[-1]) + 1
     last_frame_s = (frames[-1] - frame_start) / fps
-    covered = len(frame_indices(times, fps, frame_start)[0])
+    covered = len(link.cut_surface.frame_ticks(times, fps, frame_start)[0])
     forces_by_blade = {
         name: recording.blade(name)["block"]["engine_force_N"][nearest]
         for name in recording.blade_names

@@ -159,6 +159,33 @@ def cuttable_points(
     return ok.reshape(shape)
 
 
+def nearest_ticks(times_s: np.ndarray, step_s: float, count: int) -> np.ndarray:
+    """The index of the record nearest each of the times k * step_s, k < count (``times_s``
+    increasing, from the stroke's start)."""
+    times_s = np.asarray(times_s, np.float64)
+    wanted = np.arange(count) * step_s
+    index = np.clip(np.searchsorted(times_s, wanted), 0, max(len(times_s) - 1, 0))
+    before = np.clip(index - 1, 0, None)
+    nearer = np.abs(times_s[before] - wanted) < np.abs(times_s[index] - wanted)
+    return np.where(nearer, before, index)
+
+
+def covered_steps(times_s: np.ndarray, step_s: float) -> int:
+    """How many of the times k * step_s the records cover (the first at 0)."""
+    return int(np.floor(times_s[-1] / step_s + 1e-9)) + 1 if len(times_s) else 0
+
+
+def frame_ticks(
+    times_s: np.ndarray, fps: float, frame_start: int, frame_end: int | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """(the scene frames the recording covers, up to frame_end when given; the record nearest
+    each): what a bake keys."""
+    count = covered_steps(np.asarray(times_s, np.float64), 1.0 / fps)
+    if frame_end is not None:
+        count = min(count, max(frame_end - frame_start + 1, 0))
+    return frame_start + np.arange(count), nearest_ticks(times_s, 1.0 / fps, count)
+
+
 def row_ticks_at_frames(
     times_s: np.ndarray, fps: float, frame_start: int, substeps: int = 1
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -169,13 +196,7 @@ def row_ticks_at_frames(
     if not len(times_s):
         return np.zeros(0, np.int64), np.zeros(0, np.float64)
     step = 1.0 / (fps * max(1, substeps))
-    count = int(np.floor(times_s[-1] / step + 1e-9)) + 1
-    wanted = np.arange(count) * step
-    index = np.clip(np.searchsorted(times_s, wanted), 0, len(times_s) - 1)
-    before = np.clip(index - 1, 0, len(times_s) - 1)
-    nearer = np.abs(times_s[before] - wanted) < np.abs(times_s[index] - wanted)
-    index = np.where(nearer, before, index)
-    index = np.unique(index)
+    index = np.unique(nearest_ticks(times_s, step, covered_steps(times_s, step)))
     return index, frame_start + times_s[index] * fps
 
 

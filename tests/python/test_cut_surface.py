@@ -201,3 +201,18 @@ def test_the_cut_surface_command_names_a_file_it_cannot_read(tmp_path, capsys):
     assert main(["cut-surface", str(missing), "p.npz", "--out", str(out), "--fps", "24"]) == 1
     assert str(missing) in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_a_bake_keys_the_record_nearest_each_frame_within_the_range():
+    times = np.arange(1001) / 1000.0  # 1 s at 1 kHz.
+    frames, nearest = cut_surface.frame_ticks(times, 24.0, 10)
+    assert frames.tolist() == list(range(10, 35))
+    assert nearest.tolist() == [round(k * 1000 / 24) for k in range(25)]
+    frames, nearest = cut_surface.frame_ticks(times, 24.0, 10, frame_end=19)
+    assert frames.tolist() == list(range(10, 20)) and len(nearest) == 10
+    assert cut_surface.frame_ticks(times, 24.0, 10, frame_end=9)[0].size == 0
+    # The cut surface's rows are the same ticks, twice a frame with two substeps.
+    rows, row_frames = cut_surface.row_ticks_at_frames(times, 24.0, 10, substeps=2)
+    assert len(rows) == 49
+    assert rows[::2].tolist() == cut_surface.frame_ticks(times, 24.0, 10)[1].tolist()
+    assert row_frames[2] == pytest.approx(10 + 0.042 * 24)

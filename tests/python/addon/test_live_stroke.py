@@ -57,12 +57,12 @@ def test_the_stroke_ran_every_tick_and_the_bake_made_its_objects(baked):
 
 
 def test_the_ideal_blade_keyframes_follow_the_recording(baked):
-    from addon import baking
+    from addon import baking, live
 
     rec = recording(baked)
     blade = rec.blade("Knife")
     times = baking.record_times(rec)
-    frames, nearest = baking.frame_indices(times, 24.0, baked.frame_start)
+    frames, nearest = live.link().cut_surface.frame_ticks(times, 24.0, baked.frame_start)
     ideal = bpy.data.objects["Ideal Knife"]
     knife = bpy.data.objects["Knife"]
     assert len(frames) >= baked.frame_end - baked.frame_start + 1

@@ -119,7 +119,9 @@ def test_record_while_live_then_bake(live_finger):
     assert report["frames"] == int(span_s * 24 + 1e-9) + 1
     assert {o.name for o in baking.baked_objects()} == {"Ideal Knife", "Force Knife", "Cut Knife"}
     # The last baked frame holds the force arrow where the recording has the proxies' centre.
-    frames, nearest = baking.frame_indices(baking.record_times(rec), 24.0, live_finger.frame_start)
+    frames, nearest = live.link().cut_surface.frame_ticks(
+        baking.record_times(rec), 24.0, live_finger.frame_start
+    )
     live_finger.frame_set(int(frames[-1]))
     centre = rec.blade("Knife")["q"][nearest[-1]].mean(axis=0)
     arrow = np.array(bpy.data.objects["Force Knife"].matrix_world.translation)
