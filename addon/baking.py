@@ -46,22 +46,6 @@ def record_times(recording) -> np.ndarray:
     return times - times[0] if len(times) else times
 
 
-def ideal_pose(pose, p, q) -> tuple[mathutils.Vector, mathutils.Quaternion]:
-    """A pose (mm) for independent points, which have none of their own: the device's rotation
-    turned so the edge lies along the proxies, moved so the edge's centre is the proxies'
-    centre. A rigid blade's pose is the servo's (``ideal_poses``)."""
-    rotation = mathutils.Quaternion(pose[3:7]).normalized()
-    device_edge = mathutils.Vector(p[-1] - p[0])
-    ideal_edge = mathutils.Vector(q[-1] - q[0])
-    if device_edge.length > 1e-9 and ideal_edge.length > 1e-9:
-        rotation = device_edge.rotation_difference(ideal_edge) @ rotation
-    local_centre = mathutils.Quaternion(pose[3:7]).normalized().inverted() @ mathutils.Vector(
-        p.mean(axis=0) - pose[:3]
-    )
-    location = mathutils.Vector(q.mean(axis=0)) - rotation @ local_centre
-    return location, rotation
-
-
 def _collection(scene):
     collection = bpy.data.collections.get(COLLECTION)
     if collection is None:
@@ -191,18 +175,11 @@ def load_preview_tets(link, path: str) -> dict:
 
 
 def ideal_poses(recording, name: str, ticks) -> list[tuple[mathutils.Vector, mathutils.Quaternion]]:
-    """The ideal blade's pose (mm) at each of the ticks: a rigid blade's is the one the servo
-    solved and recorded, the whole knife held out of rigid material; independent points are
-    fitted (``ideal_pose``)."""
-    blade = recording.blade(name)
-    if recording.coupling(name) == "rigid":
-        solved = recording.ideal_pose(name)[ticks]
-        return [
-            (mathutils.Vector(pose[:3]), mathutils.Quaternion(pose[3:7]).normalized())
-            for pose in solved
-        ]
-    poses = blade["block"]["pose"]
-    return [ideal_pose(poses[k], blade["p"][k], blade["q"][k]) for k in ticks]
+    """The ideal blade's pose (mm) at each of the ticks (``Recording.placed_poses``)."""
+    return [
+        (mathutils.Vector(pose[:3]), mathutils.Quaternion(pose[3:7]))
+        for pose in recording.placed_poses(name, ticks)
+    ]
 
 
 def bake_steps(scene_name: str, link, recording_path: str, preview_path: str) -> steps.Steps[dict]:

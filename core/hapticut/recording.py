@@ -74,6 +74,18 @@ class Recording:
         blade's solved pose, independent points' the device's (``coupling``)."""
         return layout.ideal_pose(self.blade(name))
 
+    def placed_poses(self, name: str, ticks) -> np.ndarray:
+        """(K, 7): where a bake places the blade at the ticks. A rigid blade's solved pose
+        (the whole knife held out of rigid material); for independent points, which have no
+        pose of their own, the one ``fitted_poses`` fits to them."""
+        ticks = np.asarray(ticks, np.int64)
+        if self.coupling(name) == "rigid":
+            solved = np.array(self.ideal_pose(name)[ticks], np.float64)
+            solved[:, 3:] = _normalized(solved[:, 3:])
+            return solved
+        blade = self.blade(name)
+        return fitted_poses(blade["block"]["pose"][ticks], blade["p"][ticks], blade["q"][ticks])
+
     def coupling(self, name: str) -> str:
         """``"rigid"`` or ``"independent"``: what the blade's ideal pose is."""
         self.blade(name)  # KeyError naming the blades for an unknown one.
@@ -141,3 +153,57 @@ def read_recording(path: str | os.PathLike) -> Recording:
     records = np.frombuffer(body[: count * dtype.itemsize], dtype=dtype)
     partial = 0 if complete else len(body) - count * dtype.itemsize
     return Recording(os.fspath(path), header, records, not complete, partial, dropped)
+
+
+def fitted_poses(poses: np.ndarray, p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """(K, 7) poses for independent points (K, N, 3) ``q`` driven by device points ``p`` at
+    device poses (K, 7): the device's rotation turned by the shortest arc that lays its edge
+    (first to last point) along the proxies' edge, moved so the device points' centre lands
+    on the proxies' centre."""
+    poses, p, q = (np.asarray(a, np.float64) for a in (poses, p, q))
+    rotation = _normalized(poses[:, 3:7])
+    turn = _shortest_arc(p[:, -1] - p[:, 0], q[:, -1] - q[:, 0])
+    turned = _product(turn, rotation)
+    local_centre = _rotate(_conjugate(rotation), p.mean(axis=1) - poses[:, :3])
+    location = q.mean(axis=1) - _rotate(turned, local_centre)
+    return np.concatenate([location, turned], axis=1)
+
+
+# Quaternions as (K, 4) w, x, y, z.
+def _normalized(quaternions: np.ndarray) -> np.ndarray:
+    return quaternions / np.linalg.norm(quaternions, axis=1, keepdims=True)
+
+
+def _conjugate(quaternions: np.ndarray) -> np.ndarray:
+    return quaternions * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def _product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    w1, v1, w2, v2 = a[:, :1], a[:, 1:], b[:, :1], b[:, 1:]
+    w = w1 * w2 - np.sum(v1 * v2, axis=1, keepdims=True)
+    return np.concatenate([w, w1 * v2 + w2 * v1 + np.cross(v1, v2)], axis=1)
+
+
+def _rotate(quaternions: np.ndarray, vectors: np.ndarray) -> np.ndarray:
+    w, v = quaternions[:, :1], quaternions[:, 1:]
+    t = 2.0 * np.cross(v, vectors)
+    return vectors + w * t + np.cross(v, t)
+
+
+def _shortest_arc(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The rotations turning the directions a onto b (identity where either has no length;
+    half a turn about an axis across a where they are opposite)."""
+    length_a = np.linalg.norm(a, axis=1, keepdims=True)
+    length_b = np.linalg.norm(b, axis=1, keepdims=True)
+    usable = (length_a[:, 0] > 1e-9) & (length_b[:, 0] > 1e-9)
+    a = a / np.where(length_a > 1e-9, length_a, 1.0)
+    b = b / np.where(length_b > 1e-9, length_b, 1.0)
+    arc = np.concatenate([1.0 + np.sum(a * b, axis=1, keepdims=True), np.cross(a, b)], axis=1)
+    opposite = usable & (arc[:, 0] < 1e-9)
+    if opposite.any():
+        across = np.cross(a[opposite], np.array([1.0, 0.0, 0.0]))
+        small = np.linalg.norm(across, axis=1) < 1e-6
+        across[small] = np.cross(a[opposite][small], np.array([0.0, 1.0, 0.0]))
+        arc[opposite] = np.concatenate([np.zeros((len(across), 1)), across], axis=1)
+    arc[~usable] = (1.0, 0.0, 0.0, 0.0)
+    return _normalized(arc)
