@@ -47,7 +47,7 @@ class Session:
     client: object  # servo_client.ServoClient
     state: str = "connected"  # connected, loading, running, simulating, lost, stopped
     error: str = ""
-    frame: object = None  # The newest servo_client.Frame.
+    stream_frame: object = None  # The newest servo_client.StreamFrame.
     status: dict = field(default_factory=dict)
     blades: list = field(default_factory=list)  # load reply's blades
     scene_path: str = ""
@@ -56,9 +56,9 @@ class Session:
     simulate: dict | None = None  # While a stroke simulates: what the bake needs.
     last_status_s: float = 0.0
     status_pending: bool = False
-    frames_drawn: int = 0
+    stream_frames_drawn: int = 0
     tick_costs_s: list = field(default_factory=list)
-    frame_ages_s: list = field(default_factory=list)  # Servo time to the timer's take.
+    stream_frame_ages_s: list = field(default_factory=list)  # Servo time to the timer's take.
     drawn_ages_s: list = field(default_factory=list)  # Servo time to the first draw (GUI only).
 
     @property
@@ -164,7 +164,7 @@ def lose(session: Session, why: str) -> None:
     if code is not None:
         text = f"the servo exited (code {code})" + (f": {line}" if line else "")
     session.state, session.error = "lost", text
-    session.frame = None
+    session.stream_frame = None
     session.simulate = None
     session.client.close()
 
@@ -232,7 +232,7 @@ def run_steps(
     session.blades = reply["blades"]
     session.scene_path = scene_path
     # The ages shown are this run's.
-    session.frame_ages_s.clear()
+    session.stream_frame_ages_s.clear()
     session.drawn_ages_s.clear()
     if settings:
         request(session, "set_parameters", **settings)
@@ -277,10 +277,10 @@ def tick(session: Session, poses: dict[str, list[float]] | None = None) -> bool:
                 session.error = f"{reply.get('type')}: {reply.get('error', 'failed')}"
         frame = client.poll_newest(MAX_DATAGRAMS, BUDGET_S)
         if frame is not None:
-            session.frame, new = frame, True
-            age_s = frame_age_s(frame, time.monotonic())
+            session.stream_frame, new = frame, True
+            age_s = stream_frame_age_s(frame, time.monotonic())
             if age_s is not None:
-                session.frame_ages_s.append(age_s)
+                session.stream_frame_ages_s.append(age_s)
         if client.unanswered < MAX_UNANSWERED:
             for blade, pose in (poses or {}).items():
                 client.send_request("pose", blade=blade, pose=[float(x) for x in pose], buttons=0)
@@ -297,7 +297,7 @@ def tick(session: Session, poses: dict[str, list[float]] | None = None) -> bool:
     except (OSError, ValueError) as error:
         lose(session, f"the servo stopped answering ({error})")
     session.tick_costs_s.append(time.perf_counter() - began)
-    del session.tick_costs_s[:-4096], session.frame_ages_s[:-4096]
+    del session.tick_costs_s[:-4096], session.stream_frame_ages_s[:-4096]
     del session.drawn_ages_s[:-4096]
     return new
 
@@ -317,7 +317,7 @@ def stop_steps(session: Session) -> steps.Steps[None]:
         session.state = "stopped"
 
 
-def frame_age_s(frame, now_s: float) -> float | None:
+def stream_frame_age_s(frame, now_s: float) -> float | None:
     """A frame's age at now_s (time.monotonic(), the servo's CLOCK_MONOTONIC): None when it
     has none, in a run as fast as possible (virtual servo time, ahead of the clock) or when
     the servo time lies in the future (another machine's clock)."""

@@ -177,7 +177,7 @@ def test_a_client_of_other_layouts_refuses_the_servo(monkeypatch):
 
 def test_a_frame_carries_the_ideal_pose():
     """A viewport pose in, the engine's ideal pose out: independent points report the device's
-    pose (normalised), a rigid blade its own (the layout's field, and Frame.ideal_pose)."""
+    pose (normalised), a rigid blade its own (the layout's field, and StreamFrame.ideal_pose)."""
     with ServoProcess([str(SPHERE), "--device", "scalpel=viewport"]) as servo:
         client = connect(servo, ["scalpel"])
         client.subscribe(rate_Hz=200)
