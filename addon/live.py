@@ -36,14 +36,14 @@ from .units import mm_per_unit
 
 TIMER_INTERVAL_S = 1.0 / 120.0
 
-_session: live_session.Session | None = None
+_session: live_session.LiveServo | None = None
 _scene_name = ""
 _last_error = ""
 # Figures of the last Simulate stroke (for the measurements).
 last_simulate: dict = {}
 
 
-def current() -> live_session.Session | None:
+def current() -> live_session.LiveServo | None:
     return _session
 
 
@@ -59,7 +59,7 @@ def link_steps(timeout_s: float = toolkit.QUICK_TIMEOUT_S) -> steps.Steps:
     try:
         return (yield from toolkit_link.link_steps(preferences.executable(), timeout_s=timeout_s))
     except toolkit.ToolkitError as error:
-        raise live_session.SessionError(str(error)) from None
+        raise live_session.LiveServoError(str(error)) from None
 
 
 def link(timeout_s: float = toolkit.QUICK_TIMEOUT_S):
@@ -73,15 +73,15 @@ def log_path(scene) -> str:
 
 def scene_named(name: str):
     """The scene a job works for, looked up again after every wait (an undo or a file load
-    in between replaces Blender's data); SessionError once it is gone."""
+    in between replaces Blender's data); LiveServoError once it is gone."""
     scene = bpy.data.scenes.get(name)
     if scene is None:
-        raise live_session.SessionError(f"the scene {name!r} is gone")
+        raise live_session.LiveServoError(f"the scene {name!r} is gone")
     return scene
 
 
-def start_steps(scene_name: str) -> steps.Steps[live_session.Session]:
-    """Start the servo (stopping an earlier one); SessionError for the panel."""
+def start_steps(scene_name: str) -> steps.Steps[live_session.LiveServo]:
+    """Start the servo (stopping an earlier one); LiveServoError for the panel."""
     global _session, _scene_name, _last_error
     scene = scene_named(scene_name)
     live = scene.hapticut_live
@@ -98,7 +98,7 @@ def start_steps(scene_name: str) -> steps.Steps[live_session.Session]:
         _session = yield from live_session.start_steps(
             modules, path, port=port, realtime=realtime, extra=("--record-dir", work)
         )
-    except live_session.SessionError as error:
+    except live_session.LiveServoError as error:
         _last_error = str(error)
         raise
     live = scene_named(scene_name).hapticut_live
@@ -110,7 +110,7 @@ def start_steps(scene_name: str) -> steps.Steps[live_session.Session]:
 
 def refresh_devices_steps(scene_name: str, rate_Hz: float | None = None) -> steps.Steps[dict]:
     """*Refresh devices*: run the servo's listing at rate_Hz (the panel's rate), its
-    stiffness limits at that rate; the panel shows a failure (SessionError). Everything it
+    stiffness limits at that rate; the panel shows a failure (LiveServoError). Everything it
     waits for (asking the toolkit for its servo the first time, then the listing) is
     bounded by device_list.LIST_TIMEOUT_S together."""
     live = scene_named(scene_name).hapticut_live
@@ -121,10 +121,10 @@ def refresh_devices_steps(scene_name: str, rate_Hz: float | None = None) -> step
         listing = yield from device_list.refresh_steps(
             servo, max(0.1, deadline - time.monotonic()), rate_Hz
         )
-    except (live_session.SessionError, device_list.DeviceListError) as error:
+    except (live_session.LiveServoError, device_list.DeviceListError) as error:
         live = scene_named(scene_name).hapticut_live
         live.device_error = f"devices not listed: {error}"
-        raise live_session.SessionError(live.device_error) from None
+        raise live_session.LiveServoError(live.device_error) from None
     scene_named(scene_name).hapticut_live.device_error = ""
     return listing
 
@@ -154,7 +154,7 @@ def _limit_problems(scene, listing: dict, bindings: list[str], settings: dict, r
         found = device_list.settings_problems(settings, limits, rate_Hz, springs)
         problems += [f"{name} ({device}): {problem}" for problem in found]
     if problems:
-        raise live_session.SessionError("; ".join(problems) + " (lower it in the panel)")
+        raise live_session.LiveServoError("; ".join(problems) + " (lower it in the panel)")
 
 
 def listing_is_current(rate_Hz: float) -> bool:
@@ -165,7 +165,7 @@ def listing_is_current(rate_Hz: float) -> bool:
 def check_limits_steps(
     scene_name: str, bindings: list[str], settings: dict, rate_Hz: float = 1000.0
 ) -> steps.Steps[None]:
-    """Refuse settings above a bound device's limits at the servo's rate (SessionError naming
+    """Refuse settings above a bound device's limits at the servo's rate (LiveServoError naming
     blade, device and limit); the listing is read first if it was not yet, or again if the
     kept one's stiffness limits are for another rate (the servo's rule, not the add-on's)."""
     if not settings:
@@ -194,12 +194,12 @@ def requested_settings(live) -> dict:
 def _built_scene(scene) -> tuple[str, str]:
     path = building.scene_file(scene)
     if path is None:
-        raise live_session.SessionError("no scene built yet: Tetrahedralize first")
+        raise live_session.LiveServoError("no scene built yet: Tetrahedralize first")
     preview = os.path.join(os.path.dirname(path), building.PREVIEW_FILE)
     return path, preview
 
 
-def _ensure_session_steps(scene_name: str) -> steps.Steps[live_session.Session]:
+def _ensure_session_steps(scene_name: str) -> steps.Steps[live_session.LiveServo]:
     if _session is None or not _session.alive:
         return (yield from start_steps(scene_name))
     return _session
@@ -208,7 +208,7 @@ def _ensure_session_steps(scene_name: str) -> steps.Steps[live_session.Session]:
 def _refuse_at_once(scene, bindings: list[str], settings: dict, rate_Hz: float) -> None:
     """What Go Live and Simulate Stroke refuse without waiting for anything, in the job's
     order: settings above the device's limits, then no scene built. When the limits need the
-    device listing read first, the job checks both. SessionError, also on the panel."""
+    device listing read first, the job checks both. LiveServoError, also on the panel."""
     if settings and not listing_is_current(rate_Hz):
         return
     live = scene.hapticut_live
@@ -216,7 +216,7 @@ def _refuse_at_once(scene, bindings: list[str], settings: dict, rate_Hz: float) 
         if settings:
             _limit_problems(scene, device_list.cached(), bindings, settings, rate_Hz)
         _built_scene(scene)
-    except live_session.SessionError as error:
+    except live_session.LiveServoError as error:
         live.error = str(error)
         raise
 
@@ -251,13 +251,13 @@ def go_live_steps(scene_name: str) -> steps.Steps[None]:
     if live.force_shading:  # The servo may refuse it (docs/protocol.md): say why, run on.
         try:
             live_session.request(session, "set_parameters", shading=True)
-        except live_session.SessionError as error:
+        except live_session.LiveServoError as error:
             live.error = f"force shading not applied: {error}"
 
 
 def engage(engaged: bool) -> None:
     if _session is None:
-        raise live_session.SessionError("no servo: Start it first")
+        raise live_session.LiveServoError("no servo: Start it first")
     live_session.request(_session, "engage", engaged)
 
 
@@ -265,7 +265,7 @@ def record_live(scene) -> str:
     """Toggle recording of the live run; the path while recording, "" once stopped."""
     session = _session
     if session is None or not session.running:
-        raise live_session.SessionError("nothing runs: Go live first")
+        raise live_session.LiveServoError("nothing runs: Go live first")
     live = scene.hapticut_live
     if session.status.get("recording", {}).get("active"):
         live_session.request(session, "stop_recording")
@@ -307,7 +307,7 @@ def simulate_steps(scene_name: str) -> steps.Steps[dict]:
         poses = yield from stroke_path.sample_poses_steps(scene_name, name, rate_Hz)
         file = stroke_path.write_path(poses, os.path.join(folder, f"{name}.path.json"))
         if "," in file or "=" in name:
-            raise live_session.SessionError(f"{name}: the path {file} cannot hold ',' ")
+            raise live_session.LiveServoError(f"{name}: the path {file} cannot hold ',' ")
         bindings.append(f"{name}=sim:{file},hand={hand},hold_s=0")
     sampled = time.perf_counter()
     yield from check_limits_steps(scene_name, bindings, settings, rate_Hz)
@@ -329,7 +329,7 @@ def simulate_steps(scene_name: str) -> steps.Steps[dict]:
         # The live timer follows the stroke (its frames, its status) until the servo stops.
         while session.status.get("state") != "stopped":
             if not session.alive:
-                raise live_session.SessionError(session.error or "the servo stopped")
+                raise live_session.LiveServoError(session.error or "the servo stopped")
             yield "simulating the stroke"
     finally:
         session.simulate = None

@@ -35,12 +35,15 @@ EXIT_NETWORK = 5
 SERVO_FLAG_AS_FAST_AS_POSSIBLE = 4
 
 
-class SessionError(RuntimeError):
+class LiveServoError(RuntimeError):
     """Starting or talking to the servo failed; the message is for the panel."""
 
 
 @dataclass
-class Session:
+class LiveServo:
+    """The add-on's hold on one running servo: its child process, control channel and state
+    stream (the servo's own ``Session``, server/session.h, is a scene it has loaded)."""
+
     link: object  # toolkit_link.link(): servo_client, recording, servo
     process: subprocess.Popen
     log_path: str
@@ -82,9 +85,9 @@ def _last_line(path: str) -> str:
 
 def start_steps(
     link, log_path: str, port: int = 0, realtime: bool = True, extra: tuple[str, ...] = ()
-) -> steps.Steps[Session]:
+) -> steps.Steps[LiveServo]:
     """Start hapticut-servo with a control channel (``port``; 0: any free one), its output in
-    log_path; connect and say hello. SessionError naming the problem (port busy, no servo)."""
+    log_path; connect and say hello. LiveServoError naming the problem (port busy, no servo)."""
     os.makedirs(os.path.dirname(log_path) or ".", exist_ok=True)
     command = [
         link.servo,
@@ -106,7 +109,7 @@ def start_steps(
                 start_new_session=True,
             )
         except OSError as error:
-            raise SessionError(f"cannot start {link.servo}: {error}") from None
+            raise LiveServoError(f"cannot start {link.servo}: {error}") from None
     began = time.monotonic()
     found_port = 0
     while not found_port:
@@ -120,11 +123,13 @@ def start_steps(
         if code is not None:
             line = _last_line(log_path)
             if code == EXIT_NETWORK:
-                raise SessionError(f"port {port} is busy or cannot be opened ({line})")
-            raise SessionError(f"the servo exited with code {code}: {line}")
+                raise LiveServoError(f"port {port} is busy or cannot be opened ({line})")
+            raise LiveServoError(f"the servo exited with code {code}: {line}")
         if time.monotonic() - began > STARTUP_TIMEOUT_S:
             _kill(process)
-            raise SessionError(f"the servo did not open its control port in {STARTUP_TIMEOUT_S} s")
+            raise LiveServoError(
+                f"the servo did not open its control port in {STARTUP_TIMEOUT_S} s"
+            )
         yield "starting the servo"
     client = link.servo_client.ServoClient(port=found_port, timeout_s=REPLY_TIMEOUT_S)
     try:
@@ -132,8 +137,8 @@ def start_steps(
         client.hello()
     except (OSError, link.servo_client.ServoError) as error:
         _kill(process)
-        raise SessionError(f"the servo does not answer on port {found_port}: {error}") from None
-    return Session(link, process, log_path, client)
+        raise LiveServoError(f"the servo does not answer on port {found_port}: {error}") from None
+    return LiveServo(link, process, log_path, client)
 
 
 def _kill(process: subprocess.Popen, grace_s: float = 5.0) -> None:
@@ -141,22 +146,22 @@ def _kill(process: subprocess.Popen, grace_s: float = 5.0) -> None:
         steps.end_group(process, grace_s)
 
 
-def request(session: Session, name: str, *args, **kwargs):
-    """One control request; on a lost connection the session turns lost (SessionError)."""
+def request(session: LiveServo, name: str, *args, **kwargs):
+    """One control request; on a lost connection the session turns lost (LiveServoError)."""
     if not session.alive:
-        raise SessionError(session.error or "no servo")
+        raise LiveServoError(session.error or "no servo")
     try:
         return getattr(session.client, name)(*args, **kwargs)
     except session.link.servo_client.ServoError as error:
         if "closed the connection" in str(error):
             lose(session, str(error))
-        raise SessionError(str(error)) from None
+        raise LiveServoError(str(error)) from None
     except (OSError, ValueError) as error:
         lose(session, f"the servo stopped answering ({error})")
-        raise SessionError(session.error) from None
+        raise LiveServoError(session.error) from None
 
 
-def lose(session: Session, why: str) -> None:
+def lose(session: LiveServo, why: str) -> None:
     """The servo is gone: say why (its exit code and last line), free the sockets."""
     code = session.process.poll()
     line = _last_line(session.log_path)
@@ -169,12 +174,12 @@ def lose(session: Session, why: str) -> None:
     session.client.close()
 
 
-def _load_steps(session: Session, **fields) -> steps.Steps[dict]:
+def _load_steps(session: LiveServo, **fields) -> steps.Steps[dict]:
     """The load request, its reply awaited in steps (the servo reads and checks the scene
-    meanwhile); SessionError as ``request`` raises it. The session is ``loading`` meanwhile:
+    meanwhile); LiveServoError as ``request`` raises it. The session is ``loading`` meanwhile:
     ``tick`` leaves the replies to this."""
     if not session.alive:
-        raise SessionError(session.error or "no servo")
+        raise LiveServoError(session.error or "no servo")
     client = session.client
     state, session.state = session.state, "loading"
     began = time.monotonic()
@@ -190,27 +195,27 @@ def _load_steps(session: Session, **fields) -> steps.Steps[dict]:
                 try:
                     return client.loaded(reply)
                 except session.link.servo_client.ServoError as error:
-                    raise SessionError(str(error)) from None
+                    raise LiveServoError(str(error)) from None
             if session.process.poll() is not None:
                 lose(session, "the servo exited")
-                raise SessionError(session.error)
+                raise LiveServoError(session.error)
             if time.monotonic() - began > LOAD_TIMEOUT_S:
                 lose(session, f"the servo did not load the scene in {LOAD_TIMEOUT_S:g} s")
-                raise SessionError(session.error)
+                raise LiveServoError(session.error)
             yield "loading the scene"
     except session.link.servo_client.ServoError as error:
         lose(session, str(error))
-        raise SessionError(str(error)) from None
+        raise LiveServoError(str(error)) from None
     except OSError as error:
         lose(session, f"the servo stopped answering ({error})")
-        raise SessionError(session.error) from None
+        raise LiveServoError(session.error) from None
     finally:
         if session.state == "loading":
             session.state = state
 
 
 def run_steps(
-    session: Session,
+    session: LiveServo,
     scene_path: str,
     devices: list[str],
     rate_Hz: float,
@@ -252,12 +257,12 @@ def run_steps(
     return reply
 
 
-def run(session: Session, *args, **kwargs) -> dict:
+def run(session: LiveServo, *args, **kwargs) -> dict:
     """run_steps in one call."""
     return steps.run_to_end(run_steps(session, *args, **kwargs))
 
 
-def tick(session: Session, poses: dict[str, list[float]] | None = None) -> bool:
+def tick(session: LiveServo, poses: dict[str, list[float]] | None = None) -> bool:
     """The timer's work: drain the stream (bounded), send the viewport poses, refresh the
     status now and then, notice a lost servo. True when a new frame arrived."""
     began = time.perf_counter()
@@ -302,7 +307,7 @@ def tick(session: Session, poses: dict[str, list[float]] | None = None) -> bool:
     return new
 
 
-def stop_steps(session: Session) -> steps.Steps[None]:
+def stop_steps(session: LiveServo) -> steps.Steps[None]:
     """Shut the servo down (its force ramps to zero) and wait for it; kill it if it hangs."""
     if session.process.poll() is None and session.state != "lost":
         with contextlib.suppress(Exception):
