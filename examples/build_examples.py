@@ -25,7 +25,6 @@ from pathlib import Path
 import numpy as np
 from hapticut.scenebuild import BuildSettings, Region, build
 from hapticut.scenefile import BladeSpec, Material, save_scene
-from hapticut.shapes import icosphere
 
 HERE = Path(__file__).resolve().parent
 MESHES = HERE / "meshes"
@@ -34,6 +33,19 @@ MOUSE_LENGTH_MM = 120.0
 # The paper's blade: a 0.1 m edge sampled by 50 points; here centred on the tool origin.
 SCALPEL = BladeSpec("scalpel", (-50.0, 0.0, 0.0), (50.0, 0.0, 0.0), 50)
 RIGID = Material("body", "rigid")
+
+
+def icosphere(radius_mm: float, subdivisions: int) -> tuple[np.ndarray, np.ndarray]:
+    """An icosahedron subdivided (80 faces: 1, 320: 2), on a sphere of the radius. pymeshlab's,
+    not hapticut.shapes.icosphere (the same mesh, rotated): the committed spheres were built
+    from this one, the evaluation measures them against it, and fTetWild meshes the rotated
+    one differently (about 308 tets for sphere80 against 338)."""
+    import pymeshlab
+
+    meshes = pymeshlab.MeshSet()
+    meshes.create_sphere(radius=radius_mm, subdiv=subdivisions)
+    mesh = meshes.current_mesh()
+    return mesh.vertex_matrix(), mesh.face_matrix()
 
 
 def revolve(xs, radii, segments: int = 24) -> tuple[np.ndarray, np.ndarray]:
