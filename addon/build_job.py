@@ -11,17 +11,15 @@ the child's process group and removes the job's directory, so nothing is left be
 
 from __future__ import annotations
 
-import contextlib
 import json
 import os
 import shutil
-import signal
 import subprocess
 import tempfile
 import time
 from dataclasses import dataclass, field
 
-from . import toolkit
+from . import steps, toolkit
 
 POLL_INTERVAL_S = 0.1
 # A check running longer than this is slowed by its meshes' size: the progress suggests a
@@ -215,7 +213,7 @@ def cancel(scene_name: str) -> bool:
     job = _jobs.pop(scene_name, None)
     if job is None:
         return False
-    _kill_group(job.process)
+    steps.end_group(job.process, TERMINATE_GRACE_S)
     shutil.rmtree(job.job_dir, ignore_errors=True)
     # A SIGKILLed toolkit may leave its staging directory beside the output: remove it.
     parent = os.path.dirname(job.out_dir)
@@ -224,16 +222,6 @@ def cancel(scene_name: str) -> bool:
         if name.startswith(prefix):
             shutil.rmtree(os.path.join(parent, name), ignore_errors=True)
     return True
-
-
-def _kill_group(process: subprocess.Popen) -> None:
-    with contextlib.suppress(ProcessLookupError):
-        os.killpg(process.pid, signal.SIGTERM)
-    with contextlib.suppress(subprocess.TimeoutExpired):
-        process.wait(TERMINATE_GRACE_S)
-    with contextlib.suppress(ProcessLookupError):  # What the group still holds goes too.
-        os.killpg(process.pid, signal.SIGKILL)
-    process.wait()
 
 
 def cancel_all() -> None:

@@ -35,12 +35,12 @@ from .units import mm_per_unit
 
 TIMER_INTERVAL_S = 1.0 / 120.0
 
-_session: live_session.Session | None = None
+_session: live_session.LiveServo | None = None
 _scene_name = ""
 _last_error = ""
 
 
-def current() -> live_session.Session | None:
+def current() -> live_session.LiveServo | None:
     return _session
 
 
@@ -56,7 +56,7 @@ def link_steps(timeout_s: float = toolkit.QUICK_TIMEOUT_S) -> steps.Steps:
     try:
         return (yield from toolkit_link.link_steps(preferences.executable(), timeout_s=timeout_s))
     except toolkit.ToolkitError as error:
-        raise live_session.SessionError(str(error)) from None
+        raise live_session.LiveServoError(str(error)) from None
 
 
 def link(timeout_s: float = toolkit.QUICK_TIMEOUT_S):
@@ -70,15 +70,15 @@ def log_path(scene) -> str:
 
 def scene_named(name: str):
     """The scene a job works for, looked up again after every wait (an undo or a file load
-    in between replaces Blender's data); SessionError once it is gone."""
+    in between replaces Blender's data); LiveServoError once it is gone."""
     scene = bpy.data.scenes.get(name)
     if scene is None:
-        raise live_session.SessionError(f"the scene {name!r} is gone")
+        raise live_session.LiveServoError(f"the scene {name!r} is gone")
     return scene
 
 
-def start_steps(scene_name: str) -> steps.Steps[live_session.Session]:
-    """Start the servo (stopping an earlier one); SessionError for the panel."""
+def start_steps(scene_name: str) -> steps.Steps[live_session.LiveServo]:
+    """Start the servo (stopping an earlier one); LiveServoError for the panel."""
     global _session, _scene_name, _last_error
     scene = scene_named(scene_name)
     live = scene.hapticut_live
@@ -95,7 +95,7 @@ def start_steps(scene_name: str) -> steps.Steps[live_session.Session]:
         _session = yield from live_session.start_steps(
             modules, path, port=port, realtime=realtime, extra=("--record-dir", work)
         )
-    except live_session.SessionError as error:
+    except live_session.LiveServoError as error:
         _last_error = str(error)
         raise
     live = scene_named(scene_name).hapticut_live
@@ -107,7 +107,7 @@ def start_steps(scene_name: str) -> steps.Steps[live_session.Session]:
 
 def refresh_devices_steps(scene_name: str, rate_Hz: float | None = None) -> steps.Steps[dict]:
     """*Refresh devices*: run the servo's listing at rate_Hz (the panel's rate), its
-    stiffness limits at that rate; the panel shows a failure (SessionError). Everything it
+    stiffness limits at that rate; the panel shows a failure (LiveServoError). Everything it
     waits for (asking the toolkit for its servo the first time, then the listing) is
     bounded by device_list.LIST_TIMEOUT_S together."""
     live = scene_named(scene_name).hapticut_live
@@ -118,10 +118,10 @@ def refresh_devices_steps(scene_name: str, rate_Hz: float | None = None) -> step
         listing = yield from device_list.refresh_steps(
             servo, max(0.1, deadline - time.monotonic()), rate_Hz
         )
-    except (live_session.SessionError, device_list.DeviceListError) as error:
+    except (live_session.LiveServoError, device_list.DeviceListError) as error:
         live = scene_named(scene_name).hapticut_live
         live.device_error = f"devices not listed: {error}"
-        raise live_session.SessionError(live.device_error) from None
+        raise live_session.LiveServoError(live.device_error) from None
     scene_named(scene_name).hapticut_live.device_error = ""
     return listing
 
@@ -151,7 +151,7 @@ def _limit_problems(scene, listing: dict, bindings: list[str], settings: dict, r
         found = device_list.settings_problems(settings, limits, rate_Hz, springs)
         problems += [f"{name} ({device}): {problem}" for problem in found]
     if problems:
-        raise live_session.SessionError("; ".join(problems) + " (lower it in the panel)")
+        raise live_session.LiveServoError("; ".join(problems) + " (lower it in the panel)")
 
 
 def listing_is_current(rate_Hz: float) -> bool:
@@ -162,7 +162,7 @@ def listing_is_current(rate_Hz: float) -> bool:
 def check_limits_steps(
     scene_name: str, bindings: list[str], settings: dict, rate_Hz: float = 1000.0
 ) -> steps.Steps[None]:
-    """Refuse settings above a bound device's limits at the servo's rate (SessionError naming
+    """Refuse settings above a bound device's limits at the servo's rate (LiveServoError naming
     blade, device and limit); the listing is read first if it was not yet, or again if the
     kept one's stiffness limits are for another rate (the servo's rule, not the add-on's)."""
     if not settings:
@@ -191,12 +191,12 @@ def requested_settings(live) -> dict:
 def built_scene(scene) -> tuple[str, str]:
     path = building.scene_file(scene)
     if path is None:
-        raise live_session.SessionError("no scene built yet: Tetrahedralize first")
+        raise live_session.LiveServoError("no scene built yet: Tetrahedralize first")
     preview = os.path.join(os.path.dirname(path), building.PREVIEW_FILE)
     return path, preview
 
 
-def ensure_session_steps(scene_name: str) -> steps.Steps[live_session.Session]:
+def ensure_session_steps(scene_name: str) -> steps.Steps[live_session.LiveServo]:
     if _session is None or not _session.alive:
         return (yield from start_steps(scene_name))
     return _session
@@ -205,7 +205,7 @@ def ensure_session_steps(scene_name: str) -> steps.Steps[live_session.Session]:
 def refuse_at_once(scene, bindings: list[str], settings: dict, rate_Hz: float) -> None:
     """What Go Live and Simulate Stroke refuse without waiting for anything, in the job's
     order: settings above the device's limits, then no scene built. When the limits need the
-    device listing read first, the job checks both. SessionError, also on the panel."""
+    device listing read first, the job checks both. LiveServoError, also on the panel."""
     if settings and not listing_is_current(rate_Hz):
         return
     live = scene.hapticut_live
@@ -213,7 +213,7 @@ def refuse_at_once(scene, bindings: list[str], settings: dict, rate_Hz: float) -
         if settings:
             _limit_problems(scene, device_list.cached(), bindings, settings, rate_Hz)
         built_scene(scene)
-    except live_session.SessionError as error:
+    except live_session.LiveServoError as error:
         live.error = str(error)
         raise
 
@@ -248,13 +248,13 @@ def go_live_steps(scene_name: str) -> steps.Steps[None]:
     if live.force_shading:  # The servo may refuse it (docs/protocol.md): say why, run on.
         try:
             live_session.request(session, "set_parameters", shading=True)
-        except live_session.SessionError as error:
+        except live_session.LiveServoError as error:
             live.error = f"force shading not applied: {error}"
 
 
 def engage(engaged: bool) -> None:
     if _session is None:
-        raise live_session.SessionError("no servo: Start it first")
+        raise live_session.LiveServoError("no servo: Start it first")
     live_session.request(_session, "engage", engaged)
 
 
@@ -262,7 +262,7 @@ def record_live(scene) -> str:
     """Toggle recording of the live run; the path while recording, "" once stopped."""
     session = _session
     if session is None or not session.running:
-        raise live_session.SessionError("nothing runs: Go live first")
+        raise live_session.LiveServoError("nothing runs: Go live first")
     live = scene.hapticut_live
     if session.status.get("recording", {}).get("active"):
         live_session.request(session, "stop_recording")

@@ -1,8 +1,8 @@
-"""Drawing the newest frame in the 3D views: the ideal points (proxies), the device points, the
-force and the knife at its ideal pose (a wireframe ghost of each blade object's mesh), through
-one ``gpu`` draw handler. The batches are built once per new frame (``invalidate`` drops them)
-and reused by every redraw; the arrays are made by ``frame_geometry``, which needs no GPU (the
-tests call it in background mode)."""
+"""Drawing the newest stream frame in the 3D views: the ideal points (proxies), the device
+points, the force and the knife at its ideal pose (a wireframe ghost of each blade object's
+mesh), through one ``gpu`` draw handler. The batches are built once per new stream frame
+(``invalidate`` drops them) and reused by every redraw; the arrays are made by
+``stream_frame_geometry``, which needs no GPU (the tests call it in background mode)."""
 
 from __future__ import annotations
 
@@ -72,7 +72,7 @@ def ghost_lines(obj, ideal_pose, mm_per_blender_unit: float) -> np.ndarray:
     return edges @ moved[:3, :3].T + moved[:3, 3]
 
 
-def frame_geometry(frame, mm_per_blender_unit: float, objects=None) -> dict[str, np.ndarray]:
+def stream_frame_geometry(frame, mm_per_blender_unit: float, objects=None) -> dict[str, np.ndarray]:
     """Blender-unit arrays of a frame: ``proxies`` and ``devices`` (points), ``lines`` (each
     proxy to its device point, pairs), ``force`` (one segment per blade) and ``knife`` (LINES
     pairs: each blade's mesh object, found by name in objects, at its ideal pose)."""
@@ -114,7 +114,7 @@ def _build(frame, scene):
     from gpu_extras.batch import batch_for_shader
 
     shader = gpu.shader.from_builtin("UNIFORM_COLOR")
-    geometry = frame_geometry(frame, mm_per_unit(scene), scene.objects)
+    geometry = stream_frame_geometry(frame, mm_per_unit(scene), scene.objects)
     builds += 1
     return shader, {
         "proxies": (batch_for_shader(shader, "POINTS", {"pos": geometry["proxies"]}), PROXY_COLOUR),
@@ -133,16 +133,16 @@ def draw(current) -> None:
     ``current()`` gives (the live link's: it passes its own, so this module needs none)."""
     global _batches, _drawn_sequence, draws
     session = current()
-    if session is None or session.frame is None:
+    if session is None or session.stream_frame is None:
         return
     import gpu
 
-    if _batches is None or _drawn_sequence != session.frame.sequence:
-        _batches = _build(session.frame, bpy.context.scene)
-        _drawn_sequence = session.frame.sequence
-        session.frames_drawn += 1
+    if _batches is None or _drawn_sequence != session.stream_frame.sequence:
+        _batches = _build(session.stream_frame, bpy.context.scene)
+        _drawn_sequence = session.stream_frame.sequence
+        session.stream_frames_drawn += 1
         # The age of the drawn frame: servo time (CLOCK_MONOTONIC, as time.monotonic) to now.
-        age_s = live_session.frame_age_s(session.frame, time.monotonic())
+        age_s = live_session.stream_frame_age_s(session.stream_frame, time.monotonic())
         if age_s is not None:
             session.drawn_ages_s.append(age_s)
     shader, batches = _batches

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import signal
 import subprocess
 import time
 from dataclasses import dataclass, field
@@ -36,19 +35,22 @@ EXIT_NETWORK = 5
 SERVO_FLAG_AS_FAST_AS_POSSIBLE = 4
 
 
-class SessionError(RuntimeError):
+class LiveServoError(RuntimeError):
     """Starting or talking to the servo failed; the message is for the panel."""
 
 
 @dataclass
-class Session:
+class LiveServo:
+    """The add-on's hold on one running servo: its child process, control channel and state
+    stream (the servo's own ``Session``, server/session.h, is a scene it has loaded)."""
+
     link: object  # toolkit_link.link(): servo_client, recording, servo
     process: subprocess.Popen
     log_path: str
     client: object  # servo_client.ServoClient
     state: str = "connected"  # connected, loading, running, simulating, lost, stopped
     error: str = ""
-    frame: object = None  # The newest servo_client.Frame.
+    stream_frame: object = None  # The newest servo_client.StreamFrame.
     status: dict = field(default_factory=dict)
     blades: list = field(default_factory=list)  # load reply's blades
     scene_path: str = ""
@@ -57,9 +59,9 @@ class Session:
     simulate: dict | None = None  # While a stroke simulates: what the bake needs.
     last_status_s: float = 0.0
     status_pending: bool = False
-    frames_drawn: int = 0
+    stream_frames_drawn: int = 0
     tick_costs_s: list = field(default_factory=list)
-    frame_ages_s: list = field(default_factory=list)  # Servo time to the timer's take.
+    stream_frame_ages_s: list = field(default_factory=list)  # Servo time to the timer's take.
     drawn_ages_s: list = field(default_factory=list)  # Servo time to the first draw (GUI only).
 
     @property
@@ -83,9 +85,9 @@ def _last_line(path: str) -> str:
 
 def start_steps(
     link, log_path: str, port: int = 0, realtime: bool = True, extra: tuple[str, ...] = ()
-) -> steps.Steps[Session]:
+) -> steps.Steps[LiveServo]:
     """Start hapticut-servo with a control channel (``port``; 0: any free one), its output in
-    log_path; connect and say hello. SessionError naming the problem (port busy, no servo)."""
+    log_path; connect and say hello. LiveServoError naming the problem (port busy, no servo)."""
     os.makedirs(os.path.dirname(log_path) or ".", exist_ok=True)
     command = [
         link.servo,
@@ -107,7 +109,7 @@ def start_steps(
                 start_new_session=True,
             )
         except OSError as error:
-            raise SessionError(f"cannot start {link.servo}: {error}") from None
+            raise LiveServoError(f"cannot start {link.servo}: {error}") from None
     began = time.monotonic()
     found_port = 0
     while not found_port:
@@ -121,11 +123,13 @@ def start_steps(
         if code is not None:
             line = _last_line(log_path)
             if code == EXIT_NETWORK:
-                raise SessionError(f"port {port} is busy or cannot be opened ({line})")
-            raise SessionError(f"the servo exited with code {code}: {line}")
+                raise LiveServoError(f"port {port} is busy or cannot be opened ({line})")
+            raise LiveServoError(f"the servo exited with code {code}: {line}")
         if time.monotonic() - began > STARTUP_TIMEOUT_S:
             _kill(process)
-            raise SessionError(f"the servo did not open its control port in {STARTUP_TIMEOUT_S} s")
+            raise LiveServoError(
+                f"the servo did not open its control port in {STARTUP_TIMEOUT_S} s"
+            )
         yield "starting the servo"
     client = link.servo_client.ServoClient(port=found_port, timeout_s=REPLY_TIMEOUT_S)
     try:
@@ -133,38 +137,31 @@ def start_steps(
         client.hello()
     except (OSError, link.servo_client.ServoError) as error:
         _kill(process)
-        raise SessionError(f"the servo does not answer on port {found_port}: {error}") from None
-    return Session(link, process, log_path, client)
+        raise LiveServoError(f"the servo does not answer on port {found_port}: {error}") from None
+    return LiveServo(link, process, log_path, client)
 
 
 def _kill(process: subprocess.Popen, grace_s: float = 5.0) -> None:
     if process.poll() is None:
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(process.pid, signal.SIGTERM)
-        try:
-            process.wait(grace_s)
-        except subprocess.TimeoutExpired:
-            with contextlib.suppress(ProcessLookupError):
-                os.killpg(process.pid, signal.SIGKILL)
-            process.wait()
+        steps.end_group(process, grace_s)
 
 
-def request(session: Session, name: str, *args, **kwargs):
-    """One control request; on a lost connection the session turns lost (SessionError)."""
+def request(session: LiveServo, name: str, *args, **kwargs):
+    """One control request; on a lost connection the session turns lost (LiveServoError)."""
     if not session.alive:
-        raise SessionError(session.error or "no servo")
+        raise LiveServoError(session.error or "no servo")
     try:
         return getattr(session.client, name)(*args, **kwargs)
     except session.link.servo_client.ServoError as error:
         if "closed the connection" in str(error):
             lose(session, str(error))
-        raise SessionError(str(error)) from None
+        raise LiveServoError(str(error)) from None
     except (OSError, ValueError) as error:
         lose(session, f"the servo stopped answering ({error})")
-        raise SessionError(session.error) from None
+        raise LiveServoError(session.error) from None
 
 
-def lose(session: Session, why: str) -> None:
+def lose(session: LiveServo, why: str) -> None:
     """The servo is gone: say why (its exit code and last line), free the sockets."""
     code = session.process.poll()
     line = _last_line(session.log_path)
@@ -172,7 +169,7 @@ def lose(session: Session, why: str) -> None:
     if code is not None:
         text = f"the servo exited (code {code})" + (f": {line}" if line else "")
     session.state, session.error = "lost", text
-    session.frame = None
+    session.stream_frame = None
     session.simulate = None
     session.client.close()
 
@@ -182,9 +179,9 @@ def lose(session: Session, why: str) -> None:
 AWAITING = ("loading", "stopping")
 
 
-def _load_steps(session: Session, **fields) -> steps.Steps[dict]:
+def _load_steps(session: LiveServo, **fields) -> steps.Steps[dict]:
     """The load request, its reply awaited in steps (the servo reads and checks the scene
-    meanwhile); SessionError as ``request`` raises it."""
+    meanwhile); LiveServoError as ``request`` raises it."""
     return (
         yield from _reply_steps(
             session, lambda client: client.send_load(**fields), "loading", "loading the scene",
@@ -193,7 +190,7 @@ def _load_steps(session: Session, **fields) -> steps.Steps[dict]:
     )  # fmt: skip
 
 
-def _stop_run_steps(session: Session) -> steps.Steps[dict]:
+def _stop_run_steps(session: LiveServo) -> steps.Steps[dict]:
     """The stop request (the servo ramps the force down before it answers), awaited in
     steps."""
 
@@ -210,12 +207,12 @@ def _stop_run_steps(session: Session) -> steps.Steps[dict]:
     )  # fmt: skip
 
 
-def _reply_steps(session: Session, send, state_while: str, what: str, taken, timeout_s: float):
+def _reply_steps(session: LiveServo, send, state_while: str, what: str, taken, timeout_s: float):
     """The request send(client) sends (its id), its reply awaited in steps yielding ``what``
-    and given to taken(reply); the session is in state_while meanwhile. SessionError as
+    and given to taken(reply); the session is in state_while meanwhile. LiveServoError as
     ``request`` raises it."""
     if not session.alive:
-        raise SessionError(session.error or "no servo")
+        raise LiveServoError(session.error or "no servo")
     client = session.client
     state, session.state = session.state, state_while
     began = time.monotonic()
@@ -231,27 +228,27 @@ def _reply_steps(session: Session, send, state_while: str, what: str, taken, tim
                 try:
                     return taken(reply)
                 except session.link.servo_client.ServoError as error:
-                    raise SessionError(str(error)) from None
+                    raise LiveServoError(str(error)) from None
             if session.process.poll() is not None:
                 lose(session, "the servo exited")
-                raise SessionError(session.error)
+                raise LiveServoError(session.error)
             if time.monotonic() - began > timeout_s:
                 lose(session, f"the servo did not answer ({what}) in {timeout_s:g} s")
-                raise SessionError(session.error)
+                raise LiveServoError(session.error)
             yield what
     except session.link.servo_client.ServoError as error:
         lose(session, str(error))
-        raise SessionError(str(error)) from None
+        raise LiveServoError(str(error)) from None
     except OSError as error:
         lose(session, f"the servo stopped answering ({error})")
-        raise SessionError(session.error) from None
+        raise LiveServoError(session.error) from None
     finally:
         if session.state == state_while:
             session.state = state
 
 
 def run_steps(
-    session: Session,
+    session: LiveServo,
     scene_path: str,
     devices: list[str],
     rate_Hz: float,
@@ -273,7 +270,7 @@ def run_steps(
     session.blades = reply["blades"]
     session.scene_path = scene_path
     # The ages shown are this run's.
-    session.frame_ages_s.clear()
+    session.stream_frame_ages_s.clear()
     session.drawn_ages_s.clear()
     if settings:
         request(session, "set_parameters", **settings)
@@ -293,12 +290,12 @@ def run_steps(
     return reply
 
 
-def run(session: Session, *args, **kwargs) -> dict:
+def run(session: LiveServo, *args, **kwargs) -> dict:
     """run_steps in one call."""
     return steps.run_to_end(run_steps(session, *args, **kwargs))
 
 
-def tick(session: Session, poses: dict[str, list[float]] | None = None) -> bool:
+def tick(session: LiveServo, poses: dict[str, list[float]] | None = None) -> bool:
     """The timer's work: drain the stream (bounded), send the viewport poses, refresh the
     status now and then, notice a lost servo. True when a new frame arrived."""
     began = time.perf_counter()
@@ -318,10 +315,10 @@ def tick(session: Session, poses: dict[str, list[float]] | None = None) -> bool:
                 session.error = f"{reply.get('type')}: {reply.get('error', 'failed')}"
         frame = client.poll_newest(MAX_DATAGRAMS, BUDGET_S)
         if frame is not None:
-            session.frame, new = frame, True
-            age_s = frame_age_s(frame, time.monotonic())
+            session.stream_frame, new = frame, True
+            age_s = stream_frame_age_s(frame, time.monotonic())
             if age_s is not None:
-                session.frame_ages_s.append(age_s)
+                session.stream_frame_ages_s.append(age_s)
         if client.unanswered < MAX_UNANSWERED:
             for blade, pose in (poses or {}).items():
                 client.send_request("pose", blade=blade, pose=[float(x) for x in pose], buttons=0)
@@ -338,12 +335,12 @@ def tick(session: Session, poses: dict[str, list[float]] | None = None) -> bool:
     except (OSError, ValueError) as error:
         lose(session, f"the servo stopped answering ({error})")
     session.tick_costs_s.append(time.perf_counter() - began)
-    del session.tick_costs_s[:-4096], session.frame_ages_s[:-4096]
+    del session.tick_costs_s[:-4096], session.stream_frame_ages_s[:-4096]
     del session.drawn_ages_s[:-4096]
     return new
 
 
-def stop_steps(session: Session) -> steps.Steps[None]:
+def stop_steps(session: LiveServo) -> steps.Steps[None]:
     """Shut the servo down (its force ramps to zero) and wait for it; kill it if it hangs."""
     if session.process.poll() is None and session.state != "lost":
         with contextlib.suppress(Exception):
@@ -358,7 +355,7 @@ def stop_steps(session: Session) -> steps.Steps[None]:
         session.state = "stopped"
 
 
-def frame_age_s(frame, now_s: float) -> float | None:
+def stream_frame_age_s(frame, now_s: float) -> float | None:
     """A frame's age at now_s (time.monotonic(), the servo's CLOCK_MONOTONIC): None when it
     has none, in a run as fast as possible (virtual servo time, ahead of the clock) or when
     the servo time lies in the future (another machine's clock)."""

@@ -40,7 +40,7 @@ def simulate_steps(scene_name: str) -> steps.Steps[dict]:
         poses = yield from stroke_path.sample_poses_steps(scene_name, name, rate_Hz)
         file = stroke_path.write_path(poses, os.path.join(folder, f"{name}.path.json"))
         if "," in file or "=" in name:
-            raise live_session.SessionError(f"{name}: the path {file} cannot hold ',' ")
+            raise live_session.LiveServoError(f"{name}: the path {file} cannot hold ',' ")
         bindings.append(f"{name}=sim:{file},hand={hand},hold_s=0")
     sampled = time.perf_counter()
     yield from live.check_limits_steps(scene_name, bindings, settings, rate_Hz)
@@ -62,7 +62,7 @@ def simulate_steps(scene_name: str) -> steps.Steps[dict]:
         # The live timer follows the stroke (its frames, its status) until the servo stops.
         while session.status.get("state") != "stopped":
             if not session.alive:
-                raise live_session.SessionError(session.error or "the servo stopped")
+                raise live_session.LiveServoError(session.error or "the servo stopped")
             yield "simulating the stroke"
     finally:
         session.simulate = None

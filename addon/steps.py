@@ -11,6 +11,9 @@ No bpy here.
 
 from __future__ import annotations
 
+import contextlib
+import os
+import signal
 import subprocess
 import tempfile
 import time
@@ -97,3 +100,16 @@ def child(
         return ChildResult(
             process.returncode, out.read().decode(**decode), err.read().decode(**decode)
         )
+
+
+def end_group(process: subprocess.Popen, grace_s: float) -> None:
+    """End a child started with ``start_new_session=True`` and its process group: SIGTERM to
+    the group, up to grace_s for the child to exit, then SIGKILL to what the group still holds;
+    the child is reaped."""
+    with contextlib.suppress(ProcessLookupError):
+        os.killpg(process.pid, signal.SIGTERM)
+    with contextlib.suppress(subprocess.TimeoutExpired):
+        process.wait(grace_s)
+    with contextlib.suppress(ProcessLookupError):  # What the group still holds goes too.
+        os.killpg(process.pid, signal.SIGKILL)
+    process.wait()

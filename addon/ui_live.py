@@ -54,14 +54,14 @@ def status_lines(session) -> list[str]:
         recording = status.get("recording", {})
         if recording.get("active"):
             lines.append(f"recording: {recording.get('written', 0)} ticks")
-    timer_age = live_session.age_text(session.frame_ages_s)
+    timer_age = live_session.age_text(session.stream_frame_ages_s)
     if timer_age:
         drawn_age = live_session.age_text(session.drawn_ages_s)
         lines.append(
             f"frame age p50 / p99: {timer_age} at the timer"
             + (f", {drawn_age} drawn" if drawn_age else "")
         )
-    frame = session.frame
+    frame = session.stream_frame
     if frame is not None:
         for name, blade in frame.blades.items():
             counts = blade["block"]["state_counts"]

@@ -36,7 +36,10 @@ RIGID = Material("body", "rigid")
 
 
 def icosphere(radius_mm: float, subdivisions: int) -> tuple[np.ndarray, np.ndarray]:
-    """An icosahedron subdivided (80 faces: 1, 320: 2), on a sphere of the radius."""
+    """An icosahedron subdivided (80 faces: 1, 320: 2), on a sphere of the radius. pymeshlab's,
+    not hapticut.shapes.icosphere (the same mesh, rotated): the committed spheres were built
+    from this one, the evaluation measures them against it, and fTetWild meshes the rotated
+    one differently (about 308 tets for sphere80 against 338)."""
     import pymeshlab
 
     meshes = pymeshlab.MeshSet()

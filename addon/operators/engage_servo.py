@@ -19,7 +19,7 @@ class HAPTICUT_OT_engage_servo(bpy.types.Operator):
     def execute(self, context):
         try:
             live.engage(self.engaged)
-        except live_session.SessionError as error:
+        except live_session.LiveServoError as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         return {"FINISHED"}

@@ -12,7 +12,7 @@ class HAPTICUT_OT_record_live(bpy.types.Operator):
     def execute(self, context):
         try:
             path = live.record_live(context.scene)
-        except live_session.SessionError as error:
+        except live_session.LiveServoError as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         self.report({"INFO"}, f"recording to {path}" if path else "recording stopped")

@@ -13,7 +13,7 @@ class HAPTICUT_OT_simulate_stroke(jobs.FollowsJob, bpy.types.Operator):
     def execute(self, context):
         try:
             simulate.simulate(context)
-        except live_session.SessionError as error:
+        except live_session.LiveServoError as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         return {"FINISHED"}

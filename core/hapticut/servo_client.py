@@ -39,7 +39,7 @@ class ServoError(RuntimeError):
 
 
 @dataclass
-class Frame:
+class StreamFrame:
     header: np.void  # layout.FRAME_HEADER
     blades: dict[str, np.void]  # name -> layout.blade_dtype(points) ("block", "q", "p", "state")
     received_s: float  # time.monotonic() on arrival (the servo's clock: CLOCK_MONOTONIC)
@@ -70,8 +70,10 @@ class Frame:
         return self.received_s - float(self.header["servo_time_s"])
 
 
-def parse_frame(data: bytes, names: Sequence[str] | None = None, received_s: float = 0.0) -> Frame:
-    """One datagram -> Frame. ValueError naming what is wrong for anything else."""
+def parse_stream_frame(
+    data: bytes, names: Sequence[str] | None = None, received_s: float = 0.0
+) -> StreamFrame:
+    """One datagram -> StreamFrame. ValueError naming what is wrong for anything else."""
     size = layout.FRAME_HEADER.itemsize
     if len(data) < size:
         raise ValueError(f"frame of {len(data)} bytes is shorter than its header ({size})")
@@ -94,7 +96,7 @@ def parse_frame(data: bytes, names: Sequence[str] | None = None, received_s: flo
         name = names[i] if names is not None and i < len(names) else f"blade{i}"
         blades[name] = np.frombuffer(data, dtype, 1, offset)[0]
         offset += dtype.itemsize
-    return Frame(header, blades, received_s)
+    return StreamFrame(header, blades, received_s)
 
 
 _SESSION_OFFSET = layout.FRAME_HEADER.fields["session"][1]
@@ -102,7 +104,7 @@ _SEQUENCE_OFFSET = layout.FRAME_HEADER.fields["sequence"][1]
 
 
 def _order_of(data: bytes) -> tuple[int, int] | None:
-    """A datagram's (session, sequence) from its header alone (``Frame.order``), or None
+    """A datagram's (session, sequence) from its header alone (``StreamFrame.order``), or None
     when it is no frame."""
     if len(data) < layout.FRAME_HEADER.itemsize or data[:4] != layout.FRAME_MAGIC:
         return None
@@ -371,12 +373,12 @@ class ServoClient:
     def unsubscribe(self) -> dict:
         return self.request("unsubscribe")
 
-    def poll(self) -> Frame | None:
+    def poll(self) -> StreamFrame | None:
         """The newest complete frame waiting on the stream socket, or None. Never blocks."""
         frames = self.poll_all()
         return frames[-1] if frames else None
 
-    def poll_newest(self, max_datagrams: int = 64, budget_s: float = 0.002) -> Frame | None:
+    def poll_newest(self, max_datagrams: int = 64, budget_s: float = 0.002) -> StreamFrame | None:
         """The newest frame among at most ``max_datagrams`` waiting datagrams, read for at most
         ``budget_s``; None when none came. Bounded by construction (a timer of the add-on
         calls it): only the newest datagram read is parsed whole; datagrams beyond the bound
@@ -401,25 +403,25 @@ class ServoClient:
         if newest_data is None:
             return None
         try:
-            frame = parse_frame(newest_data, self.blade_names or None, newest_s)
+            frame = parse_stream_frame(newest_data, self.blade_names or None, newest_s)
         except ValueError:
             self.bad_datagrams += 1
             return None
         self.frames_received += 1
         return frame
 
-    def poll_all(self) -> list[Frame]:
+    def poll_all(self) -> list[StreamFrame]:
         """Every frame waiting, oldest first (out-of-order ones dropped). Never blocks."""
         if self._stream is None:
             return []
-        out: list[Frame] = []
+        out: list[StreamFrame] = []
         newest = (-1, -1)
         while (received := self._receive_datagram()) is not None:
             data, now = received
             if data is None:
                 continue
             try:
-                frame = parse_frame(data, self.blade_names or None, now)
+                frame = parse_stream_frame(data, self.blade_names or None, now)
             except ValueError:
                 self.bad_datagrams += 1
                 continue

@@ -171,7 +171,7 @@ def _with_blades(header: np.dtype, names: list[str], points: list[int]) -> np.dt
     return np.dtype(fields)
 
 
-def frame_dtype(points: list[int], names: list[str] | None = None) -> np.dtype:
+def stream_frame_dtype(points: list[int], names: list[str] | None = None) -> np.dtype:
     """A whole frame for blades with these point counts (fields ``blade0``, ... by default)."""
     names = names or [f"blade{i}" for i in range(len(points))]
     return _with_blades(FRAME_HEADER, names, points)

@@ -1,5 +1,5 @@
 """Closed surfaces made in code, for regions of test scenes and of the evaluation: the
-geodesic sphere. (Enclosures and the Kuhn grid: hapticut.scene.geometry; the engine's
+geodesic sphere. (Enclosures and the Kuhn grid: hapticut.scenebuild.geometry; the engine's
 reference tet meshes: hapticut._core.)"""
 
 from __future__ import annotations

@@ -1,7 +1,10 @@
-"""Shared by the scene-building tests: small meshes and a point-to-material lookup."""
+"""Shared by the scene-building tests: small meshes, a point-to-material lookup and the
+`hapticut` command run as a child."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +18,17 @@ def bunny_path() -> Path:
     import pymeshlab
 
     return Path(pymeshlab.__file__).parent / "tests" / "sample_meshes" / "bunny10k_textured.obj"
+
+
+def run_cli(*args, cwd=None) -> subprocess.CompletedProcess:
+    """`hapticut ARGS` as a child (``python -m hapticut.cli``): exit code and text output."""
+    return subprocess.run(
+        [sys.executable, "-m", "hapticut.cli", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=cwd,
+    )
 
 
 def write_obj(path: Path, vertices, faces) -> Path:

@@ -13,6 +13,7 @@ import functools
 import json
 import subprocess
 import tempfile
+import time
 from pathlib import Path
 
 import numpy as np
@@ -59,6 +60,19 @@ def connect(servo: ServoProcess, blade_names: list[str] | None = None) -> ServoC
     if blade_names:
         client.blade_names = blade_names
     return client
+
+
+def wait_stopped(client: ServoClient, timeout_s: float = 60.0) -> list:
+    """The stream frames received until the servo's run has stopped (at most timeout_s)."""
+    frames = []
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        frames += client.poll_all()
+        if client.status()["state"] == "stopped":
+            break
+        time.sleep(0.01)
+    frames += client.poll_all()
+    return frames
 
 
 def two_blade_scene(path: Path) -> Path:

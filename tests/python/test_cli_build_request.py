@@ -5,21 +5,14 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
-from build_test_support import EXAMPLES, icosphere
+from build_test_support import EXAMPLES, icosphere, run_cli
 from hapticut.build_request import RequestError, input_problems, read_request
 from hapticut.preview import preview_arrays
 from hapticut.scenebuild import Region
 from hapticut.scenefile import Material, load_scene
-
-
-def run_cli(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "hapticut.cli", *map(str, args)],
-                          capture_output=True, text=True, timeout=300, cwd=cwd)  # fmt: skip
 
 
 def write_request(folder, regions, blades=(), settings=None, **extra):

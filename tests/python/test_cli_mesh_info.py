@@ -4,24 +4,12 @@ from __future__ import annotations
 
 import json
 import re
-import subprocess
-import sys
 
 import numpy as np
 import pytest
-from build_test_support import EXAMPLES, icosphere, materials_at, write_obj
+from build_test_support import EXAMPLES, icosphere, materials_at, run_cli, write_obj
 from hapticut.commands.mesh import parse_material
 from hapticut.scenefile import Material, load_scene
-
-
-def run_cli(*args, cwd=None):
-    return subprocess.run(
-        [sys.executable, "-m", "hapticut.cli", *map(str, args)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        cwd=cwd,
-    )
 
 
 def test_mesh_then_info_on_two_nested_spheres(tmp_path):

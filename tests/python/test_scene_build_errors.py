@@ -2,12 +2,9 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import numpy as np
 import pytest
-from build_test_support import icosphere, write_obj
+from build_test_support import icosphere, run_cli, write_obj
 from hapticut.scenebuild import BuildError, BuildSettings, Region, build
 from hapticut.scenefile import Material
 
@@ -109,16 +106,6 @@ def test_duplicate_region_names_and_bad_settings_are_named():
         build([ball()], settings=BuildSettings(accuracy_mm=-1.0))
     with pytest.raises(BuildError, match="no regions"):
         build([])
-
-
-def run_cli(*args, cwd):
-    return subprocess.run(
-        [sys.executable, "-m", "hapticut.cli", *map(str, args)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        cwd=cwd,
-    )
 
 
 def test_the_mesh_command_reports_bad_input_and_writes_nothing(tmp_path):

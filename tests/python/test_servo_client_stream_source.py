@@ -9,7 +9,7 @@ import time
 
 import numpy as np
 from hapticut import servo_layout as layout
-from hapticut.servo_client import parse_frame
+from hapticut.servo_client import parse_stream_frame
 from servo_test_support import SPHERE, ServoProcess, connect
 
 FORGED_SESSION = 1 << 31
@@ -18,7 +18,7 @@ FORGED_SEQUENCE = 1 << 62
 
 def forged_frame(points: int) -> bytes:
     """A frame that parses, from the newest run there could be."""
-    frame = np.zeros((), layout.frame_dtype([points]))
+    frame = np.zeros((), layout.stream_frame_dtype([points]))
     header = frame["header"]
     header["magic"] = np.frombuffer(layout.FRAME_MAGIC, "S1")
     header["version"] = layout.FRAME_VERSION
@@ -29,7 +29,7 @@ def forged_frame(points: int) -> bytes:
     frame["blade0"]["block"]["point_count"] = points
     frame["blade0"]["block"]["force_N"] = [100.0, 0.0, 0.0]
     data = frame.tobytes()
-    assert parse_frame(data).order == (FORGED_SESSION, FORGED_SEQUENCE)
+    assert parse_stream_frame(data).order == (FORGED_SESSION, FORGED_SEQUENCE)
     return data
 
 

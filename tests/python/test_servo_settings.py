@@ -18,22 +18,11 @@ from servo_test_support import (
     independent_scene,
     offline_check,
     read_recording,
+    wait_stopped,
 )
 from test_servo_faults import assert_faulted_at, first_fault
 
 RIGID_SCENE = SPHERE  # A rigid body of flat facets: force shading bends its normals.
-
-
-def wait_stopped(client, timeout_s: float = 60.0) -> list:
-    frames = []
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        frames += client.poll_all()
-        if client.status()["state"] == "stopped":
-            break
-        time.sleep(0.01)
-    frames += client.poll_all()
-    return frames
 
 
 def test_stiffness_set_mid_stroke(tmp_path):

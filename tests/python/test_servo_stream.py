@@ -17,6 +17,7 @@ from servo_test_support import (
     connect,
     offline_check,
     read_recording,
+    wait_stopped,
 )
 
 
@@ -30,14 +31,7 @@ def test_stream_and_recording_equal_offline_engine(scene, tmp_path):
         client.blade_names = ["scalpel"]
         client.subscribe(rate_Hz=200)
         client.start()
-        frames = []
-        deadline = time.monotonic() + 30
-        while time.monotonic() < deadline:
-            frames += client.poll_all()
-            if client.status()["state"] == "stopped":
-                break
-            time.sleep(0.01)
-        frames += client.poll_all()
+        frames = wait_stopped(client, 30.0)
         client.close()
     assert len(frames) > 20, f"only {len(frames)} frames"
     sequences = [f.sequence for f in frames]
@@ -177,7 +171,7 @@ def test_a_client_of_other_layouts_refuses_the_servo(monkeypatch):
 
 def test_a_frame_carries_the_ideal_pose():
     """A viewport pose in, the engine's ideal pose out: independent points report the device's
-    pose (normalised), a rigid blade its own (the layout's field, and Frame.ideal_pose)."""
+    pose (normalised), a rigid blade its own (the layout's field, and StreamFrame.ideal_pose)."""
     with ServoProcess([str(SPHERE), "--device", "scalpel=viewport"]) as servo:
         client = connect(servo, ["scalpel"])
         client.subscribe(rate_Hz=200)

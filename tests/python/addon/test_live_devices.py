@@ -213,7 +213,7 @@ def test_a_rigid_blades_stiffness_is_its_points_springs(scene):
     assert live.blade_springs(scene, "Knife") == live.blade_springs(scene) == 20
     settings.device_mode = "BRIDGE"
     settings.stiffness_N_per_mm = 0.5 * limit
-    with pytest.raises(live.live_session.SessionError) as refused:
+    with pytest.raises(live.live_session.LiveServoError) as refused:
         live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
     assert f"stiffness {10 * limit:g} N/mm ({0.5 * limit:g} N/mm x 20 points of a rigid blade)" in (
         str(refused.value)

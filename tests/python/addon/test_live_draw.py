@@ -85,30 +85,32 @@ def test_draw_builds_once_per_frame_draws_the_frame_and_records_its_age(finger, 
     assert bpy.ops.hapticut.go_live() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
     session = live.current()
-    live_support.follow(lambda: session.frame is not None and session.status.get("ticks", 0) > 50)
+    live_support.follow(
+        lambda: session.stream_frame is not None and session.status.get("ticks", 0) > 50
+    )
     live_draw.invalidate()
-    builds0, draws0, drawn0 = live_draw.builds, live_draw.draws, session.frames_drawn
+    builds0, draws0, drawn0 = live_draw.builds, live_draw.draws, session.stream_frames_drawn
     sequences = set()
     began = time.perf_counter()
     while time.perf_counter() - began < 1.0:
         live.timer()  # Takes the newest frame and tags a redraw, as bpy.app.timers runs it.
         live_draw.draw(live.current)  # The redraw that follows.
-        sequences.add(session.frame.sequence)
+        sequences.add(session.stream_frame.sequence)
         # A second redraw of the same frame (another view, an overlay).
         live_draw.draw(live.current)
         time.sleep(0.004)
     builds = live_draw.builds - builds0
     # One build per new frame drawn, none for a redraw of a frame already built.
-    assert builds == len(sequences) == session.frames_drawn - drawn0
+    assert builds == len(sequences) == session.stream_frames_drawn - drawn0
     assert builds > 20, builds  # Frames stream at 120 Hz: about 100 in the second.
     assert len(recording_gpu["draws"]) == 5 * (live_draw.draws - draws0)
     # Every draw: the five batches of the newest build, in the add-on's colours.
     newest = recording_gpu["batches"][-5:]
     assert [b.kind for b in newest] == ["POINTS", "POINTS", "LINES", "LINES", "LINES"]
-    geometry = live_draw.frame_geometry(
-        session.frame, live_draw.mm_per_unit(finger), finger.objects
+    geometry = live_draw.stream_frame_geometry(
+        session.stream_frame, live_draw.mm_per_unit(finger), finger.objects
     )
-    points = len(session.frame.blades["Knife"]["q"])
+    points = len(session.stream_frame.blades["Knife"]["q"])
     assert np.array_equal(newest[0].pos, geometry["proxies"]) and len(newest[0].pos) == points
     assert np.array_equal(newest[1].pos, geometry["devices"])
     assert len(newest[2].pos) == 2 * points and len(newest[3].pos) == 2
@@ -131,7 +133,7 @@ def test_draw_builds_once_per_frame_draws_the_frame_and_records_its_age(finger, 
     )
     assert age_line.endswith(" drawn")
     print(
-        f"\nframe age p50 / p99 at the timer {live_session.age_text(session.frame_ages_s)}, "
+        f"\nframe age p50 / p99 at the timer {live_session.age_text(session.stream_frame_ages_s)}, "
         f"at the draw handler {live_session.age_text(drawn)} ({builds} frames drawn in 1 s; "
         "the handler called right after each timer run, with the GPU recorded: no viewport "
         "redraw delay is in it)"

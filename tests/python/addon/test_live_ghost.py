@@ -1,5 +1,5 @@
 """The knife drawn at its ideal pose in the live view: the blade object's edges moved by the
-transform that takes the object's own pose to the frame's ideal pose (``frame_geometry``'s
+transform that takes the object's own pose to the frame's ideal pose (``stream_frame_geometry``'s
 ``knife``, LINES pairs), with no servo and no GPU."""
 
 import types
@@ -26,7 +26,7 @@ def knife_object(scene):
 
 
 def frame_with(name: str, ideal_pose) -> types.SimpleNamespace:
-    """A frame of one blade (the fields frame_geometry reads) with this ideal pose."""
+    """A frame of one blade (the fields stream_frame_geometry reads) with this ideal pose."""
     points = np.zeros((2, 3))
     block = {"engine_force_N": np.zeros(3), "ideal_pose": np.asarray(ideal_pose, np.float64)}
     return types.SimpleNamespace(blades={name: {"q": points, "p": points, "block": block}})
@@ -69,7 +69,9 @@ def test_the_ghost_is_the_object_moved_by_the_ideal_pose_transform(scene_in_cm):
     transform = mathutils.Matrix.Translation((0.8, -0.3, 1.2)) @ turn.to_matrix().to_4x4()
     own = mathutils.Matrix.LocRotScale(*knife.matrix_world.decompose()[:2], None)
     ideal = pose_mm(transform @ own, mm)
-    geometry = live_draw.frame_geometry(frame_with(knife.name, ideal), mm, scene_in_cm.objects)
+    geometry = live_draw.stream_frame_geometry(
+        frame_with(knife.name, ideal), mm, scene_in_cm.objects
+    )
     expected = edge_points(knife, transform)
     assert geometry["knife"].shape == (2 * len(knife.data.edges), 3)
     error = np.abs(geometry["knife"] - expected).max()
@@ -84,7 +86,9 @@ def test_the_ghost_coincides_with_the_object_at_its_own_pose(scene_in_cm):
     mm = mm_per_unit(scene_in_cm)
     knife = knife_object(scene_in_cm)
     ideal = stroke_path.pose_of(knife.matrix_world, mm)  # What a viewport device sends.
-    geometry = live_draw.frame_geometry(frame_with(knife.name, ideal), mm, scene_in_cm.objects)
+    geometry = live_draw.stream_frame_geometry(
+        frame_with(knife.name, ideal), mm, scene_in_cm.objects
+    )
     expected = edge_points(knife, mathutils.Matrix.Identity(4))
     assert np.abs(geometry["knife"] - expected).max() < 1e-5
 
@@ -104,8 +108,11 @@ def test_the_edges_are_read_once_per_mesh(scene_in_cm):
 def test_a_blade_without_a_mesh_object_draws_no_ghost(scene_in_cm):
     from addon import live_draw
 
-    geometry = live_draw.frame_geometry(
+    geometry = live_draw.stream_frame_geometry(
         frame_with("No Such Blade", [0, 0, 0, 1, 0, 0, 0]), 10.0, scene_in_cm.objects
     )
     assert geometry["knife"].shape == (0, 3)
-    assert live_draw.frame_geometry(frame_with("No Such Blade", [0] * 7), 10.0)["knife"].size == 0
+    assert (
+        live_draw.stream_frame_geometry(frame_with("No Such Blade", [0] * 7), 10.0)["knife"].size
+        == 0
+    )

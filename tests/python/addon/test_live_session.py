@@ -42,7 +42,9 @@ def test_start_go_live_status_and_stop(finger):
     assert bpy.ops.hapticut.go_live() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert [b["kind"] for b in session.blades] == ["viewport"]
-    live_support.follow(lambda: session.frame is not None and session.status.get("ticks", 0) > 50)
+    live_support.follow(
+        lambda: session.stream_frame is not None and session.status.get("ticks", 0) > 50
+    )
     lines = ui_live.status_lines(session)
     assert lines[0] == "connected (running), servo running"
     assert any(line.startswith("Knife (viewport, fresh)") for line in lines)
@@ -53,8 +55,8 @@ def test_start_go_live_status_and_stop(finger):
     p50_ms, p99_ms = (float(x) for x in age_line.split(": ")[1].split(" ms")[0].split(" / "))
     assert 0 <= p50_ms <= p99_ms and "drawn" not in age_line
     # What the draw handler draws (its batches are made from these arrays, in Blender units).
-    geometry = live_draw.frame_geometry(session.frame, 0.5)
-    q = session.frame.blades["Knife"]["q"]
+    geometry = live_draw.stream_frame_geometry(session.stream_frame, 0.5)
+    q = session.stream_frame.blades["Knife"]["q"]
     assert geometry["proxies"].shape == (len(q), 3) and geometry["lines"].shape == (2 * len(q), 3)
     assert np.allclose(geometry["proxies"], q / 0.5, atol=1e-4)
     assert geometry["force"].shape == (2, 3)
@@ -114,7 +116,7 @@ def test_the_servo_killed_mid_session_shows_as_lost_and_start_recovers(finger):
     assert bpy.ops.hapticut.go_live() == {"FINISHED"}  # Starts the servo too.
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
     session = live.current()
-    live_support.follow(lambda: session.frame is not None)
+    live_support.follow(lambda: session.stream_frame is not None)
     os.kill(session.process.pid, signal.SIGKILL)
     session.process.wait(10)
     assert live.timer() is None  # The timer ends itself; no exception.
@@ -128,7 +130,7 @@ def test_the_servo_killed_mid_session_shows_as_lost_and_start_recovers(finger):
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
     recovered = live.current()
     assert recovered is not session and recovered.alive
-    live_support.follow(lambda: recovered.frame is not None)
+    live_support.follow(lambda: recovered.stream_frame is not None)
 
 
 def test_unregister_and_loading_a_file_remove_timer_handler_and_servo(finger, tmp_path):
@@ -190,7 +192,7 @@ def test_force_shading_asked_for_is_applied_by_the_servo(finger):
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert finger.hapticut_live.error == ""
     session = live.current()
-    live_support.follow(lambda: session.frame is not None)
+    live_support.follow(lambda: session.stream_frame is not None)
     assert live_session.request(session, "status")["settings"]["shading"] is True
 
 
@@ -214,7 +216,7 @@ def test_the_live_panels_draw_in_every_state(finger):
     assert bpy.ops.hapticut.go_live() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
     session = live.current()
-    live_support.follow(lambda: session.frame is not None and session.status.get("blades"))
+    live_support.follow(lambda: session.stream_frame is not None and session.status.get("blades"))
     assert any(text.startswith("connected (running)") for text in texts())
     finger.hapticut_live.bake_report = json.dumps(
         {

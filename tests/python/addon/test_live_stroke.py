@@ -93,12 +93,12 @@ def test_no_negative_frame_age_is_shown_after_simulate(baked):
     from addon import live, live_session, ui_live
 
     session = live.current()
-    assert session.frame is not None  # The stroke's last frame is kept.
+    assert session.stream_frame is not None  # The stroke's last frame is kept.
     lines = [line for line in ui_live.status_lines(session) if line.startswith("frame age")]
     print(f"\nafter Simulate stroke: {lines or 'no frame age line'}")
-    assert all(age >= 0 for age in session.frame_ages_s + session.drawn_ages_s)
+    assert all(age >= 0 for age in session.stream_frame_ages_s + session.drawn_ages_s)
     assert not any("-" in line.partition(":")[2] for line in lines), lines
-    assert live_session.frame_age_s(session.frame, time.monotonic()) is None
+    assert live_session.stream_frame_age_s(session.stream_frame, time.monotonic()) is None
 
 
 def baked_curves():

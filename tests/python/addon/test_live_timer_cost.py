@@ -43,17 +43,17 @@ def test_the_timer_is_bounded_while_frames_stream_at_120_hz(finger, tmp_path, po
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
     session = live.current()
     live_session.run(session, path, ["Knife=viewport"], 1000.0)  # Streams at 120 Hz.
-    live_support.follow(lambda: session.frame is not None)
-    assert len(session.frame.blades["Knife"]["q"]) == points
+    live_support.follow(lambda: session.stream_frame is not None)
+    assert len(session.stream_frame.blades["Knife"]["q"]) == points
     # At 120 Hz for 2 s.
     session.tick_costs_s.clear()
-    session.frame_ages_s.clear()
+    session.stream_frame_ages_s.clear()
     began = time.perf_counter()
     while time.perf_counter() - began < 2.0:
         live.timer()
         time.sleep(1 / 120)
     costs = np.array(session.tick_costs_s) * 1e3
-    ages = np.array(session.frame_ages_s) * 1e3
+    ages = np.array(session.stream_frame_ages_s) * 1e3
     print(
         f"\n{points} points: timer call p50 {np.median(costs):.3f} ms, max {costs.max():.3f} ms "
         f"({len(costs)} calls); frame age at the timer p50 {np.median(ages):.2f} ms, "

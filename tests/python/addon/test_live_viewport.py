@@ -46,15 +46,17 @@ def settle(session, knife, seconds: float = 0.3):
     target = np.array(knife.matrix_world.translation)
     live_support.follow(
         lambda: (
-            session.frame is not None
-            and np.allclose(session.frame.blades["Knife"]["block"]["pose"][:3], target, atol=1e-9)
+            session.stream_frame is not None
+            and np.allclose(
+                session.stream_frame.blades["Knife"]["block"]["pose"][:3], target, atol=1e-9
+            )
         )
     )
     began = time.perf_counter()
     while time.perf_counter() - began < seconds:
         live.timer()
         time.sleep(1 / 120)
-    return session.frame.blades["Knife"]
+    return session.stream_frame.blades["Knife"]
 
 
 def test_the_servo_follows_the_dragged_knife_and_the_bone_holds_the_ideal_blade(live_finger):
@@ -88,7 +90,7 @@ def test_the_servo_follows_the_dragged_knife_and_the_bone_holds_the_ideal_blade(
     # Sliding sideways in the flesh above the bone: the ideal points lag behind the knife.
     drag(knife, (x, 0, z), (x, 0, 6), 0.5)
     drag(knife, (x, 0, 6), (x, 6, 6), 0.3)
-    moving = session.frame.blades["Knife"]
+    moving = session.stream_frame.blades["Knife"]
     lag = moving["p"][:, 1] - moving["q"][:, 1]
     assert np.median(lag) > 0.05
 
