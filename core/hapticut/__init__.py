@@ -5,7 +5,10 @@ Tanaka, Hirota and Kaneko; this package adds scene files, scene building,
 benchmarks and the ``hapticut`` command.
 """
 
-__version__ = "0.1.0"
+from importlib.metadata import version as _version
+
+# The repository's one version (VERSION), as pip installed it (pyproject.toml).
+__version__ = _version("hapticut")
 
 
 def servo_path() -> str:
