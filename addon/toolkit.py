@@ -72,7 +72,7 @@ def quick_steps(
 
 
 def version_steps(executable: str) -> steps.Steps[str]:
-    """The installed toolkit's version (``hapticut --version`` prints "hapticut 0.1.0")."""
+    """The installed toolkit's version (``hapticut --version`` prints "hapticut <version>")."""
     text = yield from quick_steps(executable, "--version")
     return text.strip().removeprefix("hapticut ").strip()
 

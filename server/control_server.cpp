@@ -365,7 +365,7 @@ nlohmann::json ControlServer::hello(Client& client, const ControlJson& message) 
   return {{"version", kProtocolVersion},
           {"frame_version", kFrameVersion},
           {"record_version", kRecordVersion},
-          {"servo", "hapticut-servo 0.1.0"},
+          {"servo", "hapticut-servo " HAPTICUT_VERSION},
           {"stream_source_port", stream_port_}};
 }
 

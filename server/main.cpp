@@ -249,8 +249,8 @@ int run_main(int argc, char** argv) {
     return kExitOk;
   }
   if (options.version) {
-    std::printf("hapticut-servo 0.1.0 (protocol %d, frame %d, record %d)\n", kProtocolVersion,
-                kFrameVersion, kRecordVersion);
+    std::printf("hapticut-servo " HAPTICUT_VERSION " (protocol %d, frame %d, record %d)\n",
+                kProtocolVersion, kFrameVersion, kRecordVersion);
     return kExitOk;
   }
   if (options.list_devices) return list_devices(options);

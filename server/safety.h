@@ -20,6 +20,7 @@
 #include <memory>
 
 #include "devices/device.h"
+#include "hapticut/parameter_range.h"
 #include "passivity.h"
 
 namespace hapticut::servo {
@@ -52,9 +53,10 @@ inline constexpr std::uint32_t kSafetyFaults = kSafetyDeviceLost | kSafetyWatchd
 const char* safety_flag_name(int bit);
 
 struct SafetySettings {
-  double max_force_N = 5.0;
-  double max_torque_N_mm = 500.0;
-  double ramp_time_s = 0.5;
+  // The scene file's defaults (parameter_range.h, setting_range).
+  double max_force_N = setting_range::kMaxForce.default_value;
+  double max_torque_N_mm = setting_range::kMaxTorque.default_value;
+  double ramp_time_s = setting_range::kRampTime.default_value;
   double stop_ramp_time_s = 0.1;  // Ramp down on stop, SIGINT, SIGTERM.
   int watchdog_ticks = 50;
   std::uint32_t engage_buttons = 0;  // Device buttons that engage while held (0: none).

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "devices/viewport_device.h"
+#include "hapticut/parameter_range.h"
 #include "hapticut/scene_io.h"
 #include "passivity.h"
 
@@ -89,7 +90,7 @@ Session::Session(const SessionConfig& config) {
     request.max_torque_N_mm = std::min(request.max_torque_N_mm, scene_.safety.max_torque_N_mm);
     if (request.ramp_time_s < 0.0) request.ramp_time_s = scene_.safety.ramp_time_s;
   }
-  if (request.ramp_time_s < 0.0) request.ramp_time_s = 0.5;
+  if (request.ramp_time_s < 0.0) request.ramp_time_s = setting_range::kRampTime.default_value;
   request.watchdog_ticks =
       std::max(1, static_cast<int>(std::lround(config.watchdog_ms / 1000.0 * rate_Hz_)));
 

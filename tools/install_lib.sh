@@ -67,7 +67,7 @@ stamp_write() { mkdir -p build/stamps && echo "$2" >"build/stamps/$1"; }
 # The toolkit (hapticut, its module _core and the servo) from this checkout, built in
 # build/main for this CPU. "tests" also builds the C++ tests in the same tree and installs the
 # test extras; the product's own stamp is then satisfied too (a superset was built).
-TOOLKIT_SOURCES=(core server cmake CMakeLists.txt pyproject.toml examples tests/cpp
+TOOLKIT_SOURCES=(VERSION core server cmake CMakeLists.txt pyproject.toml examples tests/cpp
   tools/evaluation/src tools/evaluation/include tools/evaluation/tests
   tools/evaluation/CMakeLists.txt)
 install_toolkit() {

@@ -5,7 +5,14 @@ Tanaka, Hirota and Kaneko; this package adds scene files, scene building,
 benchmarks and the ``hapticut`` command.
 """
 
-__version__ = "0.1.0"
+# The repository's one version (VERSION): written into the package when it is built
+# (pyproject.toml), read from the checkout in a source tree never built.
+try:
+    from ._version import __version__
+except ImportError:
+    from pathlib import Path as _Path
+
+    __version__ = (_Path(__file__).resolve().parents[2] / "VERSION").read_text().strip()
 
 
 def servo_path() -> str:

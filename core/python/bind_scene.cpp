@@ -116,10 +116,11 @@ nb::dict document_to_dict(const SceneDocument& document) {
     nb::dict item;
     item["name"] = material.name;
     item["model"] = hapticut::material_model_name(material.model);
-    item["drag_distance_mm"] = material.drag_distance_mm;
-    item["viscosity_N_s_per_mm"] = material.viscosity_N_s_per_mm;
-    item["max_lag_mm"] = material.max_lag_mm;
-    item["break_force_N"] = material.break_force_N;
+    // Every parameter of every model (the table's order), as Material holds it.
+    for (const hapticut::MaterialParameterSpec& parameter : hapticut::material_parameters()) {
+      item[nb::str(parameter.range.name.data(), parameter.range.name.size())] =
+          material.*(parameter.field);
+    }
     materials.append(item);
   }
   std::vector<double> vertices;
@@ -246,11 +247,10 @@ hapticut::Material read_material(const nb::dict& item, std::size_t index) {
                      "unknown model '" + model_name + "' (expected " + known + ")");
   }
   material.model = *model;
-  material.drag_distance_mm = get_or(item, "drag_distance_mm", material.drag_distance_mm, field);
-  material.viscosity_N_s_per_mm =
-      get_or(item, "viscosity_N_s_per_mm", material.viscosity_N_s_per_mm, field);
-  material.max_lag_mm = get_or(item, "max_lag_mm", material.max_lag_mm, field);
-  material.break_force_N = get_or(item, "break_force_N", material.break_force_N, field);
+  for (const hapticut::MaterialParameterSpec& parameter : hapticut::material_parameters()) {
+    const char* key = parameter.range.name.data();  // The table's names are literals.
+    material.*(parameter.field) = get_or(item, key, material.*(parameter.field), field);
+  }
   return material;
 }
 

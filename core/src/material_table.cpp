@@ -7,28 +7,15 @@ namespace hapticut {
 
 namespace {
 
-// Upper bounds: a drag or viscous lag beyond a metre, a viscosity giving more
-// than 1 kN at 0.1 m/s, a membrane needing more than 100 N to break are not
-// tissue; they only overflow the physics. The lower bound is exclusive: a zero
-// would make the model the free one under another name.
-constexpr MaterialParameterSpec kDragDistance{
-    {"drag_distance_mm", "mm", 0.0, true, 1000.0, 1.0,
-     "the proxy trails the device point by at most this (eq. 16)"},
-    &Material::drag_distance_mm,
-    true};
-constexpr MaterialParameterSpec kViscosity{{"viscosity_N_s_per_mm", "N s/mm", 0.0, true, 10.0,
-                                            0.001, "resistance c in f = c v at stroke speed v"},
-                                           &Material::viscosity_N_s_per_mm,
-                                           true};
-constexpr MaterialParameterSpec kMaxLag{
-    {"max_lag_mm", "mm", 0.0, true, 1000.0, 50.0, "cap on the speed-dependent lag c v / k"},
-    &Material::max_lag_mm,
-    false};
-constexpr MaterialParameterSpec kBreakForce{
-    {"break_force_N", "N", 0.0, true, 100.0, 1.0,
-     "rigid until the push k |p - q| exceeds this, then free"},
-    &Material::break_force_N,
-    true};
+// The ranges are parameter_range.h's (material_range); this adds where each
+// value lives and whether a file may omit it.
+constexpr MaterialParameterSpec kDragDistance{material_range::kDragDistance,
+                                              &Material::drag_distance_mm, true};
+constexpr MaterialParameterSpec kViscosity{material_range::kViscosity,
+                                           &Material::viscosity_N_s_per_mm, true};
+constexpr MaterialParameterSpec kMaxLag{material_range::kMaxLag, &Material::max_lag_mm, false};
+constexpr MaterialParameterSpec kBreakForce{material_range::kBreakForce, &Material::break_force_N,
+                                            true};
 
 constexpr std::array<MaterialParameterSpec, 4> kAllParameters{kDragDistance, kViscosity, kMaxLag,
                                                               kBreakForce};

@@ -35,6 +35,11 @@ PARAMETER_RANGES: dict[str, dict[str, Any]] = {
 MATERIAL_PARAMETERS = tuple(PARAMETER_RANGES)
 
 
+def _default(ranges: dict[str, dict[str, Any]], name: str) -> float:
+    """The table's default of ``name`` (the dataclasses below restate no number)."""
+    return ranges[name]["default"]
+
+
 def parameter_problem(name: str, value: float) -> str:
     """'' when ``value`` is in the range of the material parameter or setting ``name``, else
     what is wrong, worded as the scene reader says it ("must be > 0, got -0.5")."""
@@ -65,7 +70,7 @@ class Material:
     model: str  # One of MATERIAL_MODELS.
     drag_distance_mm: float = 0.0  # drag: the proxy trails its target by at most this.
     viscosity_N_s_per_mm: float = 0.0  # viscous: resistance c in f = c v.
-    max_lag_mm: float = 50.0  # viscous: cap on the speed-dependent lag.
+    max_lag_mm: float = _default(PARAMETER_RANGES, "max_lag_mm")  # viscous: cap on the lag.
     break_force_N: float = 0.0  # membrane: rigid until k |p' - q| exceeds this.
 
 
@@ -94,11 +99,11 @@ class BladeSpec:
 class Safety:
     """Limits the servo's safety layer applies between the engine and the device."""
 
-    max_force_N: float = 5.0
-    max_torque_N_mm: float = 500.0
-    ramp_time_s: float = 0.5
-    max_transitions_per_tick: int = 64
-    capped_tick_force_N: float = 1.0
+    max_force_N: float = _default(SETTING_RANGES, "max_force_N")
+    max_torque_N_mm: float = _default(SETTING_RANGES, "max_torque_N_mm")
+    ramp_time_s: float = _default(SETTING_RANGES, "ramp_time_s")
+    max_transitions_per_tick: int = int(_default(SETTING_RANGES, "max_transitions_per_tick"))
+    capped_tick_force_N: float = _default(SETTING_RANGES, "capped_tick_force_N")
 
 
 @dataclass(eq=False)
@@ -114,9 +119,10 @@ class Scene:
     tets: np.ndarray
     tet_materials: np.ndarray
     blades: list[BladeSpec] = field(default_factory=list)
-    stiffness_N_per_mm: float = 0.1
-    servo_rate_Hz: float = 1000.0
-    tolerance_mm: float = 0.0  # 0: derived from the mesh's size by the engine.
+    stiffness_N_per_mm: float = _default(SETTING_RANGES, "stiffness_N_per_mm")
+    servo_rate_Hz: float = _default(SETTING_RANGES, "servo_rate_Hz")
+    # 0: derived from the mesh's size by the engine.
+    tolerance_mm: float = _default(SETTING_RANGES, "tolerance_mm")
     safety: Safety = field(default_factory=Safety)
     metadata: dict[str, Any] = field(default_factory=dict)
 

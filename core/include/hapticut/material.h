@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <string>
 
+#include "hapticut/parameter_range.h"
 #include "hapticut/vec3.h"
 
 namespace hapticut {
@@ -20,14 +21,16 @@ struct Material {
   MaterialModel model = MaterialModel::Free;
   double drag_distance_mm = 0.0;      // Drag: the proxy trails its target by at most this.
   double viscosity_N_s_per_mm = 0.0;  // Viscous: resistance c in f = c v.
-  double max_lag_mm = 50.0;           // Viscous: cap on the speed-dependent lag.
-  double break_force_N = 0.0;         // Membrane: rigid until k|p'-q| exceeds this.
+  // Viscous: cap on the speed-dependent lag (optional in a file: the table's default).
+  double max_lag_mm = material_range::kMaxLag.default_value;
+  double break_force_N = 0.0;  // Membrane: rigid until k|p'-q| exceeds this.
 };
 
 // What a move may depend on besides p' and q; fixed for the whole tick so a
 // tick's transitions see one consistent material.
 struct MoveContext {
-  double stiffness_N_per_mm = 0.1;     // k, for the membrane's push k|p'-q|.
+  // k, for the membrane's push k|p'-q|.
+  double stiffness_N_per_mm = setting_range::kStiffness.default_value;
   double target_speed_mm_per_s = 0.0;  // Speed of the device point this tick (viscous).
   double tolerance_mm = 1e-9;          // Repair 5: "not moved" means |p'-q| < D + eps.
 };

@@ -46,6 +46,13 @@ std::string range_reason(const ParameterRange& range, double value);
 // Throws std::invalid_argument("<what>: <reason>") unless the value is in range.
 void check_in_range(const ParameterRange& range, double value, std::string_view what);
 
+// The one table of every number's range and default: the engine's settings
+// here, the material parameters below. Default member initialisers (Scene,
+// SafetyLimits, EngineSettings, RuntimeSettings, Material, the servo's
+// SafetySettings) and the Python dataclasses (scenefile/model.py, through
+// hapticut._core) read their defaults from it; the JSON Schema is checked
+// against it by tests/python/test_material_table.py.
+
 // The engine's settings (scene file: coupling, tolerance_mm, safety).
 namespace setting_range {
 
@@ -99,5 +106,46 @@ inline constexpr ParameterRange kCappedTickForce{
     "capped_tick_force_N", "N", 0.0, true, 100.0, 1.0, "per-point force limit on a capped tick"};
 
 }  // namespace setting_range
+
+// The material parameters (scene file: materials; material_table.h says which
+// model takes which). Upper bounds: a drag or viscous lag beyond a metre, a
+// viscosity giving more than 1 kN at 0.1 m/s, a membrane needing more than
+// 100 N to break are not tissue; they only overflow the physics. The lower
+// bound is exclusive: a zero would make the model the free one under another
+// name.
+namespace material_range {
+
+inline constexpr ParameterRange kDragDistance{
+    "drag_distance_mm",
+    "mm",
+    0.0,
+    true,
+    1000.0,
+    1.0,
+    "the proxy trails the device point by at most this (eq. 16)"};
+inline constexpr ParameterRange kViscosity{"viscosity_N_s_per_mm",
+                                           "N s/mm",
+                                           0.0,
+                                           true,
+                                           10.0,
+                                           0.001,
+                                           "resistance c in f = c v at stroke speed v"};
+inline constexpr ParameterRange kMaxLag{
+    "max_lag_mm", "mm", 0.0, true, 1000.0, 50.0, "cap on the speed-dependent lag c v / k"};
+inline constexpr ParameterRange kBreakForce{
+    "break_force_N",
+    "N",
+    0.0,
+    true,
+    100.0,
+    1.0,
+    "rigid until the push k |p - q| exceeds this, then free"};
+
+}  // namespace material_range
+
+// A count's default as the int its field holds (the table keeps doubles).
+constexpr int default_count(const ParameterRange& range) {
+  return static_cast<int>(range.default_value);
+}
 
 }  // namespace hapticut

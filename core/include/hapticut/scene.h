@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "hapticut/material.h"  // Material, MaterialModel: scene users keep compiling.
+#include "hapticut/parameter_range.h"
 #include "hapticut/vec3.h"
 
 namespace hapticut {
@@ -36,12 +37,18 @@ struct BladeSpec {
   BladeOrientation orientation = BladeOrientation::Free;
 };
 
+// The file's "safety" object. Defaults: parameter_range.h (setting_range).
 struct SafetyLimits {
-  double max_force_N = 5.0;           // Clamp on the summed blade force.
-  double max_torque_N_mm = 500.0;     // Clamp on the torque about the tool origin.
-  double ramp_time_s = 0.5;           // Force ramp after start or after a fault.
-  int max_transitions_per_tick = 64;  // Cap per proxy per tick (ALGORITHM.md).
-  double capped_tick_force_N = 1.0;   // Per-point force limit on a capped tick.
+  // Clamp on the summed blade force.
+  double max_force_N = setting_range::kMaxForce.default_value;
+  // Clamp on the torque about the tool origin.
+  double max_torque_N_mm = setting_range::kMaxTorque.default_value;
+  // Force ramp after start or after a fault.
+  double ramp_time_s = setting_range::kRampTime.default_value;
+  // Cap per proxy per tick (ALGORITHM.md); an engine budget the file keeps here.
+  int max_transitions_per_tick = default_count(setting_range::kMaxTransitions);
+  // Per-point force limit on a capped tick.
+  double capped_tick_force_N = setting_range::kCappedTickForce.default_value;
 };
 
 // Throws std::invalid_argument naming the first limit outside its range
@@ -51,9 +58,11 @@ void check_safety_limits(const SafetyLimits& limits);
 
 struct Scene {
   int version = kSceneFormatVersion;
-  double stiffness_N_per_mm = 0.1;  // Coupling k in f = k (q - p), eq. (15).
-  double servo_rate_Hz = 1000.0;
-  double tolerance_mm = 0.0;  // 0: derived from the mesh's size (see docs/decisions.md).
+  // Coupling k in f = k (q - p), eq. (15).
+  double stiffness_N_per_mm = setting_range::kStiffness.default_value;
+  double servo_rate_Hz = setting_range::kServoRate.default_value;
+  // 0: derived from the mesh's size (see docs/decisions.md).
+  double tolerance_mm = setting_range::kTolerance.default_value;
   std::vector<Material> materials;
   std::vector<Vec3> vertices_mm;
   std::vector<std::array<std::int32_t, 4>> tets;

@@ -23,11 +23,12 @@
 namespace hapticut {
 
 // The scene's settings, fixed with the Space.
+// Defaults: parameter_range.h (setting_range).
 struct EngineSettings {
-  double stiffness_N_per_mm = 0.1;
-  double servo_rate_Hz = 1000.0;
-  int max_transitions_per_tick = 64;
-  double capped_tick_force_N = 1.0;
+  double stiffness_N_per_mm = setting_range::kStiffness.default_value;
+  double servo_rate_Hz = setting_range::kServoRate.default_value;
+  int max_transitions_per_tick = default_count(setting_range::kMaxTransitions);
+  double capped_tick_force_N = setting_range::kCappedTickForce.default_value;
   bool force_shading = false;  // Default of RuntimeSettings::force_shading.
 };
 
@@ -37,10 +38,13 @@ struct EngineSettings {
 // Space::runtime_settings(), the scene's own values. Plain data, trivially
 // copyable, so a servo can hand it between threads through a sequence lock.
 struct RuntimeSettings {
-  double stiffness_N_per_mm = 0.1;    // k of eq. (15); > 0.
-  int max_transitions_per_tick = 64;  // Per proxy per tick (>= 1); exact (see Proxy::step).
-  double capped_tick_force_N = 1.0;   // Per-point force limit on an unfinished tick.
-  bool force_shading = false;         // Blade: shade each point's force (ForceShading).
+  // k of eq. (15); > 0.
+  double stiffness_N_per_mm = setting_range::kStiffness.default_value;
+  // Per proxy per tick (>= 1); exact (see Proxy::step).
+  int max_transitions_per_tick = default_count(setting_range::kMaxTransitions);
+  // Per-point force limit on an unfinished tick.
+  double capped_tick_force_N = setting_range::kCappedTickForce.default_value;
+  bool force_shading = false;  // Blade: shade each point's force (ForceShading).
   // Blade: total transitions over all its points in one tick (docs/decisions.md,
   // "Work budget per tick"); 0 means kDefaultTransitionsPerPoint per point.
   int blade_transition_budget = 0;
