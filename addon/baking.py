@@ -40,12 +40,6 @@ class BakeError(RuntimeError):
     """The recording cannot be baked; the message says why."""
 
 
-def record_times(recording) -> np.ndarray:
-    """Seconds from the recording's first tick (frame_start)."""
-    times = np.asarray(recording.ticks["time_s"], np.float64)
-    return times - times[0] if len(times) else times
-
-
 def _collection(scene):
     collection = bpy.data.collections.get(COLLECTION)
     if collection is None:
@@ -210,7 +204,7 @@ def bake_steps(scene_name: str, link, recording_path: str, preview_path: str) ->
     fps = frames_per_second(scene)
     frame_start, frame_end = scene.frame_start, scene.frame_end
     substeps, arrow_setting = live.substeps, live.arrow_mm_per_N
-    times = record_times(recording)
+    times = recording.elapsed_s()
     # The keys stay in the scene's frame range; what the recording holds after it (a Simulate
     # stroke's stop ramp, a longer live recording) is not baked, and the report says so.
     frames, nearest = link.cut_surface.frame_ticks(times, fps, frame_start, frame_end)
@@ -220,7 +214,7 @@ def bake_steps(scene_name: str, link, recording_path: str, preview_path: str) ->
         )
     baked_ticks = int(nearest[-1]) + 1
     last_frame_s = (frames[-1] - frame_start) / fps
-    covered = len(link.cut_surface.frame_ticks(times, fps, frame_start)[0])
+    covered = link.cut_surface.covered_steps(times, 1.0 / fps)
     forces_by_blade = {
         name: recording.blade(name)["block"]["engine_force_N"][nearest]
         for name in recording.blade_names

@@ -193,16 +193,11 @@ def _load_steps(session: LiveServo, **fields) -> steps.Steps[dict]:
 def _stop_run_steps(session: LiveServo) -> steps.Steps[dict]:
     """The stop request (the servo ramps the force down before it answers), awaited in
     steps."""
-
-    def stopped(reply: dict) -> dict:
-        if not reply.get("ok"):
-            raise session.link.servo_client.ServoError(f"stop: {reply.get('error', 'failed')}")
-        return reply
-
     return (
         yield from _reply_steps(
             session, lambda client: client.send_request("stop"), "stopping",
-            "stopping the run", stopped, LOAD_TIMEOUT_S,
+            "stopping the run", lambda reply: session.client.checked("stop", reply),
+            REPLY_TIMEOUT_S,
         )
     )  # fmt: skip
 

@@ -21,10 +21,13 @@ longer than Blender's UI may wait.
 
 from __future__ import annotations
 
+import io
 import os
 from dataclasses import dataclass
 
 import numpy as np
+
+from hapticut.atomic_file import write_atomically
 
 CUTTABLE_MODELS = ("drag", "viscous", "membrane")
 STATE_TET = 0  # ProxyState::Tet (core/include/hapticut/proxy.h)
@@ -313,8 +316,7 @@ def recording_cut_surfaces(
 ) -> dict[str, CutSurface]:
     """Each blade's cut surface over the recording's first ``ticks`` records (a
     hapticut.recording.Recording; ``tets`` as preview_tets gives them)."""
-    times = np.asarray(recording.ticks["time_s"], np.float64)[:ticks]
-    times = times - times[0] if len(times) else times
+    times = recording.elapsed_s()[:ticks]
     locator = TetLocator(tets["vertices"], tets["tets"])
     surfaces = {}
     for name in recording.blade_names:
@@ -345,8 +347,9 @@ def write_cut_surfaces(path: str | os.PathLike, surfaces: dict[str, CutSurface])
         arrays[f"face_frames_{i}"] = surface.face_frames
         arrays[f"cutting_{i}"] = surface.cutting
         arrays[f"row_ticks_{i}"] = surface.row_ticks
-    with open(path, "wb") as out:
-        np.savez(out, **arrays)
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)
+    write_atomically(path, buffer.getvalue())
 
 
 def read_cut_surfaces(path: str | os.PathLike) -> dict[str, CutSurface]:

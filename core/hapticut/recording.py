@@ -74,6 +74,11 @@ class Recording:
         blade's solved pose, independent points' the device's (``coupling``)."""
         return layout.ideal_pose(self.blade(name))
 
+    def elapsed_s(self) -> np.ndarray:
+        """(T,): each record's time from the first one (a stroke's time, 0 at its start)."""
+        times = np.asarray(self.ticks["time_s"], np.float64)
+        return times - times[0] if len(times) else times
+
     def placed_poses(self, name: str, ticks) -> np.ndarray:
         """(K, 7): where a bake places the blade at the ticks. A rigid blade's solved pose
         (the whole knife held out of rigid material); for independent points, which have no

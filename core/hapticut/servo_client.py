@@ -216,7 +216,12 @@ class ServoClient:
             self._early.append(self.receive_message())
             self._unanswered -= 1
         reply = self.receive_message()
-        if check and not reply.get("ok"):
+        return self.checked(message_type, reply) if check else reply
+
+    @staticmethod
+    def checked(message_type: str, reply: dict) -> dict:
+        """The reply; ServoError naming the request when it is an error."""
+        if not reply.get("ok"):
             raise ServoError(f"{message_type}: {reply.get('error', 'failed')}")
         return reply
 
@@ -311,8 +316,7 @@ class ServoClient:
     def loaded(self, reply: dict) -> dict:
         """A load's reply taken: ServoError when it is an error; else the frames' blades are
         the ones it names."""
-        if not reply.get("ok"):
-            raise ServoError(f"load: {reply.get('error', 'failed')}")
+        self.checked("load", reply)
         self.blade_names = [b["name"] for b in reply["blades"]]
         return reply
 

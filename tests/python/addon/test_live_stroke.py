@@ -61,7 +61,7 @@ def test_the_ideal_blade_keyframes_follow_the_recording(baked):
 
     rec = recording(baked)
     blade = rec.blade("Knife")
-    times = baking.record_times(rec)
+    times = rec.elapsed_s()
     frames, nearest = live.link().cut_surface.frame_ticks(times, 24.0, baked.frame_start)
     ideal = bpy.data.objects["Ideal Knife"]
     knife = bpy.data.objects["Knife"]

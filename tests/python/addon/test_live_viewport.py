@@ -122,7 +122,7 @@ def test_record_while_live_then_bake(live_finger):
     assert {o.name for o in baking.baked_objects()} == {"Ideal Knife", "Force Knife", "Cut Knife"}
     # The last baked frame holds the force arrow where the recording has the proxies' centre.
     frames, nearest = live.link().cut_surface.frame_ticks(
-        baking.record_times(rec), 24.0, live_finger.frame_start
+        rec.elapsed_s(), 24.0, live_finger.frame_start
     )
     live_finger.frame_set(int(frames[-1]))
     centre = rec.blade("Knife")["q"][nearest[-1]].mean(axis=0)
