@@ -10,27 +10,20 @@ from __future__ import annotations
 
 import bpy
 
-from . import (
-    build_job,
-    jobs,
-    live,
-    live_properties,
-    operators,
-    preferences,
-    properties,
-    toolkit,
-    ui,
-    ui_live,
-    work_folder,
-)
+from . import operators
+from .authoring import build_job, properties, work_folder
+from .background import jobs
+from .live import live_link, live_properties
+from .toolkit import preferences, runner
+from .ui import live_panels, scene_panels
 
 classes = (
     *properties.classes,
     *live_properties.classes,
     *preferences.classes,
     *operators.classes,
-    *ui.classes,
-    *ui_live.classes,
+    *scene_panels.classes,
+    *live_panels.classes,
 )
 
 
@@ -39,7 +32,7 @@ def register() -> None:
         bpy.utils.register_class(cls)
     properties.attach()
     live_properties.attach()
-    live.add_handlers()
+    live_link.add_handlers()
     work_folder.add_handlers()
     if not bpy.app.background:  # Read the material table once, soon after startup.
         bpy.app.timers.register(_read_material_table, first_interval=1.0)
@@ -50,7 +43,7 @@ def _read_material_table():
     prefs = preferences.preferences()
     try:
         preferences.material_table()
-    except toolkit.ToolkitError as error:
+    except runner.ToolkitError as error:
         if prefs is not None:
             prefs.toolkit_error = str(error)
     return None
@@ -59,8 +52,8 @@ def _read_material_table():
 def unregister() -> None:
     jobs.cancel_all()
     jobs.stop_timer()
-    live.stop()
-    live.remove_handlers()
+    live_link.stop()
+    live_link.remove_handlers()
     work_folder.remove_handlers()
     if bpy.app.timers.is_registered(_read_material_table):
         bpy.app.timers.unregister(_read_material_table)

@@ -7,8 +7,11 @@ from __future__ import annotations
 import os
 import time
 
-from . import baking, jobs, live, live_session, steps, stroke_path, undo_steps, work_folder
-from .exchange import scene_objects
+from .authoring import work_folder
+from .authoring.exchange import scene_objects
+from .background import jobs, steps, undo_steps
+from .bake import baking
+from .live import live_link, live_session, stroke_path
 
 # Figures of the last Simulate stroke (for the measurements).
 last_simulate: dict = {}
@@ -19,8 +22,8 @@ def simulate(context) -> jobs.Job:
     scene = context.scene
     props = scene.hapticut_live
     bindings = [f"{obj.name}=sim:" for obj in scene_objects(scene, "BLADE")]
-    live.refuse_at_once(scene, bindings, live.requested_settings(props), props.rate_Hz)
-    return live.start_job("Simulate Stroke", scene.name, simulate_steps(scene.name))
+    live_link.refuse_at_once(scene, bindings, live_link.requested_settings(props), props.rate_Hz)
+    return live_link.start_job("Simulate Stroke", scene.name, simulate_steps(scene.name))
 
 
 def simulate_steps(scene_name: str) -> steps.Steps[dict]:
@@ -29,11 +32,11 @@ def simulate_steps(scene_name: str) -> steps.Steps[dict]:
     so; the figures (``last_simulate``)."""
     global last_simulate
     began = time.perf_counter()
-    scene = live.scene_named(scene_name)
+    scene = live_link.scene_named(scene_name)
     props = scene.hapticut_live
-    path, preview = live.built_scene(scene)
+    path, preview = live_link.built_scene(scene)
     folder = os.path.join(work_folder.work_directory(scene), "stroke")
-    rate_Hz, settings = props.rate_Hz, live.requested_settings(props)
+    rate_Hz, settings = props.rate_Hz, live_link.requested_settings(props)
     hand, bake_after = (1 if props.simulated_hand else 0), props.bake_after_simulate
     bindings = []
     for name in [obj.name for obj in scene_objects(scene, "BLADE")]:
@@ -43,8 +46,8 @@ def simulate_steps(scene_name: str) -> steps.Steps[dict]:
             raise live_session.LiveServoError(f"{name}: the path {file} cannot hold ',' ")
         bindings.append(f"{name}=sim:{file},hand={hand},hold_s=0")
     sampled = time.perf_counter()
-    yield from live.check_limits_steps(scene_name, bindings, settings, rate_Hz)
-    session = yield from live.ensure_session_steps(scene_name)
+    yield from live_link.check_limits_steps(scene_name, bindings, settings, rate_Hz)
+    session = yield from live_link.ensure_session_steps(scene_name)
     record = os.path.join(folder, "stroke.rec")
     yield from live_session.run_steps(
         session,
@@ -56,7 +59,7 @@ def simulate_steps(scene_name: str) -> steps.Steps[dict]:
         settings=settings,
         engage=True,
     )
-    session.preview_path = live.scene_named(scene_name).hapticut_live.preview_path = preview
+    session.preview_path = live_link.scene_named(scene_name).hapticut_live.preview_path = preview
     session.simulate = {"began": began, "record": record}
     try:
         # The live timer follows the stroke (its frames, its status) until the servo stops.
@@ -69,7 +72,7 @@ def simulate_steps(scene_name: str) -> steps.Steps[dict]:
     if session.state == "simulating":
         session.state = "connected"
     figures = {"servo_s": time.perf_counter() - sampled, "sampled_s": sampled - began}
-    live.scene_named(scene_name).hapticut_live.recording_path = record
+    live_link.scene_named(scene_name).hapticut_live.recording_path = record
     if bake_after:
         baked = yield from baking.bake_steps(scene_name, session.link, record, preview)
         figures["bake_s"] = baked["seconds"]

@@ -2,7 +2,7 @@
 add-on's job (Go Live, Simulate Stroke with its bake, Bake, Start, Stop, Refresh devices). In
 the GUI bpy.app.timers run them; in background mode (``blender -b``, the bpy module) no timer
 runs, so the wait calls what the timers would: ``building.update`` for the build,
-``jobs.advance`` for the job and ``live.timer`` for the live link it follows (docs/addon.md,
+``jobs.advance`` for the job and ``live_link.timer`` for the live link it follows (docs/addon.md,
 "Scripting").
 """
 
@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import time
 
-from . import build_job, building, jobs, live
+from .authoring import build_job, building
+from .background import jobs
+from .live import live_link
 
 # A job's steps wait on children and the servo: look again this soon.
 JOB_POLL_INTERVAL_S = 0.002
@@ -27,8 +29,8 @@ def wait(scene, timeout_s: float) -> float:
     while True:
         building_now = building.update(scene.name)
         job_now = jobs.advance()
-        if job_now and live.timer_registered():
-            live.timer()
+        if job_now and live_link.timer_registered():
+            live_link.timer()
         if not building_now and not job_now:
             return time.monotonic() - began
         if time.monotonic() - began > timeout_s:

@@ -143,7 +143,7 @@ def build_scene(work: Path, seconds: float):
 
 
 def tetrahedralize(scene) -> float:
-    from addon import building
+    from addon.authoring import building
 
     began = time.perf_counter()
     assert bpy.ops.hapticut.tetrahedralize() == {"FINISHED"}
@@ -157,7 +157,8 @@ def tetrahedralize(scene) -> float:
 
 
 def simulate_and_bake(scene) -> dict:
-    from addon import live, simulate
+    from addon import simulate
+    from addon.live import live_link
 
     began = time.perf_counter()
     assert bpy.ops.hapticut.simulate_stroke() == {"FINISHED"}
@@ -165,7 +166,7 @@ def simulate_and_bake(scene) -> dict:
     if bpy.ops.hapticut.wait() != {"FINISHED"} or scene.hapticut_live.error:
         sys.exit(f"blender_demo: the bake failed: {scene.hapticut_live.error}")
     figures = dict(simulate.last_simulate, seconds=time.perf_counter() - began)
-    live.stop()
+    live_link.stop()
     return figures
 
 

@@ -1,7 +1,9 @@
 import bpy
 from bpy.props import StringProperty
 
-from .. import baking, jobs, preferences, toolkit_link, undo_steps
+from ..background import jobs, undo_steps
+from ..bake import baking
+from ..toolkit import preferences, toolkit_link
 
 
 class HAPTICUT_OT_bake_recording(jobs.FollowsJob, bpy.types.Operator):

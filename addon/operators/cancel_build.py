@@ -1,6 +1,6 @@
 import bpy
 
-from .. import build_job, building
+from ..authoring import build_job, building
 
 
 class HAPTICUT_OT_cancel_build(bpy.types.Operator):

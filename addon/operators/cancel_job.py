@@ -1,6 +1,6 @@
 import bpy
 
-from .. import jobs
+from ..background import jobs
 
 
 class HAPTICUT_OT_cancel_job(bpy.types.Operator):

@@ -1,7 +1,7 @@
 import bpy
 
-from .. import build_job, building
-from ..job_modal import CancelsJobOnEsc
+from ..authoring import build_job, building
+from ..authoring.job_modal import CancelsJobOnEsc
 
 
 class HAPTICUT_OT_check_scene(CancelsJobOnEsc, bpy.types.Operator):

@@ -1,6 +1,7 @@
 import bpy
 
-from .. import jobs, preferences, toolkit
+from ..background import jobs
+from ..toolkit import materials, preferences, runner
 
 
 class HAPTICUT_OT_check_toolkit(jobs.FollowsJob, bpy.types.Operator):
@@ -12,7 +13,7 @@ class HAPTICUT_OT_check_toolkit(jobs.FollowsJob, bpy.types.Operator):
     def execute(self, context):
         try:
             executable = preferences.executable(context)
-        except toolkit.ToolkitError as error:
+        except runner.ToolkitError as error:
             _show_error(str(error))
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
@@ -25,15 +26,15 @@ class HAPTICUT_OT_check_toolkit(jobs.FollowsJob, bpy.types.Operator):
 
 
 def _show_error(message: str) -> None:
-    toolkit.forget_material_table()
+    materials.forget_material_table()
     prefs = preferences.preferences()
     if prefs is not None:
         prefs.toolkit_version, prefs.toolkit_error = "", message
 
 
 def _check_steps(executable: str):
-    version = yield from toolkit.version_steps(executable)
-    yield from toolkit.material_table_steps(executable, refresh=True)
+    version = yield from runner.version_steps(executable)
+    yield from materials.material_table_steps(executable, refresh=True)
     prefs = preferences.preferences()
     if prefs is not None:
         prefs.toolkit_version, prefs.toolkit_error = version, ""

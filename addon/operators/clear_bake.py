@@ -1,6 +1,6 @@
 import bpy
 
-from .. import baking
+from ..bake import baking
 
 
 class HAPTICUT_OT_clear_bake(bpy.types.Operator):

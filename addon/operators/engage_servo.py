@@ -1,7 +1,7 @@
 import bpy
 from bpy.props import BoolProperty
 
-from .. import live, live_session
+from ..live import live_link, live_session
 
 
 class HAPTICUT_OT_engage_servo(bpy.types.Operator):
@@ -14,11 +14,11 @@ class HAPTICUT_OT_engage_servo(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return live.current() is not None
+        return live_link.current() is not None
 
     def execute(self, context):
         try:
-            live.engage(self.engaged)
+            live_link.engage(self.engaged)
         except live_session.LiveServoError as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}

@@ -2,7 +2,9 @@ import bpy
 from bpy.props import StringProperty
 from bpy_extras.io_utils import ExportHelper
 
-from .. import building, jobs, preferences, toolkit
+from ..authoring import building
+from ..background import jobs
+from ..toolkit import preferences, runner
 
 
 class HAPTICUT_OT_export_scene(bpy.types.Operator, ExportHelper):
@@ -30,7 +32,7 @@ class HAPTICUT_OT_export_scene(bpy.types.Operator, ExportHelper):
             return {"CANCELLED"}
         try:
             executable = preferences.executable(context)
-        except toolkit.ToolkitError as error:
+        except runner.ToolkitError as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         work = _export_steps(executable, source, self.filepath)
@@ -41,5 +43,5 @@ class HAPTICUT_OT_export_scene(bpy.types.Operator, ExportHelper):
 
 
 def _export_steps(executable: str, source: str, path: str):
-    yield from toolkit.quick_steps(executable, "convert", source, path)
+    yield from runner.quick_steps(executable, "convert", source, path)
     return path

@@ -1,6 +1,7 @@
 import bpy
 
-from .. import jobs, live, live_session
+from ..background import jobs
+from ..live import live_link, live_session
 
 
 class HAPTICUT_OT_go_live(jobs.FollowsJob, bpy.types.Operator):
@@ -12,7 +13,7 @@ class HAPTICUT_OT_go_live(jobs.FollowsJob, bpy.types.Operator):
 
     def execute(self, context):
         try:
-            live.go_live(context)
+            live_link.go_live(context)
         except live_session.LiveServoError as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}

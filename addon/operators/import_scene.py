@@ -7,8 +7,9 @@ import bpy
 from bpy.props import StringProperty
 from bpy_extras.io_utils import ImportHelper
 
-from .. import jobs, preferences, toolkit, undo_steps
-from ..preview import show_preview
+from ..authoring.preview import show_preview
+from ..background import jobs, undo_steps
+from ..toolkit import preferences, runner
 
 
 class HAPTICUT_OT_import_scene(bpy.types.Operator, ImportHelper):
@@ -25,7 +26,7 @@ class HAPTICUT_OT_import_scene(bpy.types.Operator, ImportHelper):
         scene = context.scene
         try:
             executable = preferences.executable(context)
-        except toolkit.ToolkitError as error:
+        except runner.ToolkitError as error:
             self.report({"ERROR"}, str(error))
             scene.hapticut.error = str(error)
             return {"CANCELLED"}
@@ -40,7 +41,7 @@ def _import_steps(executable: str, scene_name: str, path: str):
     folder = tempfile.mkdtemp(prefix="hapticut-import-")
     preview = os.path.join(folder, "preview.npz")
     try:
-        yield from toolkit.quick_steps(executable, "preview", path, "--out", preview)
+        yield from runner.quick_steps(executable, "preview", path, "--out", preview)
         scene = bpy.data.scenes.get(scene_name)
         if scene is None:
             raise RuntimeError(f"the scene {scene_name!r} is gone")

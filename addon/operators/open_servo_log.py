@@ -2,7 +2,7 @@ import os
 
 import bpy
 
-from .. import live
+from ..live import live_link
 
 
 class HAPTICUT_OT_open_servo_log(bpy.types.Operator):
@@ -12,7 +12,7 @@ class HAPTICUT_OT_open_servo_log(bpy.types.Operator):
     bl_label = "Servo Log"
 
     def execute(self, context):
-        path = bpy.path.abspath(context.scene.hapticut_live.log_path) or live.log_path(
+        path = bpy.path.abspath(context.scene.hapticut_live.log_path) or live_link.log_path(
             context.scene
         )
         if not os.path.isfile(path):

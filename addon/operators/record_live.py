@@ -1,6 +1,6 @@
 import bpy
 
-from .. import live, live_session
+from ..live import live_link, live_session
 
 
 class HAPTICUT_OT_record_live(bpy.types.Operator):
@@ -11,7 +11,7 @@ class HAPTICUT_OT_record_live(bpy.types.Operator):
 
     def execute(self, context):
         try:
-            path = live.record_live(context.scene)
+            path = live_link.record_live(context.scene)
         except live_session.LiveServoError as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}

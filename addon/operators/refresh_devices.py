@@ -1,6 +1,7 @@
 import bpy
 
-from .. import jobs, live
+from ..background import jobs
+from ..live import live_link
 
 
 class HAPTICUT_OT_refresh_devices(jobs.FollowsJob, bpy.types.Operator):
@@ -14,8 +15,8 @@ class HAPTICUT_OT_refresh_devices(jobs.FollowsJob, bpy.types.Operator):
     def execute(self, context):
         scene = context.scene
         # Its error goes to the device line of the panel (device_error).
-        work = live.refresh_devices_steps(scene.name)
-        live.start_job("Refresh devices", scene.name, work, show_error=False)
+        work = live_link.refresh_devices_steps(scene.name)
+        live_link.start_job("Refresh devices", scene.name, work, show_error=False)
         return {"FINISHED"}
 
     def summary(self, listing):

@@ -1,6 +1,7 @@
 import bpy
 
-from .. import exchange, preferences, toolkit
+from ..authoring import exchange
+from ..toolkit import materials, preferences, runner
 
 
 class HAPTICUT_OT_set_custom_material(bpy.types.Operator):
@@ -17,11 +18,11 @@ class HAPTICUT_OT_set_custom_material(bpy.types.Operator):
     def execute(self, context):
         try:
             table = preferences.material_table(context)
-        except toolkit.ToolkitError as error:
+        except runner.ToolkitError as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         obj = context.object
-        if toolkit.model(table, obj.hapticut.custom_model) is None:
+        if materials.model(table, obj.hapticut.custom_model) is None:
             self.report({"ERROR"}, f"{obj.name}: model {obj.hapticut.custom_model!r} is unknown")
             return {"CANCELLED"}
         obj.hapticut.material_preset = "custom"

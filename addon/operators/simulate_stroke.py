@@ -1,6 +1,8 @@
 import bpy
 
-from .. import jobs, live_session, simulate
+from .. import simulate
+from ..background import jobs
+from ..live import live_session
 
 
 class HAPTICUT_OT_simulate_stroke(jobs.FollowsJob, bpy.types.Operator):

@@ -1,6 +1,7 @@
 import bpy
 
-from .. import jobs, live
+from ..background import jobs
+from ..live import live_link
 
 
 class HAPTICUT_OT_start_servo(jobs.FollowsJob, bpy.types.Operator):
@@ -11,5 +12,5 @@ class HAPTICUT_OT_start_servo(jobs.FollowsJob, bpy.types.Operator):
 
     def execute(self, context):
         scene = context.scene
-        live.start_job("Start servo", scene.name, live.start_steps(scene.name))
+        live_link.start_job("Start servo", scene.name, live_link.start_steps(scene.name))
         return {"FINISHED"}

@@ -1,6 +1,7 @@
 import bpy
 
-from .. import jobs, live
+from ..background import jobs
+from ..live import live_link
 
 
 class HAPTICUT_OT_stop_servo(jobs.FollowsJob, bpy.types.Operator):
@@ -11,10 +12,10 @@ class HAPTICUT_OT_stop_servo(jobs.FollowsJob, bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return live.current() is not None
+        return live_link.current() is not None
 
     def execute(self, context):
         # The jobs running and waiting use the servo: they end here.
         jobs.cancel_all()
-        live.start_job("Stop servo", context.scene.name, live.stop_steps())
+        live_link.start_job("Stop servo", context.scene.name, live_link.stop_steps())
         return {"FINISHED"}

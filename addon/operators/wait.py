@@ -1,7 +1,9 @@
 import bpy
 from bpy.props import FloatProperty
 
-from .. import build_job, jobs, waiting
+from .. import waiting
+from ..authoring import build_job
+from ..background import jobs
 
 
 class HAPTICUT_OT_wait(bpy.types.Operator):

@@ -86,7 +86,8 @@ class BuildReport:
 
 def accuracy_lines(report: dict) -> list[str]:
     """Where a build did not hold its accuracy, as lines for people (``hapticut mesh`` and
-    ``hapticut info``; the add-on's panel has its own short copy in addon/report_text.py)."""
+    ``hapticut info``; the add-on's panel has its own short copy in
+    addon/authoring/report_text.py)."""
     lines = []
     for miss in report.get("accuracy_not_held") or []:
         lines.append(

@@ -27,7 +27,7 @@ _built: dict = {}
 
 
 def build(scene, timeout_s: float = 900.0) -> None:
-    from addon import building
+    from addon.authoring import building
 
     assert bpy.ops.hapticut.tetrahedralize() == {"FINISHED"}
     began = time.perf_counter()
@@ -62,18 +62,18 @@ def finger_with_stroke(work: Path):
     build(scene)
     keyframe_stroke(bpy.data.objects["Knife"])
     _built["work"] = work
-    _built["blend"] = str(work / "finger-live.blend")
+    _built["blend"] = str(work / "finger-live_link.blend")
     bpy.ops.wm.save_as_mainfile(filepath=_built["blend"])
     return scene
 
 
 def follow(until, timeout_s: float = 60.0, sleep_s: float = 0.005) -> float:
     """Call the live timer (as bpy.app.timers would) until ``until()``; seconds taken."""
-    from addon import live
+    from addon.live import live_link
 
     began = time.perf_counter()
     while not until():
-        live.timer()
+        live_link.timer()
         assert time.perf_counter() - began < timeout_s, "timed out following the servo"
         time.sleep(sleep_s)
     return time.perf_counter() - began

@@ -65,7 +65,7 @@ def bunny(work: str):
 
 
 def measure(name: str, make) -> dict:
-    from addon import building
+    from addon.authoring import building
 
     scene = make(tempfile.mkdtemp(prefix=f"hapticut-measure-{name}-"))
     started = time.perf_counter()

@@ -25,7 +25,7 @@ PROBES = {
 def run_build(scene, timeout_s: float = 900.0) -> dict:
     """Tetrahedralize through the operator, then call what the timer would call until the
     build ends; the figures of the run."""
-    from addon import building
+    from addon.authoring import building
 
     started = time.perf_counter()
     assert bpy.ops.hapticut.tetrahedralize() == {"FINISHED"}
@@ -88,7 +88,7 @@ def test_the_build_makes_a_preview_per_material_region(built):
 
 
 def test_the_report_reaches_the_panel(built):
-    from addon.report_text import report_lines
+    from addon.authoring.report_text import report_lines
 
     scene, _, _ = built
     report = json.loads(scene.hapticut.report_json)
@@ -104,7 +104,7 @@ def test_the_report_reaches_the_panel(built):
 
 
 def test_an_unchanged_scene_is_not_rebuilt_and_an_edit_is(built):
-    from addon import build_job
+    from addon.authoring import build_job
 
     scene, _, _ = built
     old_hash = scene.hapticut.build_hash

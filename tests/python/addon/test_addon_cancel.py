@@ -32,7 +32,7 @@ def all_files(folder) -> list[str]:
 
 
 def test_cancel_half_way_kills_the_child_and_writes_nothing(addon, tmp_path):
-    from addon import build_job, building
+    from addon.authoring import build_job, building
 
     work = tmp_path / "work"
     scene = blender_scene.finger_scene(str(work))

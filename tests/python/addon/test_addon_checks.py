@@ -16,7 +16,7 @@ def problems() -> list[tuple[str, str]]:
 def follow(scene_name: str) -> list[str]:
     """Poll the running check (or build) as the timer does, until it ends; the progress
     texts seen. Prints the longest time one poll took."""
-    from addon import build_job, building
+    from addon.authoring import build_job, building
 
     texts, longest_s = [], 0.0
     deadline = time.monotonic() + 300
@@ -37,7 +37,7 @@ def follow(scene_name: str) -> list[str]:
 def check(expect_ok: bool = False) -> list[tuple[str, str]]:
     """Check Scene: Blender's own problems fail the operator at once; when they pass, the
     toolkit's check runs as a child (the operator returns while it runs), followed here."""
-    from addon import build_job
+    from addon.authoring import build_job
 
     scene = bpy.context.scene
     try:
@@ -97,7 +97,7 @@ def test_an_open_mesh(addon, tmp_path):
     blender_scene.knife()
     assert ("Lid", "the mesh is open (4 boundary edges)") in check()
     # Tetrahedralize: the child checks first, fails, and its error reaches the panel.
-    from addon import building
+    from addon.authoring import building
 
     scene = bpy.context.scene
     scene.hapticut.problems.clear()
@@ -148,7 +148,7 @@ def test_a_failing_child_shows_its_last_error_line(addon, tmp_path):
     # A real executable that is not the toolkit: Python itself fails on "build-request".
     import sys
 
-    from addon import building
+    from addon.authoring import building
 
     scene = blender_scene.empty_scene(str(tmp_path))
     cube("Body")
@@ -168,7 +168,7 @@ def test_a_failing_child_shows_its_last_error_line(addon, tmp_path):
 
 
 def test_a_missing_toolkit_names_the_install_command(addon, tmp_path):
-    from addon import toolkit
+    from addon.toolkit import runner
 
     prefs = bpy.context.preferences.addons[blender_scene.ADDON_MODULE].preferences
     toolkit_path = prefs.toolkit_path
@@ -177,7 +177,7 @@ def test_a_missing_toolkit_names_the_install_command(addon, tmp_path):
         with pytest.raises(RuntimeError, match="is not an executable"):
             bpy.ops.hapticut.check_toolkit()
             bpy.ops.hapticut.wait()
-        assert toolkit.INSTALL_COMMAND in prefs.toolkit_error
+        assert runner.INSTALL_COMMAND in prefs.toolkit_error
         assert prefs.toolkit_version == ""
     finally:
         prefs.toolkit_path = toolkit_path
@@ -187,7 +187,7 @@ def test_a_missing_toolkit_names_the_install_command(addon, tmp_path):
 
 
 def test_regions_crossing_are_found_without_tetrahedralizing(addon, tmp_path):
-    from addon import build_job
+    from addon.authoring import build_job
 
     scene = blender_scene.empty_scene(str(tmp_path))
     cube("Cow", size=20.0)
@@ -231,7 +231,8 @@ def test_a_running_check_can_be_cancelled_and_tells_a_slow_one_what_to_do(addon,
     from test_addon_cancel import group_members
     from test_addon_panels import CheckingLayout, draw
 
-    from addon import build_job, ui
+    from addon.authoring import build_job
+    from addon.ui import scene_panels
 
     scene = blender_scene.empty_scene(str(tmp_path))
     cube("Cow", size=20.0)
@@ -245,7 +246,7 @@ def test_a_running_check_can_be_cancelled_and_tells_a_slow_one_what_to_do(addon,
     job.started -= build_job.SLOW_CHECK_S + 1
     assert "Decimate modifier" in build_job.progress_text(job)
     layout = CheckingLayout()  # The panel shows the check's progress where it was started.
-    draw(ui.HAPTICUT_PT_scene, layout)
+    draw(scene_panels.HAPTICUT_PT_scene, layout)
     assert any("Decimate modifier" in text for text in layout.texts), layout.texts
     assert bpy.ops.hapticut.cancel_build() == {"FINISHED"}
     assert build_job.running(scene.name) is None
@@ -259,8 +260,8 @@ def test_esc_cancels_a_check_started_from_the_panel(addon, tmp_path):
     # Background mode runs no modal operators: the operator's modal() is called as Blender would.
     import types
 
-    from addon import build_job
-    from addon.job_modal import CancelsJobOnEsc
+    from addon.authoring import build_job
+    from addon.authoring.job_modal import CancelsJobOnEsc
 
     scene = blender_scene.empty_scene(str(tmp_path))
     cube("Cow")

@@ -11,15 +11,17 @@ from test_addon_panels import CheckingLayout, draw
 
 
 def build_panel_texts() -> list[str]:
-    from addon import ui
+    from addon.ui import scene_panels
 
     layout = CheckingLayout()
-    draw(ui.HAPTICUT_PT_build, layout)
+    draw(scene_panels.HAPTICUT_PT_build, layout)
     return layout.texts
 
 
 def test_the_panel_says_what_settings_cost_and_the_skin_preset_gives_way(addon, tmp_path):
-    from addon import live, report_text, toolkit
+    from addon.authoring import report_text
+    from addon.live import live_link
+    from addon.toolkit import materials
 
     scene = blender_scene.finger_scene(str(tmp_path))
     texts = build_panel_texts()
@@ -30,7 +32,7 @@ def test_the_panel_says_what_settings_cost_and_the_skin_preset_gives_way(addon, 
     skin = bpy.data.objects["Skin"].hapticut
     assert skin.material_preset == "skin"
     assert scene.hapticut_live.stiffness_N_per_mm == 0.0
-    preset = toolkit.preset(toolkit.cached_material_table(), "skin")
+    preset = materials.preset(materials.cached_material_table(), "skin")
     scene.hapticut_live.realtime = False
     live_support.build(scene)
     report = json.loads(scene.hapticut.report_json)
@@ -45,7 +47,7 @@ def test_the_panel_says_what_settings_cost_and_the_skin_preset_gives_way(addon, 
         assert bpy.ops.hapticut.wait() == {"FINISHED"}
         baked = json.loads(scene.hapticut_live.bake_report)
     finally:
-        live.stop()
+        live_link.stop()
     # The cut surface lies in cuttable material the blade entered: the flesh under the skin.
     cut_faces = baked["blades"]["Knife"]["cut_faces"]
     print(

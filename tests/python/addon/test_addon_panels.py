@@ -53,7 +53,7 @@ def draw(panel_class, layout) -> None:
 
 def test_every_panel_draws_for_each_role_and_state(addon, tmp_path):
     import addon as extension  # noqa: F401 - the add-on's package, registered by the fixture
-    from addon import ui
+    from addon.ui import scene_panels
 
     scene = blender_scene.finger_scene(str(tmp_path))
     settings = scene.hapticut
@@ -66,14 +66,18 @@ def test_every_panel_draws_for_each_role_and_state(addon, tmp_path):
         for running in (False, True):
             settings.running, settings.progress, settings.stage = running, 0.4, "label"
             drawn = {}
-            for panel_class in (ui.HAPTICUT_PT_scene, ui.HAPTICUT_PT_object, ui.HAPTICUT_PT_build,
-                                ui.HAPTICUT_PT_report):  # fmt: skip
+            for panel_class in (
+                scene_panels.HAPTICUT_PT_scene,
+                scene_panels.HAPTICUT_PT_object,
+                scene_panels.HAPTICUT_PT_build,
+                scene_panels.HAPTICUT_PT_report,
+            ):
                 drawn[panel_class] = CheckingLayout()
                 draw(panel_class, drawn[panel_class])
-            assert ("label 40%" in drawn[ui.HAPTICUT_PT_build].texts) == running
+            assert ("label 40%" in drawn[scene_panels.HAPTICUT_PT_build].texts) == running
     settings.running = False
     layout = CheckingLayout()
-    draw(ui.HAPTICUT_PT_report, layout)
+    draw(scene_panels.HAPTICUT_PT_report, layout)
     assert layout.texts[0] == "10 tets, 4 boundary faces"
     prefs = bpy.context.preferences.addons[blender_scene.ADDON_MODULE].preferences
     prefs.toolkit_error = "missing"

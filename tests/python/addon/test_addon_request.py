@@ -10,7 +10,8 @@ import pytest
 
 
 def written_request(tmp_path):
-    from addon import exchange, preferences
+    from addon.authoring import exchange
+    from addon.toolkit import preferences
 
     depsgraph = bpy.context.evaluated_depsgraph_get()
     path, digest = exchange.write_request(
@@ -49,15 +50,15 @@ def test_metres_in_blender_are_mm_for_the_toolkit(addon, tmp_path):
 
 
 def test_materials_come_from_the_toolkit_table(addon, tmp_path):
-    from addon import preferences, toolkit
+    from addon.toolkit import materials, preferences
 
     table = preferences.material_table()
     blender_scene.finger_scene(str(tmp_path))
     request, _, _ = written_request(tmp_path)
-    materials = {r["name"]: r["material"] for r in request["regions"]}
+    written = {r["name"]: r["material"] for r in request["regions"]}
     for name, preset in (("Skin", "skin"), ("Flesh", "soft_tissue"), ("Bone", "bone")):
-        entry = toolkit.preset(table, preset)
-        assert materials[name] == {"name": preset, "model": entry["model"], **entry["parameters"]}
+        entry = materials.preset(table, preset)
+        assert written[name] == {"name": preset, "model": entry["model"], **entry["parameters"]}
     # Presets the issue names, with their models.
     models = {p["name"]: p["model"] for p in table["presets"]}
     assert models == {"air": "free", "soft_tissue": "drag", "fat": "viscous",
@@ -65,7 +66,8 @@ def test_materials_come_from_the_toolkit_table(addon, tmp_path):
 
 
 def test_a_custom_material_takes_the_table_defaults_and_ranges(addon, tmp_path):
-    from addon import exchange, preferences, toolkit
+    from addon.authoring import exchange
+    from addon.toolkit import materials, preferences
 
     table = preferences.material_table()
     blender_scene.finger_scene(str(tmp_path))
@@ -73,7 +75,7 @@ def test_a_custom_material_takes_the_table_defaults_and_ranges(addon, tmp_path):
     flesh.hapticut.custom_model = "drag"
     with bpy.context.temp_override(object=flesh, active_object=flesh):
         assert bpy.ops.hapticut.set_custom_material() == {"FINISHED"}
-    (parameter,) = toolkit.model(table, "drag")["parameters"]
+    (parameter,) = materials.model(table, "drag")["parameters"]
     item = flesh.hapticut.custom_parameters[parameter["name"]]
     assert item.value == pytest.approx(parameter["default"])
     request, _, digest = written_request(tmp_path)

@@ -71,7 +71,7 @@ def test_every_listed_name_is_registered_and_every_registered_one_listed(addon):
 
 
 def test_the_recipe_runs_as_a_script(addon, tmp_path, monkeypatch):
-    from addon import baking
+    from addon.bake import baking
 
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "data"))
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))

@@ -26,7 +26,9 @@ JOB_OF = {
 def follow(scene) -> tuple[float, int]:
     """Call the timers of the scene's build and of the live jobs and link until the build
     and the jobs are over; the longest single call and the number of job steps."""
-    from addon import building, jobs, live
+    from addon.authoring import building
+    from addon.background import jobs
+    from addon.live import live_link
 
     longest, job_steps = 0.0, 0
     while True:
@@ -36,8 +38,8 @@ def follow(scene) -> tuple[float, int]:
         job_now = jobs.advance()
         stepped = time.perf_counter()
         job_steps += 1 if job_now or jobs.last() is not None else 0
-        if live.timer_registered():
-            live.timer()
+        if live_link.timer_registered():
+            live_link.timer()
         ticked = time.perf_counter()
         longest = max(longest, built - began, stepped - built, ticked - stepped)
         if not building_now and not job_now:
@@ -47,15 +49,17 @@ def follow(scene) -> tuple[float, int]:
 
 @pytest.fixture(scope="module")
 def finger(addon, tmp_path_factory):
-    from addon import live
+    from addon.live import live_link
 
     scene = live_support.finger_with_stroke(tmp_path_factory.mktemp("stalls-finger"))
     yield scene
-    live.stop()
+    live_link.stop()
 
 
 def test_no_operator_holds_the_ui(finger, tmp_path):
-    from addon import baking, jobs, live
+    from addon.background import jobs
+    from addon.bake import baking
+    from addon.live import live_link
 
     scene = finger
     rows = []
@@ -83,7 +87,7 @@ def test_no_operator_holds_the_ui(finger, tmp_path):
     run("export_scene", filepath=str(tmp_path / "finger.hapticut.msgpack"))
     run("refresh_devices")
     run("start_servo")
-    session = live.current()
+    session = live_link.current()
     run("go_live")
     assert session.running
     run("engage_servo", engaged=True)
@@ -95,7 +99,7 @@ def test_no_operator_holds_the_ui(finger, tmp_path):
     run("bake_recording")
     run("clear_bake")
     run("stop_servo")
-    assert live.current() is None
+    assert live_link.current() is None
     bpy.ops.scene.new(type="EMPTY")
     run("import_scene", filepath=str(tmp_path / "finger.hapticut.msgpack"))
 

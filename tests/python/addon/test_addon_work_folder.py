@@ -66,7 +66,8 @@ def exports(tmp_path, name: str) -> bool:
 
 
 def simulate_and_bake(scene) -> dict:
-    from addon import baking, live
+    from addon.bake import baking
+    from addon.live import live_link
 
     try:
         assert bpy.ops.hapticut.simulate_stroke() == {"FINISHED"}
@@ -75,7 +76,7 @@ def simulate_and_bake(scene) -> dict:
         assert baking.baked_objects()
         return json.loads(scene.hapticut_live.bake_report)
     finally:
-        live.stop()
+        live_link.stop()
 
 
 def test_save_as_and_reopen_keep_the_build(addon, data_home, tmp_path):
@@ -110,7 +111,7 @@ def test_save_as_and_reopen_keep_the_build(addon, data_home, tmp_path):
 
 
 def test_after_reopening_the_status_is_the_build_on_disk(addon, data_home, tmp_path):
-    from addon import building
+    from addon.authoring import building
 
     scene = cube_scene()
     build(scene)
@@ -127,7 +128,7 @@ def test_after_reopening_the_status_is_the_build_on_disk(addon, data_home, tmp_p
     assert not scene.hapticut.running
     assert exports(tmp_path, "kept")
     # The build removed from disk: the reopened file says so and shows no report.
-    from addon import work_folder
+    from addon.authoring import work_folder
 
     shutil.rmtree(work_folder.build_folder(scene))
     bpy.ops.wm.open_mainfile(filepath=path)
@@ -138,7 +139,7 @@ def test_after_reopening_the_status_is_the_build_on_disk(addon, data_home, tmp_p
 
 
 def test_a_failed_build_clears_the_report(addon, data_home, tmp_path):
-    from addon import build_job, building
+    from addon.authoring import build_job, building
 
     scene = cube_scene()
     build(scene)
@@ -166,7 +167,7 @@ def test_a_failed_build_clears_the_report(addon, data_home, tmp_path):
 
 
 def test_a_build_never_lands_in_the_next_file(addon, data_home, tmp_path):
-    from addon import build_job
+    from addon.authoring import build_job
 
     other = str(tmp_path / "other.blend")
     blender_scene.empty_scene("")
@@ -185,7 +186,7 @@ def test_a_build_never_lands_in_the_next_file(addon, data_home, tmp_path):
 def test_undo_steps(addon, data_home, monkeypatch):
     """Background mode has no undo stack (bpy.ops.ed.undo cannot run there): the options are
     checked, and the steps pushed where a timer edits the scene are recorded."""
-    from addon import undo_steps
+    from addon.background import undo_steps
 
     for name in ("clear_bake", "set_cutting_edge"):
         options = getattr(bpy.types, f"HAPTICUT_OT_{name}").bl_options

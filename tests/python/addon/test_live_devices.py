@@ -13,22 +13,22 @@ import pytest
 
 @pytest.fixture()
 def scene(addon, tmp_path):
-    from addon import device_list, live
+    from addon.live import device_list, live_link
 
     device_list.forget()
     scene = blender_scene.finger_scene(str(tmp_path))
     yield scene
-    live.stop()
+    live_link.stop()
     device_list.forget()
 
 
 def panel_texts() -> list[str]:
     from test_addon_panels import CheckingLayout, draw
 
-    from addon import ui_live
+    from addon.ui import live_panels
 
     layout = CheckingLayout()
-    draw(ui_live.HAPTICUT_PT_live, layout)
+    draw(live_panels.HAPTICUT_PT_live, layout)
     return layout.texts
 
 
@@ -40,7 +40,8 @@ def script(tmp_path: Path, name: str, body: str) -> str:
 
 
 def test_the_real_listing_fills_the_menu_and_each_item_makes_its_binding(scene):
-    from addon import device_list, live, live_properties, toolkit_link
+    from addon.live import device_list, live_link, live_properties
+    from addon.toolkit import toolkit_link
 
     settings = scene.hapticut_live
     assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
@@ -85,7 +86,7 @@ def test_the_real_listing_fills_the_menu_and_each_item_makes_its_binding(scene):
     for identifier, binding in expected.items():
         settings.device_mode = identifier
         assert settings.device_mode == identifier and settings.device_choice == identifier
-        assert live.devices(scene) == [f"Knife={binding}"]
+        assert live_link.devices(scene) == [f"Knife={binding}"]
     with pytest.raises(TypeError):
         settings.device_mode = "HID:no-such-profile"
     # The chosen item's limits are the listing's.
@@ -99,19 +100,19 @@ def test_the_real_listing_fills_the_menu_and_each_item_makes_its_binding(scene):
 
 
 def test_a_choice_saved_before_its_listing_stays_offered(scene):
-    from addon import live, live_properties
+    from addon.live import live_link, live_properties
 
     settings = scene.hapticut_live
     settings.device_choice = "HID:spacemouse-pro"  # As a reopened .blend holds it.
     items = live_properties.device_items(settings)
     assert items[-1][0] == "HID:spacemouse-pro" and "Refresh devices" in items[-1][1]
     assert settings.device_mode == "HID:spacemouse-pro"
-    assert live.devices(scene) == ["Knife=hid:spacemouse-pro"]
+    assert live_link.devices(scene) == ["Knife=hid:spacemouse-pro"]
     assert "device limits: Refresh devices to read them" in panel_texts()
 
 
 def test_settings_above_the_devices_limits_are_refused(scene):
-    from addon import device_list, live
+    from addon.live import device_list, live_link
 
     settings = scene.hapticut_live
     assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
@@ -130,11 +131,13 @@ def test_settings_above_the_devices_limits_are_refused(scene):
     with pytest.raises(RuntimeError, match="stiffness .* is above the device's"):
         bpy.ops.hapticut.go_live()
         bpy.ops.hapticut.wait()
-    assert live.current() is None  # Refused before any servo started.
+    assert live_link.current() is None  # Refused before any servo started.
     assert f"{bridge['max_stiffness_N_per_mm']:g} N/mm" in settings.error
     assert any("Go Live refuses it" in text for text in panel_texts())
     settings.stiffness_N_per_mm = 0.5 * bridge["max_stiffness_N_per_mm"]
-    live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
+    live_link.check_limits(
+        bpy.context, live_link.devices(scene), live_link.requested_settings(settings)
+    )
     assert not any("Go Live refuses it" in text for text in panel_texts())
     # The limit at another rate is the servo's (--list-devices --json --rate): Go Live reads
     # the listing again at the panel's rate and compares with its limit there. 0.75 x the
@@ -148,7 +151,7 @@ def test_settings_above_the_devices_limits_are_refused(scene):
     with pytest.raises(RuntimeError, match="stiffness .* is above the device's") as refused:
         bpy.ops.hapticut.go_live()
         bpy.ops.hapticut.wait()
-    assert live.current() is None
+    assert live_link.current() is None
     assert device_list.listed_rate() == 500.0
     slow = next(k for k in device_list.cached()["kinds"] if k["kind"] == "bridge")["limits"]
     at_500 = slow["max_stiffness_N_per_mm_at_rate"]
@@ -163,7 +166,9 @@ def test_settings_above_the_devices_limits_are_refused(scene):
     assert any("Go Live refuses it" in text for text in panel_texts())
     assert not any("Refresh devices for" in text for text in panel_texts())
     settings.rate_Hz = 1000.0
-    live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
+    live_link.check_limits(
+        bpy.context, live_link.devices(scene), live_link.requested_settings(settings)
+    )
     assert device_list.listed_rate() == 1000.0
     # A bridge bound with a lower force limit of its own: that one counts.
     settings.device_mode = "CUSTOM"
@@ -180,7 +185,9 @@ def test_settings_above_the_devices_limits_are_refused(scene):
     own = device_list.limits_for(device_list.cached(), settings.custom_device)
     assert own["max_stiffness_N_per_mm"] == lower
     assert device_list.STIFFNESS_AT_RATE not in own
-    live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
+    live_link.check_limits(
+        bpy.context, live_link.devices(scene), live_link.requested_settings(settings)
+    )
     settings.stiffness_N_per_mm = 0.0
 
     settings.device_mode = "SIM"
@@ -189,11 +196,15 @@ def test_settings_above_the_devices_limits_are_refused(scene):
         bpy.ops.hapticut.go_live()
         bpy.ops.hapticut.wait()
     settings.max_force_N = sim["max_force_N"]
-    live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
+    live_link.check_limits(
+        bpy.context, live_link.devices(scene), live_link.requested_settings(settings)
+    )
     # An input-only device renders no force: its force limit does not apply.
     settings.device_mode = f"HID:{listing['profiles'][0]['name']}"
     assert not listing["profiles"][0]["limits"]["has_force_output"]
-    live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
+    live_link.check_limits(
+        bpy.context, live_link.devices(scene), live_link.requested_settings(settings)
+    )
     settings.max_force_N = 0.0
 
 
@@ -201,7 +212,7 @@ def test_a_rigid_blades_stiffness_is_its_points_springs(scene):
     """A rigid blade renders n k in contact (its n point springs act together): the device's
     stiffness limit bounds that sum, so a point stiffness within the limit is refused for a
     rigid 20-point blade, and one under limit / 20 is taken."""
-    from addon import device_list, live
+    from addon.live import device_list, live_link
 
     settings = scene.hapticut_live
     assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
@@ -210,27 +221,34 @@ def test_a_rigid_blades_stiffness_is_its_points_springs(scene):
     limit = bridge["max_stiffness_N_per_mm_at_rate"]
     knife = bpy.data.objects["Knife"]
     assert (knife.hapticut.blade_coupling, knife.hapticut.blade_points) == ("RIGID", 20)
-    assert live.blade_springs(scene, "Knife") == live.blade_springs(scene) == 20
+    assert live_link.blade_springs(scene, "Knife") == live_link.blade_springs(scene) == 20
     settings.device_mode = "BRIDGE"
     settings.stiffness_N_per_mm = 0.5 * limit
-    with pytest.raises(live.live_session.LiveServoError) as refused:
-        live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
+    with pytest.raises(live_link.live_session.LiveServoError) as refused:
+        live_link.check_limits(
+            bpy.context, live_link.devices(scene), live_link.requested_settings(settings)
+        )
     assert f"stiffness {10 * limit:g} N/mm ({0.5 * limit:g} N/mm x 20 points of a rigid blade)" in (
         str(refused.value)
     )
     assert any("Go Live refuses it" in text for text in panel_texts())
     settings.stiffness_N_per_mm = 0.9 * limit / 20
-    live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
+    live_link.check_limits(
+        bpy.context, live_link.devices(scene), live_link.requested_settings(settings)
+    )
     assert not any("Go Live refuses it" in text for text in panel_texts())
     knife.hapticut.blade_coupling = "INDEPENDENT"
-    assert live.blade_springs(scene) == 1
+    assert live_link.blade_springs(scene) == 1
     settings.stiffness_N_per_mm = 0.5 * limit
-    live.check_limits(bpy.context, live.devices(scene), live.requested_settings(settings))
+    live_link.check_limits(
+        bpy.context, live_link.devices(scene), live_link.requested_settings(settings)
+    )
     settings.stiffness_N_per_mm = 0.0
 
 
 def test_a_servo_that_fails_to_list_is_said_so_in_the_panel(scene, tmp_path, monkeypatch):
-    from addon import device_list, live_properties, toolkit_link
+    from addon.live import device_list, live_properties
+    from addon.toolkit import toolkit_link
 
     settings = scene.hapticut_live
     assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}

@@ -70,21 +70,22 @@ def recording_gpu(monkeypatch):
 
 @pytest.fixture()
 def finger(addon, tmp_path_factory):
-    from addon import live
+    from addon.live import live_link
 
     scene = live_support.finger_with_stroke(tmp_path_factory.mktemp("live-finger"))
     yield scene
-    live.stop()
+    live_link.stop()
 
 
 def test_draw_builds_once_per_frame_draws_the_frame_and_records_its_age(finger, recording_gpu):
-    from addon import live, live_draw, live_session, ui_live
+    from addon.live import live_draw, live_link, live_session
+    from addon.ui import live_panels
 
     assert bpy.ops.hapticut.start_servo() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert bpy.ops.hapticut.go_live() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
-    session = live.current()
+    session = live_link.current()
     live_support.follow(
         lambda: session.stream_frame is not None and session.status.get("ticks", 0) > 50
     )
@@ -93,11 +94,11 @@ def test_draw_builds_once_per_frame_draws_the_frame_and_records_its_age(finger, 
     sequences = set()
     began = time.perf_counter()
     while time.perf_counter() - began < 1.0:
-        live.timer()  # Takes the newest frame and tags a redraw, as bpy.app.timers runs it.
-        live_draw.draw(live.current)  # The redraw that follows.
+        live_link.timer()  # Takes the newest frame and tags a redraw, as bpy.app.timers runs it.
+        live_draw.draw(live_link.current)  # The redraw that follows.
         sequences.add(session.stream_frame.sequence)
         # A second redraw of the same frame (another view, an overlay).
-        live_draw.draw(live.current)
+        live_draw.draw(live_link.current)
         time.sleep(0.004)
     builds = live_draw.builds - builds0
     # One build per new frame drawn, none for a redraw of a frame already built.
@@ -129,7 +130,9 @@ def test_draw_builds_once_per_frame_draws_the_frame_and_records_its_age(finger, 
     drawn = session.drawn_ages_s[-builds:]
     assert len(drawn) == builds and min(drawn) >= 0 and max(drawn) < 1.0
     age_line = next(
-        line for line in ui_live.status_lines(session) if line.startswith("frame age p50 / p99: ")
+        line
+        for line in live_panels.status_lines(session)
+        if line.startswith("frame age p50 / p99: ")
     )
     assert age_line.endswith(" drawn")
     print(

@@ -58,8 +58,8 @@ def scene_in_cm(addon):
 
 
 def test_the_ghost_is_the_object_moved_by_the_ideal_pose_transform(scene_in_cm):
-    from addon import live_draw
-    from addon.units import mm_per_unit
+    from addon.live import live_draw
+    from addon.toolkit.units import mm_per_unit
 
     mm = mm_per_unit(scene_in_cm)
     knife = knife_object(scene_in_cm)
@@ -80,8 +80,8 @@ def test_the_ghost_is_the_object_moved_by_the_ideal_pose_transform(scene_in_cm):
 
 
 def test_the_ghost_coincides_with_the_object_at_its_own_pose(scene_in_cm):
-    from addon import live_draw, stroke_path
-    from addon.units import mm_per_unit
+    from addon.live import live_draw, stroke_path
+    from addon.toolkit.units import mm_per_unit
 
     mm = mm_per_unit(scene_in_cm)
     knife = knife_object(scene_in_cm)
@@ -94,7 +94,7 @@ def test_the_ghost_coincides_with_the_object_at_its_own_pose(scene_in_cm):
 
 
 def test_the_edges_are_read_once_per_mesh(scene_in_cm):
-    from addon import live_draw
+    from addon.live import live_draw
 
     knife = knife_object(scene_in_cm)
     edges = live_draw.object_edges(knife)
@@ -106,7 +106,7 @@ def test_the_edges_are_read_once_per_mesh(scene_in_cm):
 
 
 def test_a_blade_without_a_mesh_object_draws_no_ghost(scene_in_cm):
-    from addon import live_draw
+    from addon.live import live_draw
 
     geometry = live_draw.stream_frame_geometry(
         frame_with("No Such Blade", [0, 0, 0, 1, 0, 0, 0]), 10.0, scene_in_cm.objects

@@ -15,11 +15,11 @@ import pytest
 
 @pytest.fixture()
 def finger(addon, tmp_path_factory):
-    from addon import live
+    from addon.live import live_link
 
     scene = live_support.finger_with_stroke(tmp_path_factory.mktemp("live-finger"))
     yield scene
-    live.stop()
+    live_link.stop()
 
 
 def alive(pid: int) -> bool:
@@ -31,13 +31,14 @@ def alive(pid: int) -> bool:
 
 
 def test_start_go_live_status_and_stop(finger):
-    from addon import live, live_draw, ui_live
+    from addon.live import live_draw, live_link
+    from addon.ui import live_panels
 
-    assert ui_live.status_lines(None)[0].startswith("not connected")
+    assert live_panels.status_lines(None)[0].startswith("not connected")
     assert bpy.ops.hapticut.start_servo() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
-    session = live.current()
-    assert session is not None and live.timer_registered() and live_draw.handler_added()
+    session = live_link.current()
+    assert session is not None and live_link.timer_registered() and live_draw.handler_added()
     assert os.path.isfile(finger.hapticut_live.log_path)
     assert bpy.ops.hapticut.go_live() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
@@ -45,7 +46,7 @@ def test_start_go_live_status_and_stop(finger):
     live_support.follow(
         lambda: session.stream_frame is not None and session.status.get("ticks", 0) > 50
     )
-    lines = ui_live.status_lines(session)
+    lines = live_panels.status_lines(session)
     assert lines[0] == "connected (running), servo running"
     assert any(line.startswith("Knife (viewport, fresh)") for line in lines)
     assert any(line.startswith("Knife: TET") for line in lines)
@@ -65,7 +66,7 @@ def test_start_go_live_status_and_stop(finger):
     pid = session.process.pid
     assert bpy.ops.hapticut.stop_servo() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
-    assert live.current() is None and not live.timer_registered()
+    assert live_link.current() is None and not live_link.timer_registered()
     assert not live_draw.handler_added()
     assert not alive(pid)
     # The log the panel links to holds the servo's own lines.
@@ -76,7 +77,8 @@ def test_start_go_live_status_and_stop(finger):
 
 
 def test_a_busy_port_is_said_so(finger):
-    from addon import live, ui_live
+    from addon.live import live_link
+    from addon.ui import live_panels
 
     with socket.socket() as taken:
         taken.bind(("127.0.0.1", 0))
@@ -88,13 +90,14 @@ def test_a_busy_port_is_said_so(finger):
                 bpy.ops.hapticut.wait()
         finally:
             finger.hapticut_live.port = 0
-    assert live.current() is None
+    assert live_link.current() is None
     assert "busy" in finger.hapticut_live.error
-    assert "busy" in ui_live.status_lines(None)[0]
+    assert "busy" in live_panels.status_lines(None)[0]
 
 
 def test_a_missing_toolkit_names_the_install_command(finger):
-    from addon import live, toolkit, toolkit_link
+    from addon.live import live_link
+    from addon.toolkit import runner, toolkit_link
 
     prefs = bpy.context.preferences.addons["addon"].preferences
     saved = prefs.toolkit_path
@@ -104,31 +107,32 @@ def test_a_missing_toolkit_names_the_install_command(finger):
         with pytest.raises(RuntimeError, match="install"):
             bpy.ops.hapticut.start_servo()
             bpy.ops.hapticut.wait()
-        assert toolkit.INSTALL_COMMAND in finger.hapticut_live.error
-        assert live.current() is None
+        assert runner.INSTALL_COMMAND in finger.hapticut_live.error
+        assert live_link.current() is None
     finally:
         prefs.toolkit_path = saved
 
 
 def test_the_servo_killed_mid_session_shows_as_lost_and_start_recovers(finger):
-    from addon import live, ui_live
+    from addon.live import live_link
+    from addon.ui import live_panels
 
     assert bpy.ops.hapticut.go_live() == {"FINISHED"}  # Starts the servo too.
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
-    session = live.current()
+    session = live_link.current()
     live_support.follow(lambda: session.stream_frame is not None)
     os.kill(session.process.pid, signal.SIGKILL)
     session.process.wait(10)
-    assert live.timer() is None  # The timer ends itself; no exception.
+    assert live_link.timer() is None  # The timer ends itself; no exception.
     assert session.state == "lost"
-    lines = ui_live.status_lines(session)
+    lines = live_panels.status_lines(session)
     assert lines[0].startswith("servo lost: the servo exited (code -9)")
     assert lines[1] == "Start to recover"
     assert bpy.ops.hapticut.start_servo() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert bpy.ops.hapticut.go_live() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
-    recovered = live.current()
+    recovered = live_link.current()
     assert recovered is not session and recovered.alive
     live_support.follow(lambda: recovered.stream_frame is not None)
 
@@ -136,22 +140,22 @@ def test_the_servo_killed_mid_session_shows_as_lost_and_start_recovers(finger):
 def test_unregister_and_loading_a_file_remove_timer_handler_and_servo(finger, tmp_path):
     import blender_scene
 
-    from addon import live, live_draw
+    from addon.live import live_draw, live_link
 
-    path = str(tmp_path / "live.blend")
+    path = str(tmp_path / "live_link.blend")
     bpy.ops.wm.save_as_mainfile(filepath=path)
     assert bpy.ops.hapticut.start_servo() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
-    pid = live.current().process.pid
+    pid = live_link.current().process.pid
     bpy.ops.wm.open_mainfile(filepath=path)  # Loading another file stops everything.
-    assert live.current() is None and not live.timer_registered()
+    assert live_link.current() is None and not live_link.timer_registered()
     assert not live_draw.handler_added() and not alive(pid)
     assert bpy.ops.hapticut.start_servo() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
-    pid = live.current().process.pid
+    pid = live_link.current().process.pid
     blender_scene.disable_addon()
     try:
-        assert live.current() is None and not live.timer_registered()
+        assert live_link.current() is None and not live_link.timer_registered()
         assert not live_draw.handler_added() and not alive(pid)
     finally:
         blender_scene.enable_addon()
@@ -163,7 +167,7 @@ def test_the_client_is_the_installed_toolkits_own(finger):
 
     import blender_scene
 
-    from addon import live
+    from addon.live import live_link
 
     found = json.loads(
         subprocess.run(
@@ -173,25 +177,23 @@ def test_the_client_is_the_installed_toolkits_own(finger):
             check=True,
         ).stdout
     )
-    modules = live.link()
-    for module in (
-        modules.servo_client,
-        modules.recording,
-        modules.servo_layout,
-        modules.cut_surface,
-    ):
+    link = live_link.link()
+    assert sorted(link.modules) == sorted(
+        ("servo_client", "recording", "servo_layout", "cut_surface")
+    )
+    for module in link.modules.values():
         assert os.path.dirname(module.__file__) == found["package"]
-    assert modules.servo == found["servo"]
+    assert link.servo == found["servo"]
 
 
 def test_force_shading_asked_for_is_applied_by_the_servo(finger):
-    from addon import live, live_session
+    from addon.live import live_link, live_session
 
     finger.hapticut_live.force_shading = True
     assert bpy.ops.hapticut.go_live() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert finger.hapticut_live.error == ""
-    session = live.current()
+    session = live_link.current()
     live_support.follow(lambda: session.stream_frame is not None)
     assert live_session.request(session, "status")["settings"]["shading"] is True
 
@@ -199,11 +201,12 @@ def test_force_shading_asked_for_is_applied_by_the_servo(finger):
 def test_the_live_panels_draw_in_every_state(finger):
     from test_addon_panels import CheckingLayout, draw
 
-    from addon import live, ui_live
+    from addon.live import live_link
+    from addon.ui import live_panels
 
     def texts() -> list[str]:
         drawn = []
-        for panel_class in (ui_live.HAPTICUT_PT_live, ui_live.HAPTICUT_PT_bake):
+        for panel_class in (live_panels.HAPTICUT_PT_live, live_panels.HAPTICUT_PT_bake):
             layout = CheckingLayout()
             draw(panel_class, layout)
             drawn += layout.texts
@@ -215,7 +218,7 @@ def test_the_live_panels_draw_in_every_state(finger):
     finger.hapticut_live.device_mode = "VIEWPORT"
     assert bpy.ops.hapticut.go_live() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
-    session = live.current()
+    session = live_link.current()
     live_support.follow(lambda: session.stream_frame is not None and session.status.get("blades"))
     assert any(text.startswith("connected (running)") for text in texts())
     finger.hapticut_live.bake_report = json.dumps(
@@ -229,12 +232,13 @@ def test_the_live_panels_draw_in_every_state(finger):
     assert "Knife: 4 cut faces, max force 1.00 N" in texts()
     os.kill(session.process.pid, signal.SIGKILL)
     session.process.wait(10)
-    live.timer()
+    live_link.timer()
     assert "Start to recover" in texts()
 
 
 def test_a_hid_profile_chosen_with_no_such_device_connected_says_so(finger):
-    from addon import device_list, live, ui_live
+    from addon.live import device_list, live_link
+    from addon.ui import live_panels
 
     assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
@@ -251,12 +255,12 @@ def test_a_hid_profile_chosen_with_no_such_device_connected_says_so(finger):
             bpy.ops.hapticut.wait()
         assert f"device 'Knife=hid:{absent}'" in finger.hapticut_live.error
         # The servo stays up and says nothing is running; another device runs at once.
-        session = live.current()
+        session = live_link.current()
         assert session is not None and session.alive
-        assert ui_live.status_lines(session)[0].startswith("connected")
+        assert live_panels.status_lines(session)[0].startswith("connected")
         finger.hapticut_live.device_mode = "VIEWPORT"
         assert bpy.ops.hapticut.go_live() == {"FINISHED"}
         assert bpy.ops.hapticut.wait() == {"FINISHED"}
-        assert [b["kind"] for b in live.current().blades] == ["viewport"]
+        assert [b["kind"] for b in live_link.current().blades] == ["viewport"]
     finally:
         finger.hapticut_live.device_mode = "VIEWPORT"

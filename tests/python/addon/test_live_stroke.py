@@ -17,7 +17,9 @@ CUTTABLE = {"drag", "viscous", "membrane"}
 
 @pytest.fixture(scope="module")
 def baked(addon, tmp_path_factory):
-    from addon import baking, live, simulate
+    from addon import simulate
+    from addon.bake import baking
+    from addon.live import live_link
 
     scene = live_support.finger_with_stroke(tmp_path_factory.mktemp("live-finger"))
     began = time.perf_counter()
@@ -33,13 +35,13 @@ def baked(addon, tmp_path_factory):
     assert scene.hapticut_live.error == ""
     assert baking.baked_objects()
     yield scene
-    live.stop()
+    live_link.stop()
 
 
 def recording(scene):
-    from addon import live
+    from addon.live import live_link
 
-    return live.link().recording.read_recording(scene.hapticut_live.recording_path)
+    return live_link.link().read_recording(scene.hapticut_live.recording_path)
 
 
 def test_the_stroke_ran_every_tick_and_the_bake_made_its_objects(baked):
@@ -57,12 +59,13 @@ def test_the_stroke_ran_every_tick_and_the_bake_made_its_objects(baked):
 
 
 def test_the_ideal_blade_keyframes_follow_the_recording(baked):
-    from addon import baking, live
+    from addon.bake import baking
+    from addon.live import live_link
 
     rec = recording(baked)
     blade = rec.blade("Knife")
     times = rec.elapsed_s()
-    frames, nearest = live.link().cut_surface.frame_ticks(times, 24.0, baked.frame_start)
+    frames, nearest = live_link.link().frame_ticks(times, 24.0, baked.frame_start)
     ideal = bpy.data.objects["Ideal Knife"]
     knife = bpy.data.objects["Knife"]
     assert len(frames) >= baked.frame_end - baked.frame_start + 1
@@ -90,11 +93,12 @@ def test_the_ideal_blade_keyframes_follow_the_recording(baked):
 def test_no_negative_frame_age_is_shown_after_simulate(baked):
     """A stroke runs as fast as possible: its servo time is virtual (ahead of the clock), so
     its frames have no age to show."""
-    from addon import live, live_session, ui_live
+    from addon.live import live_link, live_session
+    from addon.ui import live_panels
 
-    session = live.current()
+    session = live_link.current()
     assert session.stream_frame is not None  # The stroke's last frame is kept.
-    lines = [line for line in ui_live.status_lines(session) if line.startswith("frame age")]
+    lines = [line for line in live_panels.status_lines(session) if line.startswith("frame age")]
     print(f"\nafter Simulate stroke: {lines or 'no frame age line'}")
     assert all(age >= 0 for age in session.stream_frame_ages_s + session.drawn_ages_s)
     assert not any("-" in line.partition(":")[2] for line in lines), lines
@@ -102,7 +106,7 @@ def test_no_negative_frame_age_is_shown_after_simulate(baked):
 
 
 def baked_curves():
-    from addon import stroke_path
+    from addon.live import stroke_path
 
     for name in ("Ideal Knife", "Force Knife"):
         curves = stroke_path.object_fcurves(bpy.data.objects[name])
@@ -117,7 +121,7 @@ def test_every_baked_key_is_linear(baked):
 
 
 def test_the_keys_stay_in_the_frame_range_and_the_panel_says_what_is_not_baked(baked):
-    from addon import ui_live
+    from addon.ui import live_panels
 
     first, last = baked.frame_start, baked.frame_end
     for name, curve in baked_curves():
@@ -126,7 +130,7 @@ def test_the_keys_stay_in_the_frame_range_and_the_panel_says_what_is_not_baked(b
         assert len(frames) == last - first + 1, (name, curve.data_path, len(frames))
     # The stroke's stop ramp runs after the last frame: not baked, and the panel says so.
     report = json.loads(baked.hapticut_live.bake_report)
-    lines = ui_live.bake_lines(report)
+    lines = live_panels.bake_lines(report)
     print(f"\n{lines}")
     assert report["frame_range"] == [first, last] and report["unbaked_frames"] > 0
     assert any(line.endswith("not baked") for line in lines)
@@ -135,8 +139,9 @@ def test_the_keys_stay_in_the_frame_range_and_the_panel_says_what_is_not_baked(b
 def test_the_force_arrow_is_scaled_to_the_scene(baked):
     """Automatic (Arrow length 0, the default): the peak force's arrow spans
     ARROW_SCENE_FRACTION of the scene's diagonal, whatever the scene's size."""
-    from addon import baking, live
-    from addon.units import mm_per_unit
+    from addon.bake import baking
+    from addon.live import live_link
+    from addon.toolkit.units import mm_per_unit
 
     mm = mm_per_unit(baked)
     corners = np.array(
@@ -163,7 +168,7 @@ def test_the_force_arrow_is_scaled_to_the_scene(baked):
     assert max(lengths_mm) == pytest.approx(
         baking.ARROW_SCENE_FRACTION
         * baking.scene_diagonal_mm(
-            baking.load_preview_tets(live.link(), baked.hapticut_live.preview_path)
+            baking.load_preview_tets(live_link.link(), baked.hapticut_live.preview_path)
         ),
         rel=0.05,
     )
@@ -177,8 +182,8 @@ def test_the_preview_is_left_out_of_renders(baked):
 def test_the_baked_knife_rests_on_the_bone_and_never_enters_it(baked):
     """The default blade is rigid: the servo's ideal pose places the whole knife, and its
     cutting edge, sampled at ten times the blade's point density, is never in bone."""
-    from addon import building
-    from addon.units import mm_per_unit
+    from addon.authoring import building
+    from addon.toolkit.units import mm_per_unit
 
     rec = recording(baked)
     assert rec.coupling("Knife") == "rigid"
@@ -205,7 +210,7 @@ def test_the_baked_knife_rests_on_the_bone_and_never_enters_it(baked):
 
 
 def test_the_cut_surface_is_in_cuttable_material_only_and_opens_over_time(baked):
-    from addon import building
+    from addon.authoring import building
 
     cut = bpy.data.objects["Cut Knife"]
     mesh = cut.data
@@ -233,7 +238,7 @@ def test_the_cut_surface_is_in_cuttable_material_only_and_opens_over_time(baked)
 
 
 def test_clear_removes_the_bake_and_bake_remakes_it_from_the_recording(baked):
-    from addon import baking
+    from addon.bake import baking
 
     assert bpy.ops.hapticut.clear_bake() == {"FINISHED"}
     assert not baking.baked_objects()
@@ -246,7 +251,7 @@ def test_clear_removes_the_bake_and_bake_remakes_it_from_the_recording(baked):
 
 
 def test_a_truncated_recording_bakes_its_whole_records_and_says_so(baked, tmp_path):
-    from addon import live
+    from addon.live import live_link
 
     complete = recording(baked)
     original = baked.hapticut_live.recording_path
@@ -258,7 +263,7 @@ def test_a_truncated_recording_bakes_its_whole_records_and_says_so(baked, tmp_pa
     assert bpy.ops.hapticut.bake_recording(filepath=str(cut)) == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
     report = json.loads(baked.hapticut_live.bake_report)
-    problem = live.link().recording.read_recording(cut).problem
+    problem = live_link.link().read_recording(cut).problem
     assert report["ticks"] == keep and report["truncated"] == problem
     assert problem.startswith(f"recording {str(cut)!r} is truncated") and f"{keep} whole" in problem
     assert bpy.ops.hapticut.bake_recording(filepath=original) == {"FINISHED"}

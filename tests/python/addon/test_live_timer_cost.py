@@ -23,16 +23,17 @@ save_scene(dataclasses.replace(scene, blades=blades), sys.argv[2])
 
 @pytest.fixture(scope="module")
 def finger(addon, tmp_path_factory):
-    from addon import live
+    from addon.live import live_link
 
     scene = live_support.finger_with_stroke(tmp_path_factory.mktemp("live-finger"))
     yield scene
-    live.stop()
+    live_link.stop()
 
 
 @pytest.mark.parametrize("points", [50, 500])
 def test_the_timer_is_bounded_while_frames_stream_at_120_hz(finger, tmp_path, points, monkeypatch):
-    from addon import building, live, live_session
+    from addon.authoring import building
+    from addon.live import live_link, live_session
 
     path = str(tmp_path / f"finger-{points}.hapticut.json")
     subprocess.run(
@@ -41,7 +42,7 @@ def test_the_timer_is_bounded_while_frames_stream_at_120_hz(finger, tmp_path, po
     )
     assert bpy.ops.hapticut.start_servo() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
-    session = live.current()
+    session = live_link.current()
     live_session.run(session, path, ["Knife=viewport"], 1000.0)  # Streams at 120 Hz.
     live_support.follow(lambda: session.stream_frame is not None)
     assert len(session.stream_frame.blades["Knife"]["q"]) == points
@@ -50,7 +51,7 @@ def test_the_timer_is_bounded_while_frames_stream_at_120_hz(finger, tmp_path, po
     session.stream_frame_ages_s.clear()
     began = time.perf_counter()
     while time.perf_counter() - began < 2.0:
-        live.timer()
+        live_link.timer()
         time.sleep(1 / 120)
     costs = np.array(session.tick_costs_s) * 1e3
     ages = np.array(session.stream_frame_ages_s) * 1e3
@@ -63,14 +64,14 @@ def test_the_timer_is_bounded_while_frames_stream_at_120_hz(finger, tmp_path, po
     # one call reads at most MAX_DATAGRAMS of them and keeps the newest it read.
     time.sleep(1.0)
     before = session.client.datagrams_read
-    live.timer()
+    live_link.timer()
     read = session.client.datagrams_read - before
     assert 0 < read <= live_session.MAX_DATAGRAMS
     # With a bound of 4, the rest stay for later calls.
     monkeypatch.setattr(live_session, "MAX_DATAGRAMS", 4)
     time.sleep(0.5)
     before = session.client.datagrams_read
-    live.timer()
+    live_link.timer()
     assert 0 < session.client.datagrams_read - before <= 4
     assert session.client.poll_all()
-    live.stop()
+    live_link.stop()

@@ -13,7 +13,7 @@ import pytest
 
 @pytest.fixture()
 def live_finger(addon, tmp_path_factory):
-    from addon import live
+    from addon.live import live_link
 
     scene = live_support.finger_with_stroke(tmp_path_factory.mktemp("live-finger"))
     scene.hapticut_live.device_mode = "VIEWPORT"
@@ -21,19 +21,19 @@ def live_finger(addon, tmp_path_factory):
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert bpy.ops.hapticut.engage_servo(engaged=True) == {"FINISHED"}
     yield scene
-    live.stop()
+    live_link.stop()
 
 
 def drag(knife, start, end, seconds: float):
     """Move the knife from start to end (mm) over seconds, the timer running at ~120 Hz."""
-    from addon import live
+    from addon.live import live_link
 
     began = time.perf_counter()
     while True:
         s = min(1.0, (time.perf_counter() - began) / seconds)
         knife.location = np.array(start) + s * (np.array(end) - np.array(start))
         bpy.context.view_layer.update()
-        live.timer()
+        live_link.timer()
         if s >= 1.0:
             return
         time.sleep(1 / 120)
@@ -41,7 +41,7 @@ def drag(knife, start, end, seconds: float):
 
 def settle(session, knife, seconds: float = 0.3):
     """Keep the timer going (the knife held still) until a frame shows the knife's pose."""
-    from addon import live
+    from addon.live import live_link
 
     target = np.array(knife.matrix_world.translation)
     live_support.follow(
@@ -54,15 +54,15 @@ def settle(session, knife, seconds: float = 0.3):
     )
     began = time.perf_counter()
     while time.perf_counter() - began < seconds:
-        live.timer()
+        live_link.timer()
         time.sleep(1 / 120)
     return session.stream_frame.blades["Knife"]
 
 
 def test_the_servo_follows_the_dragged_knife_and_the_bone_holds_the_ideal_blade(live_finger):
-    from addon import live
+    from addon.live import live_link
 
-    session = live.current()
+    session = live_link.current()
     knife = bpy.data.objects["Knife"]
     x, z = live_support.KNIFE_X, live_support.DEEPEST_Z
     drag(knife, (x, 0, 20), (x, 0, 12), 0.2)
@@ -96,9 +96,10 @@ def test_the_servo_follows_the_dragged_knife_and_the_bone_holds_the_ideal_blade(
 
 
 def test_record_while_live_then_bake(live_finger):
-    from addon import baking, live
+    from addon.bake import baking
+    from addon.live import live_link
 
-    session = live.current()
+    session = live_link.current()
     knife = bpy.data.objects["Knife"]
     x, z = live_support.KNIFE_X, live_support.DEEPEST_Z
     drag(knife, (x, 0, 20), (x, 0, 14), 0.1)
@@ -112,7 +113,7 @@ def test_record_while_live_then_bake(live_finger):
     assert live_finger.hapticut_live.recording_path == path
     assert bpy.ops.hapticut.bake_recording() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
-    rec = live.link().recording.read_recording(path)
+    rec = live_link.link().read_recording(path)
     # About 1.4 s at 1 kHz, recorded by the servo (not the 120 Hz stream; a loaded machine
     # skips late ticks).
     assert len(rec) > 500
@@ -121,9 +122,7 @@ def test_record_while_live_then_bake(live_finger):
     assert report["frames"] == int(span_s * 24 + 1e-9) + 1
     assert {o.name for o in baking.baked_objects()} == {"Ideal Knife", "Force Knife", "Cut Knife"}
     # The last baked frame holds the force arrow where the recording has the proxies' centre.
-    frames, nearest = live.link().cut_surface.frame_ticks(
-        rec.elapsed_s(), 24.0, live_finger.frame_start
-    )
+    frames, nearest = live_link.link().frame_ticks(rec.elapsed_s(), 24.0, live_finger.frame_start)
     live_finger.frame_set(int(frames[-1]))
     centre = rec.blade("Knife")["q"][nearest[-1]].mean(axis=0)
     arrow = np.array(bpy.data.objects["Force Knife"].matrix_world.translation)

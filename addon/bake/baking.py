@@ -17,10 +17,13 @@ import bpy
 import mathutils
 import numpy as np
 
-from . import cut_reveal, steps, toolkit
-from .stroke_path import frames_per_second, object_fcurves
-from .toolkit import last_error_line
-from .units import mm_per_unit
+from ..background import steps
+from ..live.stroke_path import frames_per_second, object_fcurves
+from ..toolkit import runner
+from ..toolkit.runner import last_error_line
+from ..toolkit.toolkit_link import ToolkitLink
+from ..toolkit.units import mm_per_unit
+from . import cut_reveal
 
 COLLECTION = "Hapticut Bake"
 TAG = "hapticut_bake"
@@ -159,9 +162,9 @@ def cut_mesh(name: str, surface, mm: float):
     return mesh
 
 
-def load_preview_tets(link, path: str) -> dict:
+def load_preview_tets(link: ToolkitLink, path: str) -> dict:
     try:
-        return link.cut_surface.preview_tets(path)
+        return link.preview_tets(path)
     except (OSError, KeyError, ValueError) as error:
         raise BakeError(
             f"the scene's tets cannot be read from {path} ({error}): tetrahedralize again"
@@ -176,7 +179,9 @@ def ideal_poses(recording, name: str, ticks) -> list[tuple[mathutils.Vector, mat
     ]
 
 
-def bake_steps(scene_name: str, link, recording_path: str, preview_path: str) -> steps.Steps[dict]:
+def bake_steps(
+    scene_name: str, link: ToolkitLink, recording_path: str, preview_path: str
+) -> steps.Steps[dict]:
     """Bake the recording (module doc) in steps; its figures for the panel. Clears an earlier
     bake."""
     began = time.perf_counter()
@@ -188,7 +193,7 @@ def bake_steps(scene_name: str, link, recording_path: str, preview_path: str) ->
         return scene
 
     try:
-        recording = link.recording.read_recording(recording_path)
+        recording = link.read_recording(recording_path)
     except (OSError, ValueError) as error:
         raise BakeError(str(error)) from None
     if len(recording) < 2:
@@ -207,14 +212,12 @@ def bake_steps(scene_name: str, link, recording_path: str, preview_path: str) ->
     times = recording.elapsed_s()
     # The keys stay in the scene's frame range; what the recording holds after it (a Simulate
     # stroke's stop ramp, a longer live recording) is not baked, and the report says so.
-    frames, nearest = link.cut_surface.frame_ticks(times, fps, frame_start, frame_end)
+    frames, nearest = link.frame_ticks(times, fps, frame_start, frame_end)
     if not len(frames):
         raise BakeError(
             f"the scene's frame range {frame_start}-{frame_end} is empty: nothing to bake"
         )
     baked_ticks = int(nearest[-1]) + 1
-    last_frame_s = (frames[-1] - frame_start) / fps
-    covered = link.cut_surface.covered_steps(times, 1.0 / fps)
     forces_by_blade = {
         name: recording.blade(name)["block"]["engine_force_N"][nearest]
         for name in recording.blade_names
@@ -223,20 +226,7 @@ def bake_steps(scene_name: str, link, recording_path: str, preview_path: str) ->
         (float(np.max(np.linalg.norm(f, axis=1))) for f in forces_by_blade.values()), default=0.0
     )
     mm_per_N = arrow_mm_per_N(arrow_setting, peak_force_N, scene_diagonal_mm(tets))
-    figures = {
-        "recording": recording_path,
-        "ticks": len(recording),
-        "frames": len(frames),
-        "frame_range": [int(frames[0]), int(frames[-1])],
-        # The frames the recording covers after frame_end (not baked), and their seconds.
-        "unbaked_frames": covered - len(frames),
-        "unbaked_s": float(times[-1] - last_frame_s) if covered > len(frames) else 0.0,
-        "arrow_mm_per_N": mm_per_N,
-        "dropped_records": int(recording.ticks["dropped_records"][-1]),
-        # A cut recording bakes its whole records; the panel says it was cut.
-        "truncated": recording.problem,
-        "blades": {},
-    }
+    figures = _bake_figures(link, recording, recording_path, times, frames, fps, mm_per_N)
     folder = tempfile.mkdtemp(prefix="hapticut-cut-")
     cuts_path = os.path.join(folder, "cuts.npz")
     # A child computes the cut surfaces while the keys are placed.
@@ -259,7 +249,7 @@ def bake_steps(scene_name: str, link, recording_path: str, preview_path: str) ->
             line = last_error_line(done.stderr)
             raise BakeError(f"the cut surfaces were not computed: {line}")
         try:
-            surfaces = link.cut_surface.read_cut_surfaces(cuts_path)
+            surfaces = link.read_cut_surfaces(cuts_path)
         except (OSError, KeyError, ValueError) as error:
             raise BakeError(f"the cut surfaces cannot be read ({error})") from None
     finally:
@@ -285,6 +275,35 @@ def bake_steps(scene_name: str, link, recording_path: str, preview_path: str) ->
     return figures
 
 
+def _bake_figures(
+    link: ToolkitLink,
+    recording,
+    recording_path: str,
+    times: np.ndarray,
+    frames: np.ndarray,
+    fps: float,
+    mm_per_N: float,
+) -> dict:
+    """What the panel reports of a bake before its blades are added (``figures["blades"]``):
+    ``times`` are the records' (``Recording.elapsed_s``), ``frames`` the keyed ones."""
+    covered = link.covered_steps(times, 1.0 / fps)
+    last_frame_s = (frames[-1] - frames[0]) / fps
+    return {
+        "recording": recording_path,
+        "ticks": len(recording),
+        "frames": len(frames),
+        "frame_range": [int(frames[0]), int(frames[-1])],
+        # The frames the recording covers after frame_end (not baked), and their seconds.
+        "unbaked_frames": covered - len(frames),
+        "unbaked_s": float(times[-1] - last_frame_s) if covered > len(frames) else 0.0,
+        "arrow_mm_per_N": mm_per_N,
+        "dropped_records": int(recording.ticks["dropped_records"][-1]),
+        # A cut recording bakes its whole records; the panel says it was cut.
+        "truncated": recording.problem,
+        "blades": {},
+    }
+
+
 def _cut_child(
     executable: str,
     recording_path: str,
@@ -302,7 +321,7 @@ def _cut_child(
     try:
         return (
             yield from steps.child(
-                command, CUT_TIMEOUT_S, "cutting the surfaces", toolkit.child_environment()
+                command, CUT_TIMEOUT_S, "cutting the surfaces", runner.child_environment()
             )
         )
     except (OSError, steps.ChildTimeoutError) as error:

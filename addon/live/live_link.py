@@ -17,21 +17,12 @@ import time
 import bpy
 from bpy.app.handlers import persistent
 
-from . import (
-    building,
-    device_list,
-    jobs,
-    live_draw,
-    live_session,
-    preferences,
-    steps,
-    stroke_path,
-    toolkit,
-    toolkit_link,
-    work_folder,
-)
-from .exchange import scene_objects
-from .units import mm_per_unit
+from ..authoring import building, work_folder
+from ..authoring.exchange import scene_objects
+from ..background import jobs, steps
+from ..toolkit import preferences, runner, toolkit_link
+from ..toolkit.units import mm_per_unit
+from . import device_list, live_draw, live_session, stroke_path
 
 TIMER_INTERVAL_S = 1.0 / 120.0
 
@@ -52,14 +43,14 @@ def _scene():
     return bpy.data.scenes.get(_scene_name) if _scene_name else None
 
 
-def link_steps(timeout_s: float = toolkit.QUICK_TIMEOUT_S) -> steps.Steps:
+def link_steps(timeout_s: float = runner.QUICK_TIMEOUT_S) -> steps.Steps:
     try:
         return (yield from toolkit_link.link_steps(preferences.executable(), timeout_s=timeout_s))
-    except toolkit.ToolkitError as error:
+    except runner.ToolkitError as error:
         raise live_session.LiveServoError(str(error)) from None
 
 
-def link(timeout_s: float = toolkit.QUICK_TIMEOUT_S):
+def link(timeout_s: float = runner.QUICK_TIMEOUT_S):
     """The toolkit's modules (link_steps in one call)."""
     return steps.run_to_end(link_steps(timeout_s))
 

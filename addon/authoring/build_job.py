@@ -19,7 +19,8 @@ import tempfile
 import time
 from dataclasses import dataclass, field
 
-from . import steps, toolkit
+from ..background import steps
+from ..toolkit import runner
 
 POLL_INTERVAL_S = 0.1
 # A check running longer than this is slowed by its meshes' size: the progress suggests a
@@ -92,7 +93,7 @@ def start(
     action = ["--check"] if kind == "check" else ["--out", out_dir]
     scratch = os.path.join(job_dir, "tmp")
     os.makedirs(scratch, exist_ok=True)
-    env = toolkit.child_environment(TMPDIR=scratch, PYTHONUNBUFFERED="1")
+    env = runner.child_environment(TMPDIR=scratch, PYTHONUNBUFFERED="1")
     with (
         open(os.path.join(job_dir, "progress.jsonl"), "wb") as stdout,
         open(os.path.join(job_dir, "stderr.log"), "wb") as stderr,
@@ -163,7 +164,7 @@ def progress_text(job: Job) -> str:
 def _stderr_tail(job: Job) -> str:
     try:
         with open(job.stderr_path, encoding="utf-8", errors="replace") as file:
-            return toolkit.last_error_line(file.read()[-20000:])
+            return runner.last_error_line(file.read()[-20000:])
     except OSError:
         return "(no error output)"
 

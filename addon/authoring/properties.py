@@ -14,7 +14,7 @@ from bpy.props import (
     StringProperty,
 )
 
-from . import toolkit
+from ..toolkit import materials
 
 ROLES = (
     ("NONE", "None", "Not part of the scene"),
@@ -40,13 +40,13 @@ CUSTOM = "custom"
 
 
 def _preset_names(self, context, edit_text):
-    table = toolkit.cached_material_table()
+    table = materials.cached_material_table()
     names = [p["name"] for p in table["presets"]] if table else []
     return [*names, CUSTOM]
 
 
 def _model_names(self, context, edit_text):
-    table = toolkit.cached_material_table()
+    table = materials.cached_material_table()
     return [m["name"] for m in table["models"]] if table else []
 
 

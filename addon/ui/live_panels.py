@@ -7,8 +7,9 @@ import json
 
 import bpy
 
-from . import device_list, jobs, live, live_draw, live_properties, live_session
-from .ui_common import SidebarSubpanel, draw_properties, draw_status
+from ..background import jobs
+from ..live import device_list, live_draw, live_link, live_properties, live_session
+from .sidebar import SidebarSubpanel, draw_properties, draw_status
 
 SESSION_SETTINGS = (
     "rate_Hz",
@@ -26,7 +27,7 @@ def status_lines(session) -> list[str]:
     job = jobs.current()
     doing = [f"{job.name}: {job.stage}"] if job is not None else []
     if session is None:
-        error = live.last_error()
+        error = live_link.last_error()
         return [f"not connected: {error}" if error else "not connected", *doing]
     if session.state == "lost":
         return [f"servo lost: {session.error}", "Start to recover"]
@@ -109,7 +110,7 @@ def draw_device(layout, settings) -> None:
         layout.label(text="device limits: Refresh devices to read them", icon="INFO")
         return
     layout.label(text=f"device limits: {device_list.limits_text(limits)}")
-    requested = live.requested_settings(settings)
+    requested = live_link.requested_settings(settings)
     listed_Hz = device_list.listed_rate()
     if listed_Hz != settings.rate_Hz and limits.get("max_stiffness_N_per_mm", 0) > 0:
         layout.label(
@@ -117,7 +118,7 @@ def draw_device(layout, settings) -> None:
             f"{settings.rate_Hz:g} Hz (Go Live reads it)",
             icon="INFO",
         )
-    springs = live.blade_springs(settings.id_data)  # The scene the settings belong to.
+    springs = live_link.blade_springs(settings.id_data)  # The scene the settings belong to.
     for problem in device_list.settings_problems(requested, limits, listed_Hz, springs):
         layout.label(text=f"{problem}: Go Live refuses it", icon="ERROR")
 
@@ -130,7 +131,7 @@ class HAPTICUT_PT_live(SidebarSubpanel, bpy.types.Panel):
         settings = context.scene.hapticut_live
         draw_device(layout, settings)
         draw_properties(layout, settings, SESSION_SETTINGS)
-        session = live.current()
+        session = live_link.current()
         row = layout.row()
         row.operator("hapticut.start_servo", icon="PLAY")
         row.operator("hapticut.stop_servo", icon="PAUSE")

@@ -6,9 +6,10 @@ import json
 
 import bpy
 
-from . import build_job, toolkit
-from .report_text import cost_lines, report_lines
-from .ui_common import SidebarPanel, SidebarSubpanel, draw_properties, draw_status
+from ..authoring import build_job
+from ..authoring.report_text import cost_lines, report_lines
+from ..toolkit import materials
+from .sidebar import SidebarPanel, SidebarSubpanel, draw_properties, draw_status
 
 
 def draw_job(layout, settings, job: build_job.Job | None) -> None:
@@ -95,12 +96,12 @@ class HAPTICUT_PT_object(SidebarSubpanel, bpy.types.Panel):
 
     def draw_region(self, layout, settings):
         layout.prop(settings, "material_preset")
-        table = toolkit.cached_material_table()
+        table = materials.cached_material_table()
         if table is None:
             layout.label(text="Material table not read: Check in the preferences", icon="INFO")
             return
         if settings.material_preset != "custom":
-            preset = toolkit.preset(table, settings.material_preset)
+            preset = materials.preset(table, settings.material_preset)
             if preset is not None:
                 layout.label(
                     text=f"{preset['model']}: "
@@ -110,14 +111,14 @@ class HAPTICUT_PT_object(SidebarSubpanel, bpy.types.Panel):
             return
         layout.prop(settings, "custom_name")
         layout.prop(settings, "custom_model")
-        model = toolkit.model(table, settings.custom_model)
+        model = materials.model(table, settings.custom_model)
         ranges = {p["name"]: p for p in model["parameters"]} if model else {}
         for item in settings.custom_parameters:
             row = layout.row()
             row.prop(item, "value", text=item.name)
             limits = ranges.get(item.name)
             if limits:
-                row.label(text=toolkit.range_text(limits))
+                row.label(text=materials.range_text(limits))
 
 
 class HAPTICUT_PT_build(SidebarSubpanel, bpy.types.Panel):

@@ -5,9 +5,10 @@ from __future__ import annotations
 import bpy
 from bpy.props import StringProperty
 
-from . import toolkit
+from . import materials, runner
 
-ADDON_ID = __package__
+# The add-on's own package (its name differs between an extension and a development folder).
+ADDON_ID = __package__.rpartition(".")[0]
 
 
 class HAPTICUT_AP_preferences(bpy.types.AddonPreferences):
@@ -30,7 +31,7 @@ class HAPTICUT_AP_preferences(bpy.types.AddonPreferences):
             row.label(text=f"hapticut {self.toolkit_version}", icon="CHECKMARK")
         if self.toolkit_error:
             layout.label(text=self.toolkit_error, icon="ERROR")
-            layout.label(text=f"Install: {toolkit.INSTALL_COMMAND}")
+            layout.label(text=f"Install: {runner.INSTALL_COMMAND}")
 
 
 def preferences(context=None):
@@ -47,12 +48,12 @@ def configured_toolkit_path(context=None) -> str:
 
 
 def executable(context=None) -> str:
-    """The toolkit's executable (toolkit.ToolkitError with the install command if missing)."""
-    return toolkit.find_toolkit(bpy.path.abspath(configured_toolkit_path(context)))
+    """The toolkit's executable (runner.ToolkitError with the install command if missing)."""
+    return runner.find_toolkit(bpy.path.abspath(configured_toolkit_path(context)))
 
 
 def material_table(context=None, refresh: bool = False) -> dict:
-    return toolkit.material_table(executable(context), refresh=refresh)
+    return materials.material_table(executable(context), refresh=refresh)
 
 
 classes = (HAPTICUT_AP_preferences,)

@@ -1,4 +1,4 @@
-"""Reaching the ``hapticut`` toolkit: where it is, its version, its material table.
+"""Reaching the ``hapticut`` toolkit: where it is, how its commands run, its version.
 
 The add-on never imports the toolkit (it lives in another Python, with compiled modules):
 every call is a child process. No bpy here.
@@ -6,11 +6,10 @@ every call is a child process. No bpy here.
 
 from __future__ import annotations
 
-import json
 import os
 import shutil
 
-from . import steps
+from ..background import steps
 
 # What the add-on tells a user who has no toolkit yet (run outside Blender, from a checkout).
 INSTALL_COMMAND = 'python3 -m pip install "./[build]"   (in a Hapticut checkout; docs/addon.md)'
@@ -75,58 +74,3 @@ def version_steps(executable: str) -> steps.Steps[str]:
     """The installed toolkit's version (``hapticut --version`` prints "hapticut <version>")."""
     text = yield from quick_steps(executable, "--version")
     return text.strip().removeprefix("hapticut ").strip()
-
-
-_material_table: dict | None = None
-
-
-def material_table_steps(executable: str, refresh: bool = False) -> steps.Steps[dict]:
-    """``hapticut materials --json``, run once and kept (refresh=True runs it again)."""
-    global _material_table
-    if _material_table is None or refresh:
-        text = yield from quick_steps(executable, "materials", "--json")
-        try:
-            table = json.loads(text)
-        except json.JSONDecodeError as error:
-            raise ToolkitError(f"hapticut materials --json printed no JSON ({error})") from None
-        if table.get("version") != 1 or "presets" not in table or "models" not in table:
-            raise ToolkitError("hapticut materials --json: not a version 1 material table")
-        _material_table = table
-    return _material_table
-
-
-def material_table(executable: str, refresh: bool = False) -> dict:
-    """material_table_steps in one call."""
-    return steps.run_to_end(material_table_steps(executable, refresh))
-
-
-def cached_material_table() -> dict | None:
-    """The table if it was read already (for drawing: never runs a process)."""
-    return _material_table
-
-
-def forget_material_table() -> None:
-    global _material_table
-    _material_table = None
-
-
-def preset(table: dict, name: str) -> dict | None:
-    return next((p for p in table["presets"] if p["name"] == name), None)
-
-
-def model(table: dict, name: str) -> dict | None:
-    return next((m for m in table["models"] if m["name"] == name), None)
-
-
-def in_range(parameter: dict, value: float) -> bool:
-    """Within the table's range (its minimum exclusive when it says so)."""
-    low, high = parameter["minimum"], parameter["maximum"]
-    above = value > low if parameter.get("minimum_exclusive") else value >= low
-    return above and value <= high
-
-
-def range_text(parameter: dict) -> str:
-    """'(0, 1000] mm': the parameter's range as the table gives it."""
-    opening = "(" if parameter.get("minimum_exclusive") else "["
-    unit = f" {parameter['unit']}" if parameter.get("unit") else ""
-    return f"{opening}{parameter['minimum']:g}, {parameter['maximum']:g}]{unit}"

@@ -17,8 +17,8 @@ import bpy
 import mathutils
 import numpy as np
 
-from . import steps
-from .units import mm_per_unit
+from ..background import steps
+from ..toolkit.units import mm_per_unit
 
 SUBFRAMES = 4
 # The longest a step of the sampling runs before it lets Blender draw.

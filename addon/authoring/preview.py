@@ -8,7 +8,7 @@ import json
 import bpy
 import numpy as np
 
-from .units import mm_per_unit
+from ..toolkit.units import mm_per_unit
 
 COLLECTION = "Hapticut Preview"
 # Viewport colour (RGBA) per material model.

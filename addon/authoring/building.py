@@ -12,7 +12,9 @@ import shutil
 
 import bpy
 
-from . import build_job, checking, exchange, preferences, toolkit, undo_steps, work_folder
+from ..background import undo_steps
+from ..toolkit import preferences, runner
+from . import build_job, checking, exchange, work_folder
 from .preview import show_preview
 
 PREVIEW_FILE = "preview.npz"
@@ -46,7 +48,7 @@ def start_build(context) -> str:
     try:
         table = preferences.material_table(context)
         executable = preferences.executable(context)
-    except toolkit.ToolkitError as error:
+    except runner.ToolkitError as error:
         settings.error = str(error)
         raise BuildRefusedError(str(error)) from None
     try:
@@ -84,7 +86,7 @@ def start_check(context) -> list[str]:
     try:
         table = preferences.material_table(context)
         executable = preferences.executable(context)
-    except toolkit.ToolkitError as error:
+    except runner.ToolkitError as error:
         return checking.record(scene, [exchange.SceneProblemError("", str(error))])
     try:
         work_dir, job_dir, request, digest = _write_request(context, table)

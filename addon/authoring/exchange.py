@@ -10,8 +10,8 @@ import os
 
 import numpy as np
 
-from . import toolkit
-from .units import mm_per_unit
+from ..toolkit import materials
+from ..toolkit.units import mm_per_unit
 
 REQUEST_FORMAT = "hapticut.build-request"
 REQUEST_VERSION = 1
@@ -69,7 +69,7 @@ def region_material(obj, table: dict) -> dict:
     """The region's material as the request writes it ({name, model, parameters...})."""
     settings = obj.hapticut
     if settings.material_preset != "custom":
-        preset = toolkit.preset(table, settings.material_preset)
+        preset = materials.preset(table, settings.material_preset)
         if preset is None:
             names = ", ".join(p["name"] for p in table["presets"])
             raise SceneProblemError(
@@ -77,7 +77,7 @@ def region_material(obj, table: dict) -> dict:
                 f"material preset {settings.material_preset!r} is not one of {names} (or custom)",
             )
         return {"name": preset["name"], "model": preset["model"], **preset["parameters"]}
-    model = toolkit.model(table, settings.custom_model)
+    model = materials.model(table, settings.custom_model)
     if model is None:
         names = ", ".join(m["name"] for m in table["models"])
         raise SceneProblemError(
@@ -88,9 +88,9 @@ def region_material(obj, table: dict) -> dict:
     for parameter in model["parameters"]:
         name = parameter["name"]
         value = values.get(name, parameter["default"])
-        if not toolkit.in_range(parameter, value):
+        if not materials.in_range(parameter, value):
             raise SceneProblemError(
-                obj.name, f"{name} = {value:g} is outside {toolkit.range_text(parameter)}"
+                obj.name, f"{name} = {value:g} is outside {materials.range_text(parameter)}"
             )
         material[name] = float(value)
     return material
@@ -99,7 +99,7 @@ def region_material(obj, table: dict) -> dict:
 def fill_custom_parameters(obj, table: dict) -> None:
     """The custom model's parameters at their defaults (keeping values already set)."""
     settings = obj.hapticut
-    model = toolkit.model(table, settings.custom_model)
+    model = materials.model(table, settings.custom_model)
     if model is None:
         return
     old = {item.name: item.value for item in settings.custom_parameters}

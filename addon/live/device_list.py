@@ -15,7 +15,8 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 
-from . import steps, toolkit
+from ..background import steps
+from ..toolkit import runner
 
 LIST_TIMEOUT_S = 10.0
 BRIDGE_DEFAULT_PORT = 47810
@@ -60,7 +61,7 @@ def listing_steps(
     command = [servo, "--list-devices", "--json", "--rate", repr(float(rate_Hz))]
     try:
         done = yield from steps.child(
-            command, timeout_s, "listing the devices", toolkit.child_environment()
+            command, timeout_s, "listing the devices", runner.child_environment()
         )
     except steps.ChildTimeoutError:
         raise DeviceListError(
@@ -69,7 +70,7 @@ def listing_steps(
     except OSError as error:
         raise DeviceListError(f"cannot run {servo}: {error}") from None
     if done.returncode != 0:
-        line = toolkit.last_error_line(done.stderr)
+        line = runner.last_error_line(done.stderr)
         raise DeviceListError(f"{servo} --list-devices failed (code {done.returncode}): {line}")
     try:
         listing = json.loads(done.stdout)

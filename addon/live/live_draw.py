@@ -11,8 +11,8 @@ import time
 import bpy
 import numpy as np
 
+from ..toolkit.units import mm_per_unit
 from . import live_session, stroke_path
-from .units import mm_per_unit
 
 PROXY_COLOUR = (0.1, 0.9, 1.0, 1.0)
 DEVICE_COLOUR = (1.0, 0.3, 0.9, 1.0)

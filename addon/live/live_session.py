@@ -16,7 +16,8 @@ import subprocess
 import time
 from dataclasses import dataclass, field
 
-from . import steps
+from ..background import steps
+from ..toolkit.toolkit_link import ToolkitLink
 
 MAX_DATAGRAMS = 64
 BUDGET_S = 0.002
@@ -44,7 +45,7 @@ class LiveServo:
     """The add-on's hold on one running servo: its child process, control channel and state
     stream (the servo's own ``Session``, server/session.h, is a scene it has loaded)."""
 
-    link: object  # toolkit_link.link(): servo_client, recording, servo
+    link: ToolkitLink
     process: subprocess.Popen
     log_path: str
     client: object  # servo_client.ServoClient
@@ -84,7 +85,11 @@ def _last_line(path: str) -> str:
 
 
 def start_steps(
-    link, log_path: str, port: int = 0, realtime: bool = True, extra: tuple[str, ...] = ()
+    link: ToolkitLink,
+    log_path: str,
+    port: int = 0,
+    realtime: bool = True,
+    extra: tuple[str, ...] = (),
 ) -> steps.Steps[LiveServo]:
     """Start hapticut-servo with a control channel (``port``; 0: any free one), its output in
     log_path; connect and say hello. LiveServoError naming the problem (port busy, no servo)."""
@@ -131,11 +136,11 @@ def start_steps(
                 f"the servo did not open its control port in {STARTUP_TIMEOUT_S} s"
             )
         yield "starting the servo"
-    client = link.servo_client.ServoClient(port=found_port, timeout_s=REPLY_TIMEOUT_S)
+    client = link.servo_client(found_port, REPLY_TIMEOUT_S)
     try:
         client.connect()
         client.hello()
-    except (OSError, link.servo_client.ServoError) as error:
+    except (OSError, link.servo_error) as error:
         _kill(process)
         raise LiveServoError(f"the servo does not answer on port {found_port}: {error}") from None
     return LiveServo(link, process, log_path, client)
@@ -152,7 +157,7 @@ def request(session: LiveServo, name: str, *args, **kwargs):
         raise LiveServoError(session.error or "no servo")
     try:
         return getattr(session.client, name)(*args, **kwargs)
-    except session.link.servo_client.ServoError as error:
+    except session.link.servo_error as error:
         if "closed the connection" in str(error):
             lose(session, str(error))
         raise LiveServoError(str(error)) from None
@@ -222,7 +227,7 @@ def _reply_steps(session: LiveServo, send, state_while: str, what: str, taken, t
                 session.state = state
                 try:
                     return taken(reply)
-                except session.link.servo_client.ServoError as error:
+                except session.link.servo_error as error:
                     raise LiveServoError(str(error)) from None
             if session.process.poll() is not None:
                 lose(session, "the servo exited")
@@ -231,7 +236,7 @@ def _reply_steps(session: LiveServo, send, state_while: str, what: str, taken, t
                 lose(session, f"the servo did not answer ({what}) in {timeout_s:g} s")
                 raise LiveServoError(session.error)
             yield what
-    except session.link.servo_client.ServoError as error:
+    except session.link.servo_error as error:
         lose(session, str(error))
         raise LiveServoError(str(error)) from None
     except OSError as error:
@@ -322,7 +327,7 @@ def tick(session: LiveServo, poses: dict[str, list[float]] | None = None) -> boo
             session.last_status_s = now
             session.status_pending = True
             client.send_request("status")
-    except session.link.servo_client.ServoError as error:
+    except session.link.servo_error as error:
         if "closed the connection" in str(error):
             lose(session, str(error))
         else:

@@ -1,0 +1,1 @@
+"""Baking a recording into keys, force arrows and a cut surface revealed over time."""

@@ -1,0 +1,2 @@
+"""The sidebar's panels: the scene's (regions, blades, checks, build, report) and the live
+ones (session, bake)."""
