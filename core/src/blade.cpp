@@ -218,15 +218,6 @@ BladeTick Blade::step_points(double dt_s, const RuntimeSettings& settings) {
     tick.max_transitions = std::max(tick.max_transitions, r.transitions);
     tick.transitions += r.transitions;
   };
-  // account for a point that finished its tick in the first pass (neither capped nor deferred).
-  auto account_finished = [&](std::size_t i) {
-    const Vec3 f = proxies_[i].force_N();
-    tick.force_N += f;
-    weighted_force += f * fractions_[i];
-    const int transitions = point_ticks_[i].transitions;
-    tick.max_transitions = std::max(tick.max_transitions, transitions);
-    tick.transitions += transitions;
-  };
   int capped_in_first_pass = 0;
   // The point kPrefetchAhead places on has its tet asked for while this one
   // ticks: after a sleep the mesh is cold, and one point's misses then
@@ -249,13 +240,13 @@ BladeTick Blade::step_points(double dt_s, const RuntimeSettings& settings) {
       continue;
     }
     // Inline (proxy.h): most points settle in the blade's own loop, without a call.
-    proxy.tick_within(world_points_[i], dt_s, settings, std::min(cap, remaining), shading, true, r);
+    proxy.tick(world_points_[i], dt_s, settings, std::min(cap, remaining), shading, true, r);
     remaining -= r.transitions;
     if (r.capped) {
       ++capped_in_first_pass;
       continue;
     }
-    account_finished(i);
+    account(i);
   }
   for (std::size_t k = 0; k < n && capped_in_first_pass > 0; ++k) {
     const std::size_t i = index(k);
@@ -264,12 +255,14 @@ BladeTick Blade::step_points(double dt_s, const RuntimeSettings& settings) {
     --capped_in_first_pass;
     Proxy& proxy = proxies_[i];
     const Vec3& p = world_points_[i];
+    // Walks on with what the budget has left, then ends the tick, still capped or not.
     if (remaining > 0) {
       const int before = r.transitions;
-      proxy.walk(p, proxy.context_for(p, dt_s, settings), before + remaining, r);
+      proxy.walk(p, dt_s, settings, before + remaining, shading, false, r);
       remaining -= r.transitions - before;
+    } else {
+      proxy.end_tick(p, r, settings, shading);
     }
-    proxy.finish_tick(p, r, settings, shading);
     account(i);
   }
   // Sum of (p_i - origin) x f_i with p_i - origin = lever + s_i span.

@@ -233,8 +233,7 @@ void Blade::place_proxies_on_ideal(const RuntimeSettings& settings) {
     Proxy& proxy = proxies_[i];
     const std::int32_t t = ideal_tets_[i];
     proxy.place_ = {t == kNoTet ? ProxyState::Outside : ProxyState::Tet, t, 0, ideal_points_[i]};
-    const Vec3 force = (ideal_points_[i] - world_points_[i]) * settings.stiffness_N_per_mm;
-    point_forces_[i] = is_finite(force) ? force : Vec3{};
+    point_forces_[i] = proxy.spring_force(world_points_[i], settings, nullptr);
     proxy.force_N_ = point_forces_[i];
   }
 }

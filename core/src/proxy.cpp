@@ -6,7 +6,6 @@
 #include <stdexcept>
 #include <vector>
 
-#include "hapticut/force_shading.h"
 #include "hapticut/geometry.h"
 
 namespace hapticut {
@@ -248,7 +247,7 @@ TickResult Proxy::step(const Vec3& p, double dt_s, const RuntimeSettings& settin
     reject_input(is_finite(p) && !space_->in_workspace(p), result);
     return result;
   }
-  tick_within(p, dt_s, settings, settings.max_transitions_per_tick, shading, false, result);
+  tick(p, dt_s, settings, settings.max_transitions_per_tick, shading, false, result);
   return result;
 }
 
@@ -270,8 +269,11 @@ MoveContext Proxy::context_for(const Vec3& p, double dt_s, const RuntimeSettings
   return context;
 }
 
-[[gnu::always_inline]] inline void Proxy::walk_inline(const Vec3& p, const MoveContext& context,
-                                                      int limit, TickResult& result) {
+// Out of line, with the loop and the tick's end inline: a point the settles
+// decline makes one call (docs/decisions.md, "Build tuning and the hot path").
+void Proxy::walk(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
+                 const ForceShading* shading, bool keep_capped_open, TickResult& result) {
+  const MoveContext context = context_for(p, dt_s, settings);
   int transitions = result.transitions;  // A local: no store-to-load round trip per transition.
   bool capped = false;
   for (;;) {
@@ -296,51 +298,7 @@ MoveContext Proxy::context_for(const Vec3& p, double dt_s, const RuntimeSettings
   }
   result.transitions = transitions;
   result.capped = capped;
-}
-
-[[gnu::always_inline]] inline void Proxy::finish_tick_inline(const Vec3& p, TickResult& result,
-                                                             const RuntimeSettings& settings,
-                                                             const ForceShading* shading) {
-  // A branch, not std::max: GCC vectorises the max through a 16-byte reload of
-  // a 4-byte store, a store-forwarding stall on every step (docs/decisions.md,
-  // "Build tuning and the hot path").
-  const auto transitions = static_cast<std::uint32_t>(result.transitions);
-  counters_.total_transitions += transitions;
-  if (transitions > counters_.max_transitions_in_tick) {
-    counters_.max_transitions_in_tick = transitions;
-  }
-  last_p_ = p;
-  has_last_p_ = true;
-  if (result.capped) {
-    // The proxy is valid but behind: its lag is the computation's, not the
-    // material's. The hand keeps feeling the last finished force while the
-    // proxy catches up; a proxy that stays behind is limited to the capped force.
-    ++counters_.capped_ticks;
-    hold_force(settings);
-    return;
-  }
-  Vec3 force = (place_.q - p) * settings.stiffness_N_per_mm;  // Eq. (15).
-  if (shading != nullptr && settings.force_shading) force = shading->shade(place_, force);
-  force_N_ = is_finite(force) ? force : Vec3{};
-  unfinished_in_row_ = 0;
-}
-
-void Proxy::walk(const Vec3& p, const MoveContext& context, int limit, TickResult& result) {
-  walk_inline(p, context, limit, result);
-}
-
-void Proxy::finish_tick(const Vec3& p, TickResult& result, const RuntimeSettings& settings,
-                        const ForceShading* shading) {
-  finish_tick_inline(p, result, settings, shading);
-}
-
-// A point's tick that the settles (proxy.h) declined: one call, with the
-// walk and the tick's end inline, so a point makes no further call
-// (docs/decisions.md, "Build tuning and the hot path").
-void Proxy::tick_walk(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
-                      const ForceShading* shading, bool keep_capped_open, TickResult& result) {
-  walk_inline(p, context_for(p, dt_s, settings), limit, result);
-  if (!result.capped || !keep_capped_open) finish_tick_inline(p, result, settings, shading);
+  if (!capped || !keep_capped_open) end_tick(p, result, settings, shading);
 }
 
 void Proxy::defer_tick(TickResult& result, const RuntimeSettings& settings) {
@@ -406,8 +364,7 @@ Proxy::Outcome Proxy::step_tet(const Vec3& p, const MoveContext& context) {
 }
 
 // FACE: (a-1) toward the outside of the owner (eq. 5): into the neighbour or
-// OUTSIDE; (a-2) back into the owner; (b) slide on the plane (eq. 6) and stop
-// on the nearest edge.
+// OUTSIDE; (a-2) back into the owner; else (b), slide_on_face.
 Proxy::Outcome Proxy::step_face(const Vec3& p, const MoveContext& context) {
   const TetMesh& mesh = space_->mesh();
   const std::int32_t t = place_.tet;
@@ -426,8 +383,20 @@ Proxy::Outcome Proxy::step_face(const Vec3& p, const MoveContext& context) {
   } else if (move(material, p, q, context).moved) {
     return go(ProxyState::Tet, t, 0, q);
   }
-  const Vec3 target = project_to_plane(p, plane);
-  const MoveResult moved = move(material, target, q, context);
+  return slide_on_face(p, context);
+}
+
+// FACE's (b): the slide to p projected on the plane (eq. 6), stopping on the
+// nearest edge, or where the material stops it.
+[[gnu::always_inline]] inline Proxy::Outcome Proxy::slide_on_face(const Vec3& p,
+                                                                  const MoveContext& context) {
+  const TetMesh& mesh = space_->mesh();
+  const std::int32_t t = place_.tet;
+  const int face = place_.local;
+  const Vec3 q = place_.q;
+  const double eps = context.tolerance_mm;
+  const Vec3 target = project_to_plane(p, mesh.face_plane(t, face));
+  const MoveResult moved = move(space_->material_of_tet(t), target, q, context);
   if (!moved.moved) return Outcome::Unchanged;
   const Exit exit = find_face_exit(mesh, t, face, q, moved.q, eps);
   if (exit.face < 0) {
@@ -455,7 +424,7 @@ Proxy::Outcome Proxy::step_face(const Vec3& p, const MoveContext& context) {
 // EDGE: (a-1) into a tet of the fan whose wedge holds p (eq. 7); (a-2) out
 // of the mesh only from a boundary edge when p is outside every closed wedge
 // (repair 2); (a-3) onto the fan face the projected target moves furthest
-// along (eq. 8); (b) slide on the line (eq. 9), stopping at an end (eq. 10).
+// along (eq. 8); else (b), slide_along_edge.
 Proxy::Outcome Proxy::step_edge(const Vec3& p, const MoveContext& context) {
   const TetMesh& mesh = space_->mesh();
   const std::int32_t t = place_.tet;
@@ -510,7 +479,17 @@ Proxy::Outcome Proxy::step_edge(const Vec3& p, const MoveContext& context) {
     mesh.prefetch_fan_ranges(best.tet);  // A slide on goes on to one of its edges.
     return go(best.state, best.tet, best.local, q);
   }
+  return slide_along_edge(p, context);
+}
 
+// EDGE's (b): the slide to p projected on the line (eq. 9), stopping at an
+// end (eq. 10), or where the material stops it.
+[[gnu::always_inline]] inline Proxy::Outcome Proxy::slide_along_edge(const Vec3& p,
+                                                                     const MoveContext& context) {
+  const TetMesh& mesh = space_->mesh();
+  const std::int32_t t = place_.tet;
+  const std::int32_t e = mesh.edge_of(t, place_.local);
+  const Vec3 q = place_.q;
   const auto& ends = mesh.edge_vertices(e);
   const Vec3& direction = mesh.edge_direction(e);
   const Vec3& o0 = mesh.vertex(ends[0]);

@@ -1,5 +1,5 @@
-// The inline settles in a tet, on a face and beside the mesh (Proxy::tick_in_tet,
-// tick_on_face and tick_beside_mesh) are shortcuts of the walk: every tick they take must leave
+// The inline settles in a tet, on a face and beside the mesh (Proxy::settle_in_tet,
+// settle_on_bone and settle_in_air) are shortcuts of the walk: every tick they take must leave
 // the proxy exactly as the walk would (place, force and counters, bit for
 // bit), and they must decline every other tick.
 #include <gtest/gtest.h>
@@ -21,21 +21,21 @@ struct TetSettleTestAccess {
                                  const RuntimeSettings& settings) {
     TickResult result;
     ++proxy.counters_.ticks;
-    proxy.tick_walk(p, dt_s, settings, settings.max_transitions_per_tick, nullptr, false, result);
+    proxy.walk(p, dt_s, settings, settings.max_transitions_per_tick, nullptr, false, result);
     return result;
   }
   static bool settles_in_tet(Proxy proxy, const Vec3& p, const RuntimeSettings& settings) {
     TickResult result;
-    return proxy.tick_in_tet(p, settings, settings.max_transitions_per_tick, result);
+    return proxy.settle_in_tet(p, settings, settings.max_transitions_per_tick, result);
   }
   static bool settles_on_face(Proxy proxy, const Vec3& p, const RuntimeSettings& settings) {
     TickResult result;
-    return proxy.tick_on_face(p, settings, settings.max_transitions_per_tick, nullptr, result);
+    return proxy.settle_on_bone(p, settings, settings.max_transitions_per_tick, nullptr, result);
   }
   static bool settles_beside(Proxy proxy, const Vec3& p, const RuntimeSettings& settings,
                              const ForceShading* shading = nullptr) {
     TickResult result;
-    return proxy.tick_beside_mesh(p, settings, settings.max_transitions_per_tick, shading, result);
+    return proxy.settle_in_air(p, settings, settings.max_transitions_per_tick, shading, result);
   }
 };
 

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "hapticut/aabb_tree.h"
+#include "hapticut/force_shading.h"
 #include "hapticut/geometry.h"
 #include "hapticut/material.h"
 #include "hapticut/proxy_place.h"
@@ -61,8 +62,6 @@ struct TickResult {
   bool rejected = false;  // p not finite or outside the workspace: nothing moved, force zero.
   bool deferred = false;  // Blade only: the tick's work budget ran out before this point.
 };
-
-class ForceShading;
 
 // How a reset went: where the proxy started.
 enum class StartKind : std::uint8_t {
@@ -127,57 +126,62 @@ class alignas(64) Proxy {
   // check is not part of the transition timed, and subtracting it is noisier
   // than not making it.
   friend struct TransitionTimingAccess;
-  // The test that the inline settles give what the walk gives
-  // (tests/cpp/tet_settle_test.cpp) runs tick_walk, tick_in_tet and tick_on_face apart.
+  // The test that the settles give what the walk gives (tests/cpp/tet_settle_test.cpp)
+  // runs walk, settle_in_tet, settle_on_bone and settle_in_air apart.
   friend struct TetSettleTestAccess;
-  // The pieces of step: refuse an input; the tick's move context; walk
-  // toward p until converged or `limit` transitions in all this tick (exact,
-  // see step); end the tick at p (counters, force). tick_walk walks and
-  // ends the tick unless the walk is capped and `keep_capped_open` (the Blade
-  // then walks on with what its budget has left, then ends it).
+
+  // The pieces of step. A tick makes at most `limit` transitions in all
+  // (exact, see step); a capped tick is left open when `keep_capped_open`
+  // (the Blade then walks on with what its budget has left, and ends it).
   void reject_input(bool out_of_workspace, TickResult& result);
-  // The tick most points make, inline (defined below): a TET proxy whose
-  // material moves it (free, drag, membrane) to a q' still inside its tet
-  // settles there, with the same place, counters and force as the walk
-  // (step_tet, then finish_tick) would give, bit for bit, without the walk's
-  // machinery, which is most of such a tick's cost (docs/decisions.md,
-  // "The settle in a tet and the slide on bone, inline"). Returns false,
-  // touching nothing, for any other tick (another state, a viscous material,
-  // q' leaving the tet, a tick already under way); tick_walk then does it.
-  bool tick_in_tet(const Vec3& p, const RuntimeSettings& settings, int limit, TickResult& result);
-  // The same for the commonest FACE tick, a slide on bone: p strictly beyond
-  // the face, the neighbour rigid, the slide's end inside the face and off
-  // its edges (step_face's settle). Declines also when the force is shaded.
-  bool tick_on_face(const Vec3& p, const RuntimeSettings& settings, int limit,
-                    const ForceShading* shading, TickResult& result);
-  // The same for OUTSIDE in free air beside the mesh: q -> p lies wholly
-  // beyond one face of the entry box, so q follows p (step_outside's first
-  // test, then the walk's probe that finds nothing more to do). Declines also
-  // when the force is shaded.
-  bool tick_beside_mesh(const Vec3& p, const RuntimeSettings& settings, int limit,
-                        const ForceShading* shading, TickResult& result);
-  // The end of a tick that tick_in_tet, tick_on_face or tick_beside_mesh settled: q moved to
-  // q1, a transition of `state` to itself when it changed q (settle_at).
-  void end_settled_tick(const Vec3& p, const Vec3& q1, ProxyState state,
-                        const RuntimeSettings& settings, TickResult& result);
-  // A point's tick (inline, defined below; the blade's loop calls it too):
-  // tick_in_tet, else tick_on_face, else tick_beside_mesh, else tick_walk.
-  void tick_within(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
-                   const ForceShading* shading, bool keep_capped_open, TickResult& result);
-  void tick_walk(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
-                 const ForceShading* shading, bool keep_capped_open, TickResult& result);
+  // A point's tick (inline, defined below, so the blade's loop has it without
+  // a call): the first settle that takes it, else walk.
+  void tick(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
+            const ForceShading* shading, bool keep_capped_open, TickResult& result);
+  // The settles: the ticks most points make, inline (defined below). Each one
+  // decides whether its tick ends after one move within the proxy's place;
+  // when it does, it makes that move and ends the tick with the same place,
+  // counters and force as walk would give, bit for bit, without the walk's
+  // machinery, which is most of such a tick's cost (docs/decisions.md, "The
+  // settle in a tet and the slide on bone, inline"). Otherwise it returns
+  // false, touching nothing, and walk does the tick. Each declines a tick
+  // already under way.
+  //
+  // A TET proxy whose material moves it (free, drag, membrane) to a q' still
+  // inside its tet stays there (step_tet's settle). Declines a viscous material.
+  bool settle_in_tet(const Vec3& p, const RuntimeSettings& settings, int limit, TickResult& result);
+  // A FACE proxy pressed against bone: p strictly beyond the face, the
+  // neighbour rigid, the slide's end inside the face and off its edges
+  // (step_face's settle). Declines a viscous material and a shaded force.
+  bool settle_on_bone(const Vec3& p, const RuntimeSettings& settings, int limit,
+                      const ForceShading* shading, TickResult& result);
+  // An OUTSIDE proxy in free air beside the mesh: q -> p lies wholly beyond
+  // one face of the entry box, so q follows p (step_outside's first test,
+  // then the walk's probe that finds nothing more to do). Declines a shaded force.
+  bool settle_in_air(const Vec3& p, const RuntimeSettings& settings, int limit,
+                     const ForceShading* shading, TickResult& result);
+  // A tick the settles declined: transitions toward p until converged or
+  // `limit` in all this tick, then end_tick, unless the walk is capped and
+  // `keep_capped_open`.
+  void walk(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
+            const ForceShading* shading, bool keep_capped_open, TickResult& result);
   MoveContext context_for(const Vec3& p, double dt_s, const RuntimeSettings& settings) const;
-  void walk(const Vec3& p, const MoveContext& context, int limit, TickResult& result);
-  void finish_tick(const Vec3& p, TickResult& result, const RuntimeSettings& settings,
-                   const ForceShading* shading);
-  // The bodies of walk and finish_tick, inlined into tick_walk (proxy.cpp
-  // only): a point the settles decline makes one call, not three.
-  void walk_inline(const Vec3& p, const MoveContext& context, int limit, TickResult& result);
-  void finish_tick_inline(const Vec3& p, TickResult& result, const RuntimeSettings& settings,
-                          const ForceShading* shading);
+  // The end of every tick walked or settled (inline, defined below): the
+  // counters, p, and the force, eq. (15), or the held force when capped.
+  void end_tick(const Vec3& p, TickResult& result, const RuntimeSettings& settings,
+                const ForceShading* shading);
+  // The end of a settled tick: q moved to q1 within its place, a transition
+  // of `state` to itself when that changed q (as settle_at decides), then end_tick.
+  void end_tick_at(const Vec3& p, const Vec3& q1, ProxyState state, const RuntimeSettings& settings,
+                   TickResult& result);
+  // A Blade point its work budget did not reach: place kept, force held.
   void defer_tick(TickResult& result, const RuntimeSettings& settings);
   // An unfinished tick: the last finished force, limited from the second in a row on.
   void hold_force(const RuntimeSettings& settings);
+  // Eq. (15), f = k (q - p), shaded when a shading is given and on; zero
+  // where not finite.
+  Vec3 spring_force(const Vec3& p, const RuntimeSettings& settings,
+                    const ForceShading* shading) const;
 
   // What one step of a state did: nothing, moved (the tick goes on), or
   // moved within its tet, face or edge and settled (the tick ends; see settle_at).
@@ -185,7 +189,9 @@ class alignas(64) Proxy {
   Outcome advance(const Vec3& p, const MoveContext& context);
   Outcome step_tet(const Vec3& p, const MoveContext& context);
   Outcome step_face(const Vec3& p, const MoveContext& context);
+  Outcome slide_on_face(const Vec3& p, const MoveContext& context);
   Outcome step_edge(const Vec3& p, const MoveContext& context);
+  Outcome slide_along_edge(const Vec3& p, const MoveContext& context);
   Outcome step_vertex(const Vec3& p, const MoveContext& context);
   Outcome step_outside(const Vec3& p);
   Outcome enter_beyond(const Vec3& q, const Vec3& end, const Vec3& p, double lowest,
@@ -224,36 +230,60 @@ class alignas(64) Proxy {
   std::shared_ptr<const Space> space_owner_;
 };
 
-// The bookkeeping of walk_inline and finish_tick_inline (proxy.cpp) for a
-// tick of one settle, in the same order.
-[[gnu::always_inline]] inline void Proxy::end_settled_tick(const Vec3& p, const Vec3& q1,
-                                                           ProxyState state,
-                                                           const RuntimeSettings& settings,
-                                                           TickResult& result) {
-  std::uint32_t transitions = 0;
-  if (!within_tolerance(q1 - place_.q, space_->tolerance())) {
-    transitions = 1;
-    const auto s = static_cast<int>(state);
-    ++counters_.transitions[s][s][0];  // To itself, same owner: not a neighbour.
-  }
-  place_.q = q1;
-  result.transitions = static_cast<int>(transitions);
+[[gnu::always_inline]] inline Vec3 Proxy::spring_force(const Vec3& p,
+                                                       const RuntimeSettings& settings,
+                                                       const ForceShading* shading) const {
+  Vec3 force = (place_.q - p) * settings.stiffness_N_per_mm;
+  if (shading != nullptr && settings.force_shading) force = shading->shade(place_, force);
+  return is_finite(force) ? force : Vec3{};
+}
+
+[[gnu::always_inline]] inline void Proxy::end_tick(const Vec3& p, TickResult& result,
+                                                   const RuntimeSettings& settings,
+                                                   const ForceShading* shading) {
+  // A branch, not std::max: GCC vectorises the max through a 16-byte reload of
+  // a 4-byte store, a store-forwarding stall on every step (docs/decisions.md,
+  // "Build tuning and the hot path").
+  const auto transitions = static_cast<std::uint32_t>(result.transitions);
   counters_.total_transitions += transitions;
   if (transitions > counters_.max_transitions_in_tick) {
     counters_.max_transitions_in_tick = transitions;
   }
   last_p_ = p;
   has_last_p_ = true;
-  const Vec3 force = (place_.q - p) * settings.stiffness_N_per_mm;  // Eq. (15).
-  force_N_ = is_finite(force) ? force : Vec3{};
+  if (result.capped) {
+    // The proxy is valid but behind: its lag is the computation's, not the
+    // material's. The hand keeps feeling the last finished force while the
+    // proxy catches up; a proxy that stays behind is limited to the capped force.
+    ++counters_.capped_ticks;
+    hold_force(settings);
+    return;
+  }
+  force_N_ = spring_force(p, settings, shading);
   unfinished_in_row_ = 0;
 }
 
-// step_tet's (b-2): the material's move, no exit plane strictly crossed.
-// Shading leaves a TET force as it is (ForceShading::shade), so none is asked.
-[[gnu::always_inline]] inline bool Proxy::tick_in_tet(const Vec3& p,
-                                                      const RuntimeSettings& settings, int limit,
+// No shading: settle_in_tet's force is a TET force, which shading leaves as it
+// is (ForceShading::shade), and the other settles decline a shaded force.
+[[gnu::always_inline]] inline void Proxy::end_tick_at(const Vec3& p, const Vec3& q1,
+                                                      ProxyState state,
+                                                      const RuntimeSettings& settings,
                                                       TickResult& result) {
+  int transitions = 0;
+  if (!within_tolerance(q1 - place_.q, space_->tolerance())) {
+    transitions = 1;
+    const auto s = static_cast<int>(state);
+    ++counters_.transitions[s][s][0];  // To itself, same owner: not a neighbour.
+  }
+  place_.q = q1;
+  result.transitions = transitions;
+  end_tick(p, result, settings, nullptr);
+}
+
+// step_tet's (b-2): the material's move, no exit plane strictly crossed.
+[[gnu::always_inline]] inline bool Proxy::settle_in_tet(const Vec3& p,
+                                                        const RuntimeSettings& settings, int limit,
+                                                        TickResult& result) {
   if (place_.state != ProxyState::Tet || result.transitions != 0 || limit < 1) return false;
   const std::int32_t t = place_.tet;
   const MaterialModel model = space_->tet_model(t);
@@ -274,17 +304,17 @@ class alignas(64) Proxy {
     }
     if (leaves) return false;
   }
-  end_settled_tick(p, moved.q, ProxyState::Tet, settings, result);
+  end_tick_at(p, moved.q, ProxyState::Tet, settings, result);
   return true;
 }
 
 // step_face's (a-1) refused by a rigid neighbour, then (b): the slide to p
 // projected on the plane (eq. 6), no other face plane strictly crossed nor
 // touched (touching it, the edge's fan may decide: the walk does it).
-[[gnu::always_inline]] inline bool Proxy::tick_on_face(const Vec3& p,
-                                                       const RuntimeSettings& settings, int limit,
-                                                       const ForceShading* shading,
-                                                       TickResult& result) {
+[[gnu::always_inline]] inline bool Proxy::settle_on_bone(const Vec3& p,
+                                                         const RuntimeSettings& settings, int limit,
+                                                         const ForceShading* shading,
+                                                         TickResult& result) {
   if (place_.state != ProxyState::Face || result.transitions != 0 || limit < 1) return false;
   if (shading != nullptr && settings.force_shading) return false;
   const TetMesh& mesh = space_->mesh();
@@ -313,33 +343,33 @@ class alignas(64) Proxy {
     }
     if (reaches) return false;
   }
-  end_settled_tick(p, moved.q, ProxyState::Face, settings, result);
+  end_tick_at(p, moved.q, ProxyState::Face, settings, result);
   return true;
 }
 
 // step_outside's box test: q -> p meets nothing of the mesh, q' = p, and
 // the walk's next step would change nothing.
-[[gnu::always_inline]] inline bool Proxy::tick_beside_mesh(const Vec3& p,
-                                                           const RuntimeSettings& settings,
-                                                           int limit, const ForceShading* shading,
-                                                           TickResult& result) {
+[[gnu::always_inline]] inline bool Proxy::settle_in_air(const Vec3& p,
+                                                        const RuntimeSettings& settings, int limit,
+                                                        const ForceShading* shading,
+                                                        TickResult& result) {
   if (place_.state != ProxyState::Outside || result.transitions != 0 || limit < 1) return false;
   if (shading != nullptr && settings.force_shading) return false;
   if (!box_beyond_face(segment_box(place_.q, p), entry_box_)) return false;
-  end_settled_tick(p, p, ProxyState::Outside, settings, result);
+  end_tick_at(p, p, ProxyState::Outside, settings, result);
   return true;
 }
 
-[[gnu::always_inline]] inline void Proxy::tick_within(const Vec3& p, double dt_s,
-                                                      const RuntimeSettings& settings, int limit,
-                                                      const ForceShading* shading,
-                                                      bool keep_capped_open, TickResult& result) {
-  if (tick_in_tet(p, settings, limit, result) ||
-      tick_on_face(p, settings, limit, shading, result) ||
-      tick_beside_mesh(p, settings, limit, shading, result)) {
+[[gnu::always_inline]] inline void Proxy::tick(const Vec3& p, double dt_s,
+                                               const RuntimeSettings& settings, int limit,
+                                               const ForceShading* shading, bool keep_capped_open,
+                                               TickResult& result) {
+  if (settle_in_tet(p, settings, limit, result) ||
+      settle_on_bone(p, settings, limit, shading, result) ||
+      settle_in_air(p, settings, limit, shading, result)) {
     return;
   }
-  tick_walk(p, dt_s, settings, limit, shading, keep_capped_open, result);
+  walk(p, dt_s, settings, limit, shading, keep_capped_open, result);
 }
 
 }  // namespace hapticut
