@@ -1,4 +1,4 @@
-// Force shading's normals (issue 8, defect 6): the nearest source triangle
+// Force shading's normals: the nearest source triangle
 // found exactly, and normals smoothed at the scale of the rigid surface's facets.
 #include "hapticut/force_shading.h"
 

@@ -102,7 +102,7 @@ TEST(Geometry, PointsStrictlyOutOfAClosedConeNeedsOnePlanePassedByMoreThanEps) {
   EXPECT_FALSE(points_strictly_out_of(std::array<double, 2>{0.0, 0.0}, eps));  // Along the edge.
   EXPECT_FALSE(points_strictly_out_of(std::array<double, 2>{-1.0, -1.0}, eps));
   // Neither strictly into nor strictly out of: in the closed cone's boundary,
-  // where repair 2 keeps the walk on the feature (defect 1).
+  // where repair 2 keeps the walk on the feature (ALGORITHM.md).
   const std::array<double, 3> in_a_face_plane{-1.0, 0.0, -0.5};
   EXPECT_FALSE(points_strictly_into(in_a_face_plane, eps));
   EXPECT_FALSE(points_strictly_out_of(in_a_face_plane, eps));

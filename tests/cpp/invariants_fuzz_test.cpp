@@ -1,9 +1,9 @@
-// Invariant and fuzz tests (issue: engine, item 7; issue 8): random meshes
+// Invariant and fuzz tests: random meshes
 // with slivers and large fans, random trajectories with jumps across many
 // tets. Device points also land exactly on vertices, edges and faces, and
 // segments q -> p run exactly through boundary vertices, edges and faces,
-// along face planes (issue 8, defects 1 and 2: putting p on a feature never
-// drove the segment through one). After every tick: q finite, the state
+// along face planes (putting p on a feature alone never drives the segment
+// through one). After every tick: q finite, the state
 // agrees with q, q outside every rigid tet, an OUTSIDE q outside the mesh;
 // stepping again with the same p changes nothing; rigid layers one tet thick
 // are never crossed. At least 10^6 steps run here; HAPTICUT_FUZZ_STEPS raises

@@ -1,5 +1,5 @@
-// The material table and the engine's own range checks (issue 8, defects 4
-// and 8): every public constructor refuses NaN, infinite, negative or absurd
+// The material table and the engine's own range checks: every public
+// constructor refuses NaN, infinite, negative or absurd
 // values with an error naming the value.
 #include "hapticut/material_table.h"
 

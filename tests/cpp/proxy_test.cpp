@@ -36,7 +36,7 @@ bool has_boundary_face(const TetMesh& mesh, std::int32_t t) {
 }
 
 // Checked here without check_invariants, so the tests also fail against an
-// engine whose check had the blind spot (issue 8, defect 2).
+// engine whose check has a blind spot for them.
 bool inside_rigid(const Space& space, const Vec3& q) {
   const TetMesh& mesh = space.mesh();
   for (std::int32_t t = 0; t < mesh.tet_count(); ++t) {
@@ -284,11 +284,11 @@ TEST(Proxy, EntersExactlyThroughABoundaryVertexIntoAnInnerTet) {
   EXPECT_GT(checked, 0) << "the grid should have inner tets at boundary vertices";
 }
 
-// Issue 8, defect 1: on the jittered grid with every tet that has no
-// boundary face rigid, a path from outside exactly through a boundary vertex
-// and along the plane of a rigid tet's face through it met no fan tet
-// strictly toward p; OUTSIDE then set q = p inside the mesh, and the next
-// tick walked into the bone with zero force (48 of 48 such paths). The rim
+// On the jittered grid with every tet that has no boundary face rigid, a
+// path from outside exactly through a boundary vertex and along the plane of
+// a rigid tet's face through it can meet no fan tet strictly toward p; OUTSIDE
+// must not then set q = p inside the mesh, or the next tick walks into the
+// bone with zero force. The rim
 // now lands on the vertex unless p - q points strictly out of every closed cone.
 TEST(Proxy, EnteringThroughABoundaryVertexAlongAnInnerFacePlaneStopsAtTheBone) {
   const MeshData data = grid_mesh({0, 5, 10}, {0, 5, 10}, {0, 5, 10}, 0.3, 21);
@@ -390,9 +390,8 @@ TEST(Proxy, ARimPassedByOutsideLeavesTheSearchToTheRimBeyond) {
   EXPECT_EQ(checked, 6);
 }
 
-// Issue 8, defect 2: an OUTSIDE proxy on an inner vertex or face of the mesh
-// passed the check (its tolerance was the wrong way round); one on the
-// boundary is fine.
+// An OUTSIDE proxy on an inner vertex or face of the mesh fails the check
+// (its tolerance points into the mesh); one on the boundary is fine.
 TEST(Proxy, CheckInvariantsRejectsAnOutsideProxyInsideTheMesh) {
   const MeshData data = grid_mesh({0, 10, 20}, {0, 10, 20}, {0, 10, 20});
   const auto space_owner = make_space(data, 0);
@@ -411,7 +410,7 @@ TEST(Proxy, CheckInvariantsRejectsAnOutsideProxyInsideTheMesh) {
   EXPECT_EQ(proxy.check_invariants(), "");
 }
 
-// Issue 8, defect 2: the rigid message was overwritten by the OUTSIDE one.
+// A proxy both OUTSIDE and in a rigid tet is reported as in the rigid tet.
 TEST(Proxy, CheckInvariantsNamesTheRigidTet) {
   const auto space_owner = make_space(two_tets_mesh(), {0, 2});
   const Space& space = *space_owner;
@@ -439,7 +438,7 @@ TEST(Proxy, OutsideNeverSetsQToAPointInsideTheMesh) {
   EXPECT_FALSE(inside_rigid(space, proxy.q()));
 }
 
-// Issue 8, defect 3: a 12-tet fan around (0,0,-5)-(0,0,5), rigid where x > 0
+// A 12-tet fan around (0,0,-5)-(0,0,5), rigid where x > 0
 // and y > 0. With q on the free face y = 0 and p at (0, 0.5, 0), exactly in
 // the plane between a rigid and a free tet, the face slide landed on the fan
 // edge and stayed there, pushing 0.05 N for as long as p was held (0.5 N
@@ -474,10 +473,10 @@ TEST(Proxy, AFaceSlideEndingOnAnEdgeLetsTheEdgeFanDecide) {
   }
 }
 
-// Issue 8, defect 7: a jump to 1e18 mm and back left q where it was computed
-// as q + d s with every digit lost: inside the rigid sphere, OUTSIDE, 0 N,
-// for good. The entry search now runs on the segment clipped to the mesh's
-// reach, so the way back gives the same place and force as no glitch at all.
+// A jump to 1e18 mm and back must not leave q where q + d s lost every digit
+// (inside the rigid sphere, OUTSIDE, 0 N, for good): the entry search runs on
+// the segment clipped to the mesh's reach, so the way back gives the same
+// place and force as no glitch at all.
 TEST(Proxy, AHugeJumpOutAndBackEntersExactly) {
   const auto space_owner = Space::from_scene(load_scene(
       std::string(HAPTICUT_TEST_DATA_DIR) + "/../../examples/sphere80.hapticut.msgpack"));

@@ -1,4 +1,4 @@
-// The scene reader trusts no input (issue 8, defect 9): every reproducer is a
+// The scene reader trusts no input: every reproducer is a
 // regression test, in both encodings where it applies.
 #include <gtest/gtest.h>
 

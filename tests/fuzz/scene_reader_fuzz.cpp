@@ -1,4 +1,4 @@
-// libFuzzer harness for the C++ scene reader (issue 8, defect 9). Every input
+// libFuzzer harness for the C++ scene reader. Every input
 // is read in both encodings; the only exception allowed out of the reader is
 // SceneError, and a scene it accepts must build a Space or be refused with
 // MeshError / std::invalid_argument. Anything else (a crash, a sanitizer

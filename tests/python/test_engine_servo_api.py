@@ -1,4 +1,4 @@
-"""What the servo and the add-on need from the engine's bindings (issue 8):
+"""What the servo and the add-on need from the engine's bindings:
 checked inputs (never a crash), settings per tick, force shading, snapshots,
 Spaces kept alive by their users, and the GIL released in long calls."""
 

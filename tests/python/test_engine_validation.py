@@ -1,4 +1,4 @@
-"""The engine refuses what it cannot simulate, through the bindings as ValueError (issue 8, 4/8)."""
+"""The engine refuses what it cannot simulate, through the bindings as ValueError."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The reduced evaluation (issue 4): stability verdicts of the tetrahedral proxy
+"""The reduced evaluation: stability verdicts of the tetrahedral proxy
 (with and without force shading) and sanity of the baselines. Pass or fail only;
 never time."""
 

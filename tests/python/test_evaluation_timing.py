@@ -1,4 +1,4 @@
-"""The evaluation's timing harness (issue 4): timed passes run on copies and leave
+"""The evaluation's timing harness: timed passes run on copies and leave
 the methods as they were, the recorded pass is the same with or without timing,
 and the matched-accuracy comparison picks the fastest model that is at least as
 accurate. Never asserts a time, only that times are measured at all."""

@@ -1,4 +1,4 @@
-"""Force shading (issue 4, beyond the paper) with normals from the source surface
+"""Force shading (beyond the paper) with normals from the source surface
 the scene was built from: on faces the tet mesh split, the shaded normal is the
 source's own interpolated field."""
 

@@ -1,4 +1,4 @@
-"""The one material table (C++) as Python, the CLI and the JSON Schema see it (issue 9, item 3)."""
+"""The one material table (C++) as Python, the CLI and the JSON Schema see it."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Holding the accuracy (issue 32): where a build cannot, it says what was lost (the strict
+"""Holding the accuracy: where a build cannot, it says what was lost (the strict
 mode's error: test_scene_build.py); inputs whose size suggests other units than mm are
 warned about."""
 

@@ -1,4 +1,4 @@
-"""The scene readers trust no input (issue 8, defect 9): each reproducer, through both readers.
+"""The scene readers trust no input: each reproducer, through both readers.
 
 Both readers decode with the C++ decoder (hapticut._core.decode_scene_tree, scene_tree.h), so
 the bindings raise SceneError, never UnicodeDecodeError or RecursionError.

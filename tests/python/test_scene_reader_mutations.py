@@ -1,5 +1,5 @@
-"""The scene reader on mutated files: no crash, a SceneError for every bad file (issue 8,
-defect 9; since issue 9 there is one reader, in C++, which Python calls).
+"""The scene reader on mutated files: no crash, a SceneError for every bad file (one reader,
+in C++, which Python calls).
 
 Seeded mutations of two valid scenes, in both encodings: byte edits (flip, insert, delete,
 truncate, repeat a run) and tree edits (replace a value with one of many bad values, drop a key,

@@ -59,7 +59,7 @@ def test_materials_come_from_the_toolkit_table(addon, tmp_path):
     for name, preset in (("Skin", "skin"), ("Flesh", "soft_tissue"), ("Bone", "bone")):
         entry = materials.preset(table, preset)
         assert written[name] == {"name": preset, "model": entry["model"], **entry["parameters"]}
-    # Presets the issue names, with their models.
+    # The shipped presets, with their models.
     models = {p["name"]: p["model"] for p in table["presets"]}
     assert models == {"air": "free", "soft_tissue": "drag", "fat": "viscous",
                       "skin": "membrane", "bone": "rigid"}  # fmt: skip

@@ -56,7 +56,7 @@ def speed_vs_error(accuracy_rows: list[dict], out: Path) -> None:
     speed.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     speed.axhline(0.3, color="grey", lw=0.8, ls=":")
     speed.annotate(
-        "0.3 deg: issue 4's shading target",
+        "0.3 deg: the shading target",
         (speed.get_xlim()[0], 0.3),
         textcoords="offset points",
         xytext=(2, 3),

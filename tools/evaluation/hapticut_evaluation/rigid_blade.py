@@ -1,4 +1,4 @@
-"""The rigid blade against the paper's independent points (issue 31; docs/decisions.md).
+"""The rigid blade against the paper's independent points (docs/decisions.md, "The rigid blade").
 
 - Stiffness felt against the length of edge over bone: a 50-point blade (2 mm spacing) pressed
   into a flat bone under n of its points, n = 1, 2, 5, 10, 25, 50. Independent points push back
