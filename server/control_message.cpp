@@ -24,22 +24,9 @@ const ControlJson& field(const ControlJson& message, const char* key) {
 }  // namespace
 
 std::string quoted_excerpt(std::string_view text) {
-  static constexpr char kHex[] = "0123456789abcdef";
   const bool cut = text.size() > kMaxEchoBytes;
   if (cut) text = text.substr(0, kMaxEchoBytes);
-  std::string out = "'";
-  for (const char c : text) {
-    const auto byte = static_cast<unsigned char>(c);
-    if (byte >= 0x20 && byte < 0x7F) {
-      out += c;
-    } else {
-      out += "\\x";
-      out += kHex[byte >> 4];
-      out += kHex[byte & 0xF];
-    }
-  }
-  out += cut ? "'..." : "'";
-  return out;
+  return "'" + printable(text) + (cut ? "'..." : "'");
 }
 
 ControlMessage parse_control_message(std::string_view text) {

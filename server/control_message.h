@@ -64,7 +64,7 @@ bool boolean_field(const ControlJson& message, const char* key);
 std::string string_field(const ControlJson& message, const char* key, std::size_t max_bytes);
 
 // Client text for an error: at most kMaxEchoBytes, in quotes, anything outside
-// printable ASCII as \xNN, "..." when cut.
+// printable ASCII as \xNN (printable(), hapticut/scene_tree.h), "..." when cut.
 std::string quoted_excerpt(std::string_view text);
 
 }  // namespace hapticut::servo

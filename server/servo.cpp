@@ -143,7 +143,8 @@ void Servo::load(const SessionConfig& config) {
                 session_->scene_label().c_str(), session_->bindings().size(), session_->rate_Hz());
     for (const Binding& b : session_->bindings()) {
       std::printf("  blade '%s' (%zu points, %s) <- %s\n", b.blade_name.c_str(),
-                  b.frame.point_count(), coupling_name(b.blade->coupling()), b.device_text.c_str());
+                  b.snapshot.point_count(), coupling_name(b.blade->coupling()),
+                  b.device_text.c_str());
     }
     std::fflush(stdout);
   }
@@ -492,7 +493,7 @@ nlohmann::json Servo::load_command(const ControlJson& message) {
   nlohmann::json blades = nlohmann::json::array();
   for (const Binding& b : session_->bindings()) {
     blades.push_back({{"name", b.blade_name},
-                      {"points", b.frame.point_count()},
+                      {"points", b.snapshot.point_count()},
                       {"device", b.device_text},
                       {"kind", b.device->kind()},
                       {"coupling", coupling_name(b.blade->coupling())},

@@ -77,21 +77,21 @@ void tick_blade(Binding& b, double now_s, double dt_s, std::atomic<bool>& engage
       r.engine_force_N = tick.force_N;
       r.engine_torque_N_mm = tick.torque_N_mm;
     }
-    b.frame_stale = true;
+    b.snapshot_stale = true;
   }
   r.safety =
       b.safety->render(r.engine_force_N, r.engine_torque_N_mm, engine_ok, dt_s, engaged, stopping);
   b.device->write(r.safety.force_N, r.safety.torque_N_mm);
 }
 
-// The blade's frame, brought up to its last step (a snapshot of every point:
-// taken off the tick's compute, and only on the ticks that record or stream).
-const BladeFrame& current_frame(Binding& b) {
-  if (b.frame_stale) {
-    read_blade_frame(*b.blade, b.frame);
-    b.frame_stale = false;
+// The blade's snapshot, brought up to its last step (every point: taken off
+// the tick's compute, and only on the ticks that record or stream).
+const BladeTickSnapshot& current_snapshot(Binding& b) {
+  if (b.snapshot_stale) {
+    read_blade_tick_snapshot(*b.blade, b.snapshot);
+    b.snapshot_stale = false;
   }
-  return b.frame;
+  return b.snapshot;
 }
 
 void publish_report(const Binding& b, LatestValue<SafetyReport>& out) {
@@ -223,7 +223,7 @@ void run_loop(Session& session, LoopShared& shared) {
         std::memcpy(slot, &header, sizeof(header));
         std::size_t offset = sizeof(header);
         for (Binding& b : bindings)
-          offset += write_blade_block(b.result, current_frame(b), slot + offset);
+          offset += write_blade_block(b.result, current_snapshot(b), slot + offset);
         ring->end_push();
       }
     }
@@ -248,7 +248,7 @@ void run_loop(Session& session, LoopShared& shared) {
       header.servo_flags = servo_flags(stopping, fast, recording);
       std::size_t offset = sizeof(header);
       for (Binding& b : bindings)
-        offset += write_blade_block(b.result, current_frame(b), frame.bytes + offset);
+        offset += write_blade_block(b.result, current_snapshot(b), frame.bytes + offset);
       header.frame_bytes = static_cast<std::uint32_t>(offset);
       std::memcpy(frame.bytes, &header, sizeof(header));
       frame.size = static_cast<std::uint32_t>(offset);

@@ -129,7 +129,7 @@ Session::Session(const SessionConfig& config) {
           make_passivity_controller(config.passivity_link_delay_s, rate_Hz_));
       binding.passivity = true;
     }
-    binding.frame = BladeFrame(blade_spec.points);
+    binding.snapshot = BladeTickSnapshot(blade_spec.points);
     bindings_.push_back(std::move(binding));
   }
   if (frame_bytes() > kMaxFrameBytes) {
@@ -142,7 +142,7 @@ Session::Session(const SessionConfig& config) {
   recording_info_.scene = scene_label_;
   for (const Binding& b : bindings_) {
     recording_info_.blades.push_back({b.blade_name, b.device_text,
-                                      static_cast<std::uint32_t>(b.frame.point_count()), 0,
+                                      static_cast<std::uint32_t>(b.snapshot.point_count()), 0,
                                       coupling_name(b.blade->coupling())});
   }
   lay_out_record(recording_info_);
@@ -167,7 +167,7 @@ const Binding* Session::stiffness_exceeded(double stiffness_N_per_mm) const {
 std::size_t Session::frame_bytes() const {
   std::size_t bytes = sizeof(FrameHeader);
   for (const Binding& b : bindings_)
-    bytes += sizeof(BladeBlock) + points_block_bytes(b.frame.point_count());
+    bytes += sizeof(BladeBlock) + points_block_bytes(b.snapshot.point_count());
   return bytes;
 }
 

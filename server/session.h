@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "blade_frame.h"
+#include "blade_tick_snapshot.h"
 #include "client_files.h"
 #include "devices/device.h"
 #include "devices/device_factory.h"
@@ -53,10 +53,10 @@ struct Binding {
   // The limit on k for this blade (point_stiffness_limit: the device's over
   // springs; 0: none): the blade steps with the settings' stiffness lowered to it.
   double max_stiffness_N_per_mm = 0.0;
-  BladeFrame frame;
-  // The blade stepped since `frame` was last filled: the snapshot is taken
+  BladeTickSnapshot snapshot;
+  // The blade stepped since `snapshot` was last filled: the snapshot is taken
   // only when a record or a stream frame needs it, after the device write.
-  bool frame_stale = false;
+  bool snapshot_stale = false;
   BladeTickResult result;
   bool has_reset = false;
   bool engage_bit = false;  // kEngageRequestBit of the last admitted sample.

@@ -23,25 +23,25 @@ void put_pose(double* out, const Pose& pose) {
 
 }  // namespace
 
-std::size_t write_blade_block(const BladeTickResult& result, const BladeFrame& frame,
+std::size_t write_blade_block(const BladeTickResult& result, const BladeTickSnapshot& snapshot,
                               unsigned char* out) {
   BladeBlock block;
   put_pose(block.pose, result.sample.pose);
-  put_pose(block.ideal_pose, frame.ideal_pose);
+  put_pose(block.ideal_pose, snapshot.ideal_pose);
   put(block.engine_force_N, result.engine_force_N);
   put(block.engine_torque_N_mm, result.engine_torque_N_mm);
   put(block.force_N, result.safety.force_N);
   put(block.torque_N_mm, result.safety.torque_N_mm);
   block.ramp = result.safety.ramp;
   block.step_dt_s = result.step == StepKind::None ? 0.0 : result.step_dt_s;
-  const std::size_t points = frame.point_count();
-  const BladeTick& tick = frame.header.tick;
-  const BladeCounters& counters = frame.header.counters;
+  const std::size_t points = snapshot.point_count();
+  const BladeTick& tick = snapshot.header.tick;
+  const BladeCounters& counters = snapshot.header.counters;
   block.point_count = static_cast<std::uint32_t>(points);
   block.buttons = result.sample.buttons;
   block.safety_flags = result.safety.flags;
   block.events = result.safety.events;
-  for (int s = 0; s < kProxyStateCount; ++s) block.state_counts[s] = frame.state_counts[s];
+  for (int s = 0; s < kProxyStateCount; ++s) block.state_counts[s] = snapshot.state_counts[s];
   block.capped_points = static_cast<std::uint16_t>(tick.capped_points);
   block.device_status = static_cast<std::uint8_t>(result.status);
   block.step_kind = static_cast<std::uint8_t>(result.step);
@@ -60,7 +60,7 @@ std::size_t write_blade_block(const BladeTickResult& result, const BladeFrame& f
   std::memset(points_out + points * 6 * sizeof(double), 0, bytes - points * 6 * sizeof(double));
   const PointsView view = points_view(points_out, points);
   for (std::size_t i = 0; i < points; ++i) {
-    const ProxySnapshot& point = frame.points[i];
+    const ProxySnapshot& point = snapshot.points[i];
     std::memcpy(view.q + 3 * i, &point.place.q, 3 * sizeof(double));
     std::memcpy(view.p + 3 * i, &point.p, 3 * sizeof(double));
     view.state[i] = static_cast<std::uint8_t>(point.place.state);

@@ -4,7 +4,7 @@
 
 #include <cstdint>
 
-#include "blade_frame.h"
+#include "blade_tick_snapshot.h"
 #include "devices/device.h"
 #include "layout.h"
 #include "safety.h"
@@ -33,7 +33,7 @@ struct BladeTickResult {
 
 // Writes the blade's block at `out` (sizeof(BladeBlock) + points_block_bytes
 // bytes); returns the bytes written.
-std::size_t write_blade_block(const BladeTickResult& result, const BladeFrame& frame,
+std::size_t write_blade_block(const BladeTickResult& result, const BladeTickSnapshot& snapshot,
                               unsigned char* out);
 
 }  // namespace hapticut::servo

@@ -46,7 +46,7 @@ def space_from_scene(scene: Scene) -> _core.Space:
         [asdict(m) for m in scene.materials],
         stiffness_N_per_mm=scene.stiffness_N_per_mm,
         servo_rate_Hz=scene.servo_rate_Hz,
-        max_transitions_per_tick=scene.safety.max_transitions_per_tick,
+        max_transitions_per_tick=scene.max_transitions_per_tick,
         capped_tick_force_N=scene.safety.capped_tick_force_N,
         tolerance_mm=scene.tolerance_mm,
     )

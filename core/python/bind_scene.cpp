@@ -145,7 +145,6 @@ nb::dict document_to_dict(const SceneDocument& document) {
   safety["max_force_N"] = scene.safety.max_force_N;
   safety["max_torque_N_mm"] = scene.safety.max_torque_N_mm;
   safety["ramp_time_s"] = scene.safety.ramp_time_s;
-  safety["max_transitions_per_tick"] = scene.safety.max_transitions_per_tick;
   safety["capped_tick_force_N"] = scene.safety.capped_tick_force_N;
 
   nb::dict out;
@@ -158,6 +157,7 @@ nb::dict document_to_dict(const SceneDocument& document) {
   out["stiffness_N_per_mm"] = scene.stiffness_N_per_mm;
   out["servo_rate_Hz"] = scene.servo_rate_Hz;
   out["tolerance_mm"] = scene.tolerance_mm;
+  out["max_transitions_per_tick"] = scene.max_transitions_per_tick;
   out["safety"] = safety;
   out["metadata"] = nb::module_::import_("json").attr("loads")(document.metadata_json);
   return out;
@@ -306,14 +306,15 @@ SceneDocument document_from_dict(const nb::dict& scene_dict) {
       get_or(scene_dict, "stiffness_N_per_mm", scene.stiffness_N_per_mm, "/coupling");
   scene.servo_rate_Hz = get_or(scene_dict, "servo_rate_Hz", scene.servo_rate_Hz, "/coupling");
   scene.tolerance_mm = get_or(scene_dict, "tolerance_mm", scene.tolerance_mm, "");
+  // The file keeps the engine's transition budget in its "safety" object.
+  scene.max_transitions_per_tick =
+      get_or(scene_dict, "max_transitions_per_tick", scene.max_transitions_per_tick, "/safety");
   if (scene_dict.contains("safety")) {
     const auto safety = cast_at<nb::dict>(scene_dict["safety"], "/safety");
     hapticut::SafetyLimits& limits = scene.safety;
     limits.max_force_N = get_or(safety, "max_force_N", limits.max_force_N, "/safety");
     limits.max_torque_N_mm = get_or(safety, "max_torque_N_mm", limits.max_torque_N_mm, "/safety");
     limits.ramp_time_s = get_or(safety, "ramp_time_s", limits.ramp_time_s, "/safety");
-    limits.max_transitions_per_tick =
-        get_or(safety, "max_transitions_per_tick", limits.max_transitions_per_tick, "/safety");
     limits.capped_tick_force_N =
         get_or(safety, "capped_tick_force_N", limits.capped_tick_force_N, "/safety");
   }

@@ -46,8 +46,6 @@ void check_safety_limits(const SafetyLimits& limits) {
   check_in_range(setting_range::kMaxForce, limits.max_force_N, "max_force_N");
   check_in_range(setting_range::kMaxTorque, limits.max_torque_N_mm, "max_torque_N_mm");
   check_in_range(setting_range::kRampTime, limits.ramp_time_s, "ramp_time_s");
-  check_in_range(setting_range::kMaxTransitions, limits.max_transitions_per_tick,
-                 "max_transitions_per_tick");
   check_in_range(setting_range::kCappedTickForce, limits.capped_tick_force_N,
                  "capped_tick_force_N");
 }

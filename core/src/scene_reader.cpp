@@ -64,7 +64,10 @@ void read_coupling(const Json& root, const Path& root_path, Scene& scene) {
   reject_unknown_fields(*coupling, path, {"stiffness_N_per_mm", "servo_rate_Hz"});
 }
 
-void read_safety(const Json& root, const Path& root_path, SafetyLimits& safety) {
+// The file's "safety" object: the safety limits, and the engine's transition
+// budget (Scene::max_transitions_per_tick), which the file keeps there.
+void read_safety(const Json& root, const Path& root_path, Scene& scene) {
+  SafetyLimits& safety = scene.safety;
   const Json* object = find(root, "safety");
   if (object == nullptr) return;
   const Path path(root_path, "safety");
@@ -73,7 +76,7 @@ void read_safety(const Json& root, const Path& root_path, SafetyLimits& safety) 
   read_setting(*object, path, setting_range::kMaxTorque, safety.max_torque_N_mm);
   read_setting(*object, path, setting_range::kRampTime, safety.ramp_time_s);
   if (const Json* value = find(*object, "max_transitions_per_tick")) {
-    safety.max_transitions_per_tick = read_int_in_range(
+    scene.max_transitions_per_tick = read_int_in_range(
         *value, Path(path, "max_transitions_per_tick"), setting_range::kMaxTransitions);
   }
   read_setting(*object, path, setting_range::kCappedTickForce, safety.capped_tick_force_N);
@@ -300,7 +303,7 @@ SceneDocument read_scene_tree(const SceneTree& root, const ReadOptions& options)
   read_units(root, root_path);
   read_coupling(root, root_path, scene);
   read_setting(root, root_path, setting_range::kTolerance, scene.tolerance_mm);
-  read_safety(root, root_path, scene.safety);
+  read_safety(root, root_path, scene);
   read_materials(root, root_path, scene);
   read_mesh(root, root_path, document, options);
   read_blades(root, root_path, scene);

@@ -51,25 +51,6 @@ bool is_utf8(std::string_view text) {
   return true;
 }
 
-// A decoder's message with anything outside printable ASCII shown as \xNN, so
-// an error never carries the file's bytes into a terminal, a log or Python.
-std::string printable(std::string_view text) {
-  static constexpr char kHex[] = "0123456789abcdef";
-  std::string out;
-  out.reserve(text.size());
-  for (const char c : text) {
-    const auto byte = static_cast<unsigned char>(c);
-    if (byte >= 0x20 && byte < 0x7F) {
-      out += c;
-    } else {
-      out += "\\x";
-      out += kHex[byte >> 4];
-      out += kHex[byte & 0xF];
-    }
-  }
-  return out;
-}
-
 // "[json.exception.parse_error.101] parse error at line 1, column 3: syntax
 // error while parsing value - invalid literal; last read: 'tru'" -> "parse
 // error at line 1, column 3: syntax error while parsing value - invalid
@@ -224,6 +205,23 @@ class TreeBuilder {
 };
 
 }  // namespace
+
+std::string printable(std::string_view text) {
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte >= 0x20 && byte < 0x7F) {
+      out += c;
+    } else {
+      out += "\\x";
+      out += kHex[byte >> 4];
+      out += kHex[byte & 0xF];
+    }
+  }
+  return out;
+}
 
 void append_pointer_token(std::string& out, std::string_view key) {
   for (const char c : key) {

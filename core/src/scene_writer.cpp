@@ -78,7 +78,8 @@ Json document_tree(const Scene& scene, const std::string& metadata_json) {
   tree["safety"] = Json{{"max_force_N", safety.max_force_N},
                         {"max_torque_N_mm", safety.max_torque_N_mm},
                         {"ramp_time_s", safety.ramp_time_s},
-                        {"max_transitions_per_tick", safety.max_transitions_per_tick},
+                        // The engine's budget, kept in the file's "safety" object.
+                        {"max_transitions_per_tick", scene.max_transitions_per_tick},
                         {"capped_tick_force_N", safety.capped_tick_force_N}};
   Json materials = Json::array();
   for (const Material& material : scene.materials) materials.push_back(material_tree(material));

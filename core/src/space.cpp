@@ -65,7 +65,7 @@ std::shared_ptr<const Space> Space::from_scene(const Scene& scene) {
   EngineSettings settings;
   settings.stiffness_N_per_mm = scene.stiffness_N_per_mm;
   settings.servo_rate_Hz = scene.servo_rate_Hz;
-  settings.max_transitions_per_tick = scene.safety.max_transitions_per_tick;
+  settings.max_transitions_per_tick = scene.max_transitions_per_tick;
   settings.capped_tick_force_N = scene.safety.capped_tick_force_N;
   return create(TetMesh(scene.vertices_mm, scene.tets, scene.tet_materials, scene.tolerance_mm),
                 scene.materials, settings);

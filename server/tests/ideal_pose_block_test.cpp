@@ -44,9 +44,10 @@ PressedBlade press(BladeCoupling coupling) {
   run_loop(session, *shared);
   Binding& b = session.bindings().at(0);
   EXPECT_NE(b.result.step, StepKind::None);
-  read_blade_frame(*b.blade, b.frame);
-  std::vector<unsigned char> bytes(sizeof(BladeBlock) + points_block_bytes(b.frame.point_count()));
-  EXPECT_EQ(write_blade_block(b.result, b.frame, bytes.data()), bytes.size());
+  read_blade_tick_snapshot(*b.blade, b.snapshot);
+  std::vector<unsigned char> bytes(sizeof(BladeBlock) +
+                                   points_block_bytes(b.snapshot.point_count()));
+  EXPECT_EQ(write_blade_block(b.result, b.snapshot, bytes.data()), bytes.size());
   PressedBlade out;
   std::memcpy(&out.block, bytes.data(), sizeof(BladeBlock));
   out.engine_ideal = b.blade->ideal_pose();

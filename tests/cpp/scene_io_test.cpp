@@ -80,10 +80,10 @@ void expect_same_scene(const Scene& a, const Scene& b) {
   EXPECT_EQ(a.stiffness_N_per_mm, b.stiffness_N_per_mm);
   EXPECT_EQ(a.servo_rate_Hz, b.servo_rate_Hz);
   EXPECT_EQ(a.tolerance_mm, b.tolerance_mm);
+  EXPECT_EQ(a.max_transitions_per_tick, b.max_transitions_per_tick);
   EXPECT_EQ(a.safety.max_force_N, b.safety.max_force_N);
   EXPECT_EQ(a.safety.max_torque_N_mm, b.safety.max_torque_N_mm);
   EXPECT_EQ(a.safety.ramp_time_s, b.safety.ramp_time_s);
-  EXPECT_EQ(a.safety.max_transitions_per_tick, b.safety.max_transitions_per_tick);
   EXPECT_EQ(a.safety.capped_tick_force_N, b.safety.capped_tick_force_N);
 }
 
@@ -138,8 +138,7 @@ TEST(SceneIo, OptionalSectionsTakeTheirDefaults) {
   EXPECT_TRUE(document.scene.blades.empty());
   EXPECT_EQ(document.metadata_json, "{}");
   EXPECT_EQ(document.scene.stiffness_N_per_mm, defaults.stiffness_N_per_mm);
-  EXPECT_EQ(document.scene.safety.max_transitions_per_tick,
-            defaults.safety.max_transitions_per_tick);
+  EXPECT_EQ(document.scene.max_transitions_per_tick, defaults.max_transitions_per_tick);
 }
 
 TEST(SceneIo, EveryModelReadsWithItsParameters) {

@@ -94,9 +94,9 @@ def test_python_defaults_are_the_tables():
     safety = Safety()
     for f in dataclasses.fields(Safety):
         assert getattr(safety, f.name) == SETTING_RANGES[f.name]["default"], f.name
-    assert isinstance(safety.max_transitions_per_tick, int)
     scene = Scene([], np.zeros((0, 3)), np.zeros((0, 4), np.int32), np.zeros(0, np.int32))
-    for name in ("stiffness_N_per_mm", "servo_rate_Hz", "tolerance_mm"):
+    assert isinstance(scene.max_transitions_per_tick, int)
+    for name in ("stiffness_N_per_mm", "servo_rate_Hz", "tolerance_mm", "max_transitions_per_tick"):
         assert getattr(scene, name) == SETTING_RANGES[name]["default"], name
     assert Material("goo", "viscous").max_lag_mm == PARAMETER_RANGES["max_lag_mm"]["default"]
 
@@ -112,7 +112,7 @@ def test_cpp_defaults_are_the_tables():
         "blades": [{"name": "b", "start_mm": (0, 0, 0), "end_mm": (1, 0, 0)}],
     }
     read = _core.parse_scene_bytes(_core.serialize_scene_bytes(scene, "json"), "json")
-    for name in ("stiffness_N_per_mm", "servo_rate_Hz", "tolerance_mm"):
+    for name in ("stiffness_N_per_mm", "servo_rate_Hz", "tolerance_mm", "max_transitions_per_tick"):
         assert read[name] == SETTING_RANGES[name]["default"], name
     for name, value in read["safety"].items():
         assert value == SETTING_RANGES[name]["default"], name

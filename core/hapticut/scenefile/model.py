@@ -102,7 +102,6 @@ class Safety:
     max_force_N: float = _default(SETTING_RANGES, "max_force_N")
     max_torque_N_mm: float = _default(SETTING_RANGES, "max_torque_N_mm")
     ramp_time_s: float = _default(SETTING_RANGES, "ramp_time_s")
-    max_transitions_per_tick: int = int(_default(SETTING_RANGES, "max_transitions_per_tick"))
     capped_tick_force_N: float = _default(SETTING_RANGES, "capped_tick_force_N")
 
 
@@ -123,6 +122,9 @@ class Scene:
     servo_rate_Hz: float = _default(SETTING_RANGES, "servo_rate_Hz")
     # 0: derived from the mesh's size by the engine.
     tolerance_mm: float = _default(SETTING_RANGES, "tolerance_mm")
+    # Cap on one proxy's transitions per tick: an engine budget, which the file keeps in its
+    # "safety" object under this name.
+    max_transitions_per_tick: int = int(_default(SETTING_RANGES, "max_transitions_per_tick"))
     safety: Safety = field(default_factory=Safety)
     metadata: dict[str, Any] = field(default_factory=dict)
 

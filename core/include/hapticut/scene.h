@@ -37,7 +37,9 @@ struct BladeSpec {
   BladeOrientation orientation = BladeOrientation::Free;
 };
 
-// The file's "safety" object. Defaults: parameter_range.h (setting_range).
+// The file's "safety" object, less the engine's transition budget the file
+// also keeps there (Scene::max_transitions_per_tick). Defaults:
+// parameter_range.h (setting_range).
 struct SafetyLimits {
   // Clamp on the summed blade force.
   double max_force_N = setting_range::kMaxForce.default_value;
@@ -45,8 +47,6 @@ struct SafetyLimits {
   double max_torque_N_mm = setting_range::kMaxTorque.default_value;
   // Force ramp after start or after a fault.
   double ramp_time_s = setting_range::kRampTime.default_value;
-  // Cap per proxy per tick (ALGORITHM.md); an engine budget the file keeps here.
-  int max_transitions_per_tick = default_count(setting_range::kMaxTransitions);
   // Per-point force limit on a capped tick.
   double capped_tick_force_N = setting_range::kCappedTickForce.default_value;
 };
@@ -63,6 +63,9 @@ struct Scene {
   double servo_rate_Hz = setting_range::kServoRate.default_value;
   // 0: derived from the mesh's size (see docs/decisions.md).
   double tolerance_mm = setting_range::kTolerance.default_value;
+  // Cap on one proxy's transitions per tick (ALGORITHM.md): an engine budget,
+  // not a safety limit. The file keeps it in its "safety" object.
+  int max_transitions_per_tick = default_count(setting_range::kMaxTransitions);
   std::vector<Material> materials;
   std::vector<Vec3> vertices_mm;
   std::vector<std::array<std::int32_t, 4>> tets;

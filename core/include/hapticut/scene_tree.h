@@ -25,6 +25,11 @@ using SceneTree = nlohmann::ordered_json;
 // needs 4 (root, mesh, vertices, vertex); metadata may use the rest.
 inline constexpr int kMaxSceneNesting = 64;
 
+// `text` with every byte outside printable ASCII (0x20 to 0x7E) shown as \xNN,
+// so that an error never carries a file's or a client's bytes into a
+// terminal, a log or Python.
+std::string printable(std::string_view text);
+
 // Appends one JSON pointer step (RFC 6901: '~' becomes "~0", '/' becomes "~1").
 void append_pointer_token(std::string& out, std::string_view key);
 

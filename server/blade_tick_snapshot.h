@@ -1,8 +1,9 @@
-// BladeFrame: what the servo publishes and records of one blade after a tick:
-// the engine's own snapshot (Blade::snapshot: per point the proxy place, the
-// device point p and the force; the tick with its work budget; the blade's
+// BladeTickSnapshot: what the servo publishes and records of one blade after a
+// tick: the engine's own snapshot (Blade::snapshot: per point the proxy place,
+// the device point p and the force; the tick with its work budget; the blade's
 // counters), the blade's ideal pose and the proxies per state. Sized once for the blade's points;
-// filling it never allocates.
+// filling it never allocates. (Not a stream frame, stream_frame.h: that is the
+// UDP datagram a snapshot is written into.)
 #pragma once
 
 #include <array>
@@ -13,8 +14,8 @@
 
 namespace hapticut::servo {
 
-struct BladeFrame {
-  explicit BladeFrame(int points = 0) : points(static_cast<std::size_t>(points)) {}
+struct BladeTickSnapshot {
+  explicit BladeTickSnapshot(int points = 0) : points(static_cast<std::size_t>(points)) {}
 
   std::size_t point_count() const { return points.size(); }
 
@@ -26,7 +27,7 @@ struct BladeFrame {
   Pose ideal_pose;
 };
 
-// Copies the blade's state after its last step into `frame` (sized for it).
-void read_blade_frame(const Blade& blade, BladeFrame& frame);
+// Copies the blade's state after its last step into `snapshot` (sized for it).
+void read_blade_tick_snapshot(const Blade& blade, BladeTickSnapshot& snapshot);
 
 }  // namespace hapticut::servo
