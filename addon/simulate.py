@@ -1,5 +1,5 @@
 """Simulate Stroke: every blade's keyframed animation sampled into a sim path, run through
-the servo as fast as possible and recorded (the live link, ``live``), then baked
+the servo as fast as possible and recorded (the live link, ``live_link``), then baked
 (``baking``). It sits above both, so the live link never calls the bake."""
 
 from __future__ import annotations

@@ -311,6 +311,11 @@ SceneDocument document_from_dict(const nb::dict& scene_dict) {
       get_or(scene_dict, "max_transitions_per_tick", scene.max_transitions_per_tick, "/safety");
   if (scene_dict.contains("safety")) {
     const auto safety = cast_at<nb::dict>(scene_dict["safety"], "/safety");
+    // The file's place for it, not the dict's: refused, so a file-shaped dict loses no value.
+    if (safety.contains("max_transitions_per_tick")) {
+      throw SceneError("/safety/max_transitions_per_tick",
+                       "a scene dict keeps it at its top level (Scene.max_transitions_per_tick)");
+    }
     hapticut::SafetyLimits& limits = scene.safety;
     limits.max_force_N = get_or(safety, "max_force_N", limits.max_force_N, "/safety");
     limits.max_torque_N_mm = get_or(safety, "max_torque_N_mm", limits.max_torque_N_mm, "/safety");

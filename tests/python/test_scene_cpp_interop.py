@@ -181,4 +181,9 @@ def test_bad_scene_dict_is_rejected_by_the_cpp_writer(tmp_path):
     as_dict["tet_materials"] = np.array([1, 9])
     with pytest.raises(_core.SceneError, match=r"^/mesh/tet_materials/1: unknown material 9"):
         _core.write_scene_file(as_dict, str(tmp_path / "bad.hapticut.json"))
+    # The transition budget where the file keeps it, not where the dict does: no value dropped.
+    as_dict = scene_to_dict(load_scene(EXAMPLE_PATH))
+    as_dict["safety"]["max_transitions_per_tick"] = as_dict.pop("max_transitions_per_tick")
+    with pytest.raises(_core.SceneError, match=r"^/safety/max_transitions_per_tick: a scene dict"):
+        _core.write_scene_file(as_dict, str(tmp_path / "bad.hapticut.json"))
     assert list(tmp_path.iterdir()) == []
