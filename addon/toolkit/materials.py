@@ -4,10 +4,8 @@ lookups the panels and the exchange make in it. No bpy here.
 
 from __future__ import annotations
 
-import json
-
 from ..background import steps
-from .runner import ToolkitError, quick_steps
+from .runner import ToolkitError, json_steps
 
 _material_table: dict | None = None
 
@@ -16,11 +14,7 @@ def material_table_steps(executable: str, refresh: bool = False) -> steps.Steps[
     """``hapticut materials --json``, run once and kept (refresh=True runs it again)."""
     global _material_table
     if _material_table is None or refresh:
-        text = yield from quick_steps(executable, "materials", "--json")
-        try:
-            table = json.loads(text)
-        except json.JSONDecodeError as error:
-            raise ToolkitError(f"hapticut materials --json printed no JSON ({error})") from None
+        table = yield from json_steps(executable, "materials")
         if table.get("version") != 1 or "presets" not in table or "models" not in table:
             raise ToolkitError("hapticut materials --json: not a version 1 material table")
         _material_table = table

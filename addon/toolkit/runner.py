@@ -6,6 +6,7 @@ every call is a child process. No bpy here.
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 
@@ -68,6 +69,18 @@ def quick_steps(
         # The toolkit's own messages start with "hapticut <command>:" already.
         raise ToolkitError(line if line.startswith("hapticut") else f"hapticut {args[0]}: {line}")
     return done.stdout
+
+
+def json_steps(
+    executable: str, command: str, timeout_s: float = QUICK_TIMEOUT_S
+) -> steps.Steps[dict]:
+    """``hapticut <command> --json``, parsed, as steps; ToolkitError when it fails or prints
+    no JSON."""
+    text = yield from quick_steps(executable, command, "--json", timeout_s=timeout_s)
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as error:
+        raise ToolkitError(f"hapticut {command} --json printed no JSON ({error})") from None
 
 
 def version_steps(executable: str) -> steps.Steps[str]:

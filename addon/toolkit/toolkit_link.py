@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
-import json
 import os
 import sys
 from types import ModuleType
@@ -72,16 +71,6 @@ class ToolkitLink:
 _link: ToolkitLink | None = None
 
 
-def toolkit_paths_steps(
-    executable: str, timeout_s: float = runner.QUICK_TIMEOUT_S
-) -> steps.Steps[dict]:
-    text = yield from runner.quick_steps(executable, "paths", "--json", timeout_s=timeout_s)
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as error:
-        raise runner.ToolkitError(f"hapticut paths --json printed no JSON ({error})") from None
-
-
 def _package(directory: str) -> ModuleType:
     existing = sys.modules.get("hapticut")
     if existing is not None:
@@ -114,7 +103,7 @@ def link_steps(
     global _link
     if _link is not None and not refresh:
         return _link
-    found = yield from toolkit_paths_steps(executable, timeout_s)
+    found = yield from runner.json_steps(executable, "paths", timeout_s)
     if not found.get("servo"):
         raise runner.ToolkitError(found.get("servo_error") or "the toolkit has no servo")
     _package(found["package"])
