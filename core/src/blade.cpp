@@ -101,6 +101,15 @@ Blade::Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
     targets_.assign(n, Vec3{});
     walls_.assign(n, ProbeWalls::Rigid);
     point_forces_.assign(n, Vec3{});
+    start_points_.assign(n, Vec3{});
+    start_tets_.assign(n, kNoTet);
+    held_points_.assign(n, Vec3{});
+    held_tets_.assign(n, kNoTet);
+    resisting_materials_ =
+        std::any_of(space_->materials().begin(), space_->materials().end(), [](const Material& m) {
+          return m.model != MaterialModel::Free && m.model != MaterialModel::Rigid;
+        });
+    if (n > 1) rigid_edges_ = std::make_unique<const RigidSurfaceEdges>(*space_);
   }
 }
 
@@ -111,7 +120,9 @@ Blade::Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
 PoseCheck Blade::place_checked(const Pose& pose) {
   const PoseCheck check = check_rotation(pose);
   if (check != PoseCheck::Fine) return check;
-  const Quaternion r = pose.rotation.normalized();
+  // q and -q are one rotation: the one nearer the last keeps what the blade
+  // streams from flipping sign when a device's does.
+  const Quaternion r = same_hemisphere(pose.rotation.normalized(), device_pose_.rotation);
   device_pose_ = {pose.position_mm, r};
   world_lever_ = r.rotate(tool_start_);
   world_span_ = r.rotate(tool_span_);
@@ -141,6 +152,7 @@ void Blade::reset(const Pose& pose) {
   last_tick_ = {};
   ideal_pose_ = device_pose_;
   if (coupling_ == BladeCoupling::Rigid) {
+    sliding_ = false;
     std::fill(point_forces_.begin(), point_forces_.end(), Vec3{});
     seated_ = seat_at(device_edge());
     if (seated_) place_proxies_on_ideal(space_->runtime_settings());

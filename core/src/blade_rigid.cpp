@@ -9,16 +9,22 @@
 //     elsewhere t_i is the device point. A membrane a point reached without
 //     breaking it is a wall for that point's walks, as bone is.
 //  2. The edge nearest the targets (fit_edge) is the first trial.
-//  3. Every point walks from the ideal pose to the trial (probe_segment), then
-//     the stretches between neighbours are walked at the trial. All free:
-//     the trial becomes the ideal pose and the tick ends. Else the planes met
-//     are kept as contacts, the pose advances as far as every walk got (a
-//     verified pose, or none), and the fit with the contacts
-//     (fit_edge_constrained) from there is the next trial.
+//  3. The motion from the ideal pose to the trial is verified: in pieces
+//     (swept_pieces), every point walks its chord (probe_segment) and every
+//     stretch between neighbours sweeps its patch against the rigid surface's
+//     edges (swept_stretch.h); then the stretches are walked at the trial.
+//     All free: the trial becomes the ideal pose. Else the planes met join
+//     the contact set (two samples per plane, edge_contact_set.h), the pose
+//     advances as far as the earliest contact (a verified pose, or none), and
+//     the fit with the contacts (fit_edge_constrained) from there is the next
+//     trial.
 //  4. After kMaxRigidRounds rounds the tick ends on the last verified pose.
+//  5. Friction (apply_friction) keeps the tick's first pose inside the cone
+//     or shortens the slide.
 // Force and torque are today's sums with q_i = x_i(ideal pose).
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "hapticut/blade.h"
 #include "hapticut/segment_probe.h"
@@ -48,6 +54,9 @@ Quaternion rotation_between(const Vec3& from, const Vec3& to) {
 
 // A pose's advance below this fraction is no advance.
 constexpr double kLeastAdvance = 1e-9;
+// The swept test cuts a turn into pieces whose chords every sample's arc
+// leaves by at most this fraction of the blade's length.
+constexpr double kSweptDeviation = 1e-4;
 // Linearised fits per round at most (free orientation).
 constexpr int kFitPasses = 4;
 
@@ -125,38 +134,55 @@ EdgePose Blade::device_edge() const {
       length_mm_ > 0.0 ? world_span_ / length_mm_ : device_pose_.rotation.rotate(tool_direction_)};
 }
 
-void Blade::add_contact(double fraction, const Plane& plane) {
-  for (int j = 0; j < contact_count_; ++j) {
-    const EdgeContact& c = contacts_[j];
-    if (c.fraction == fraction && c.plane.normal == plane.normal &&
-        c.plane.offset == plane.offset) {
-      return;
-    }
+void Blade::add_contact(double fraction, const Plane& plane, std::int32_t wall_tet) {
+  if (wall_tet != kNoTet) {
+    const Material& material = space_->material_of_tet(wall_tet);
+    contact_static_friction_ = std::max(contact_static_friction_, material.static_friction);
+    contact_dynamic_friction_ = std::max(contact_dynamic_friction_, material.dynamic_friction);
   }
-  // Full: the walks still refuse every pose that enters rigid material; the
-  // fit only lacks this plane.
-  if (contact_count_ == kMaxEdgeContacts) return;
-  contacts_[contact_count_++] = {fraction, plane};
+  // Planes a tolerance apart are one: coplanar faces of a tet mesh differ by
+  // rounding. A plane the full set cannot keep: the walks still refuse every
+  // pose that enters the material; the fit only lacks it.
+  contacts_.add(fraction, plane, space_->tolerance());
 }
 
 bool Blade::probe_motion(const EdgePose& edge, double& advance, bool add_contacts) {
   const Space& space = *space_;
   const std::size_t n = proxies_.size();
   advance = 1.0;
-  bool free = true;
-  for (std::size_t i = 0; i < n; ++i) {
-    trial_points_[i] = edge.point(fractions_[i], length_mm_);
-    const SegmentProbe probe =
-        probe_segment(space, ideal_tets_[i], ideal_points_[i], trial_points_[i], walls_[i]);
-    if (probe.hit) {
-      free = false;
-      advance = std::min(advance, probe.fraction);
-      if (add_contacts && !probe.exhausted) add_contact(fractions_[i], probe.contact);
-    } else {
-      trial_tets_[i] = probe.end_tet;
+  // The motion: a turn is cut into pieces (swept_pieces) between poses on the
+  // interpolation from the ideal edge; in each piece every point walks its
+  // chord and every stretch between neighbours sweeps its patch. A point's
+  // walk in one piece starts where its last one ended (trial_*).
+  const double turn = std::acos(std::clamp(dot(ideal_edge_.direction, edge.direction), -1.0, 1.0));
+  const int pieces = swept_pieces(turn, length_mm_, kSweptDeviation * length_mm_);
+  for (int k = 0; k < pieces; ++k) {
+    const double from = double(k) / pieces;
+    const double to = double(k + 1) / pieces;
+    const EdgePose first =
+        k == 0 ? ideal_edge_ : interpolate_edge(ideal_edge_, edge, from, motion_pivot_, length_mm_);
+    const EdgePose last =
+        k + 1 == pieces ? edge : interpolate_edge(ideal_edge_, edge, to, motion_pivot_, length_mm_);
+    bool free = true;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3 a = k == 0 ? ideal_points_[i] : trial_points_[i];
+      const std::int32_t a_tet = k == 0 ? ideal_tets_[i] : trial_tets_[i];
+      trial_points_[i] = last.point(fractions_[i], length_mm_);
+      const SegmentProbe probe = probe_segment(space, a_tet, a, trial_points_[i], walls_[i]);
+      if (probe.hit) {
+        free = false;
+        advance = std::min(advance, from + (to - from) * probe.fraction);
+        if (add_contacts && !probe.exhausted) {
+          add_contact(fractions_[i], probe.contact, probe.wall_tet);
+        }
+      } else {
+        trial_tets_[i] = probe.end_tet;
+      }
     }
+    if (!free) return false;
+    if (!sweep_stretches(first, last, from, to, advance, add_contacts)) return false;
   }
-  if (!free) return false;
+  bool free = true;
   // Between neighbours: a stretch that passes through rigid material is
   // walked from both ends, giving the plane it enters by and the plane it
   // leaves by; the contact is the plane through their common line that runs
@@ -182,10 +208,30 @@ bool Blade::probe_motion(const EdgePose& edge, double& advance, bool add_contact
     if (wedge_contact(ahead.contact, back.contact, direction, trial_points_[i],
                       trial_points_[i + 1], ahead.fraction, 1.0 - back.fraction, contact)) {
       contact.fraction = fractions_[i] + contact.fraction * gap;
-      add_contact(contact.fraction, contact.plane);
+      add_contact(contact.fraction, contact.plane, ahead.wall_tet);
     }
   }
   if (!free) advance = 0.0;  // The points got there; the edge between them did not.
+  return free;
+}
+
+bool Blade::sweep_stretches(const EdgePose& first, const EdgePose& last, double from, double to,
+                            double& advance, bool add_contacts) {
+  if (!rigid_edges_ || rigid_edges_->size() == 0) return true;
+  const std::size_t n = proxies_.size();
+  const double tolerance = space_->tolerance();
+  bool free = true;
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    const double f0 = fractions_[i];
+    const double f1 = fractions_[i + 1];
+    const SweptHit hit =
+        sweep_stretch(*rigid_edges_, first.point(f0, length_mm_), first.point(f1, length_mm_),
+                      last.point(f0, length_mm_), last.point(f1, length_mm_), from, to, tolerance);
+    if (!hit.hit) continue;
+    free = false;
+    advance = std::min(advance, hit.motion);
+    if (add_contacts) add_contact(f0 + hit.along * (f1 - f0), hit.contact, hit.wall_tet);
+  }
   return free;
 }
 
@@ -193,6 +239,60 @@ void Blade::accept_trial(const EdgePose& edge) {
   ideal_edge_ = edge;
   ideal_points_.swap(trial_points_);
   ideal_tets_.swap(trial_tets_);
+}
+
+void Blade::apply_friction(const EdgePose& start) {
+  const std::size_t n = proxies_.size();
+  const bool sliding = sliding_;
+  sliding_ = false;
+  if (contacts_.plane_count() == 0 || !(contact_static_friction_ > 0.0)) return;
+  // The springs' pull (over k) at the start and at the frictionless pose,
+  // where the contacts' reaction balances it: its direction is their normal.
+  Vec3 at_start;
+  Vec3 at_end;
+  for (std::size_t i = 0; i < n; ++i) {
+    at_start += start_points_[i] - targets_[i];
+    at_end += ideal_points_[i] - targets_[i];
+  }
+  const double push_end = norm(at_end);
+  if (!(push_end > space_->tolerance())) return;
+  const Vec3 normal = at_end / push_end;
+  const double push = dot(at_start, normal);
+  if (!(push > 0.0)) return;  // Pulled off the contacts: no friction.
+  const double pull = norm(at_start - normal * push);
+  const double mu_static = contact_static_friction_;
+  const double mu_dynamic = std::min(contact_dynamic_friction_, mu_static);
+  const auto restore_start = [&] {
+    ideal_edge_ = start;
+    std::copy(start_points_.begin(), start_points_.end(), ideal_points_.begin());
+    std::copy(start_tets_.begin(), start_tets_.end(), ideal_tets_.begin());
+  };
+  if (pull <= (sliding ? mu_dynamic : mu_static) * push) {
+    restore_start();  // Stuck: inside the cone.
+    return;
+  }
+  sliding_ = true;
+  // Along the way to the frictionless pose the pull along the contacts falls
+  // as (1 - s) pull and the push moves linearly to push_end: the fraction s
+  // where pull = mu_d push.
+  const double denominator = pull + mu_dynamic * (push_end - push);
+  const double s = denominator > 0.0 ? (pull - mu_dynamic * push) / denominator : 1.0;
+  if (!(s < 1.0)) return;
+  const EdgePose part =
+      interpolate_edge(start, ideal_edge_, std::max(s, 0.0), motion_pivot_, length_mm_);
+  const EdgePose frictionless = ideal_edge_;
+  std::copy(ideal_points_.begin(), ideal_points_.end(), held_points_.begin());
+  std::copy(ideal_tets_.begin(), ideal_tets_.end(), held_tets_.begin());
+  restore_start();
+  double ignored = 1.0;
+  if (probe_motion(part, ignored, false)) {
+    accept_trial(part);
+    return;
+  }
+  // The slide's pose is not verified from the start: the frictionless one is.
+  ideal_edge_ = frictionless;
+  std::copy(held_points_.begin(), held_points_.end(), ideal_points_.begin());
+  std::copy(held_tets_.begin(), held_tets_.end(), ideal_tets_.begin());
 }
 
 bool Blade::seat_at(const EdgePose& edge) {
@@ -220,7 +320,8 @@ bool Blade::seat_at(const EdgePose& edge) {
 void Blade::update_ideal_pose(const Pose& device) {
   const Vec3 device_direction = device.rotation.rotate(tool_direction_);
   const Quaternion turn = rotation_between(device_direction, ideal_edge_.direction);
-  const Quaternion rotation = multiply(turn, device.rotation).normalized();
+  const Quaternion rotation =
+      same_hemisphere(multiply(turn, device.rotation).normalized(), ideal_pose_.rotation);
   ideal_pose_ = {ideal_edge_.start_mm - rotation.rotate(tool_start_), rotation};
 }
 
@@ -255,8 +356,15 @@ BladeTick Blade::step_rigid(const Pose& pose, double dt_s, const RuntimeSettings
     }
   }
   // 1. The targets: the paper's tick of every point from the ideal pose.
-  BladeTick tick = step_points(dt_s, settings);
-  for (std::size_t i = 0; i < n; ++i) {
+  // Where no material resists (free and rigid only), every target is the
+  // device point and the walls are rigid: the points' ticks, which would
+  // only walk round the bone the pose is held on, are not needed.
+  if (!resisting_materials_) {
+    std::copy(world_points_.begin(), world_points_.end(), targets_.begin());
+    std::fill(point_ticks_.begin(), point_ticks_.end(), TickResult{});
+  }
+  BladeTick tick = resisting_materials_ ? step_points(dt_s, settings) : BladeTick{};
+  for (std::size_t i = 0; resisting_materials_ && i < n; ++i) {
     const ProxyPlace& place = proxies_[i].place();
     const TickResult& r = point_ticks_[i];
     const bool held_by_material =
@@ -271,7 +379,13 @@ BladeTick Blade::step_rigid(const Pose& pose, double dt_s, const RuntimeSettings
   const std::span<const double> fractions(fractions_);
   const std::span<const Vec3> targets(targets_);
   EdgePose trial = fit_edge(fractions, targets, length_mm_, device.direction, lock);
-  contact_count_ = 0;
+  contacts_.clear();
+  motion_pivot_ = 0.5;
+  contact_static_friction_ = 0.0;
+  contact_dynamic_friction_ = 0.0;
+  const EdgePose start = ideal_edge_;
+  std::copy(ideal_points_.begin(), ideal_points_.end(), start_points_.begin());
+  std::copy(ideal_tets_.begin(), ideal_tets_.end(), start_tets_.begin());
   // The fit keeps contacts this far on their free side: a rounding error of
   // the pose then never reads as a step into the plane.
   const double margin = 4.0 * space_->tolerance();
@@ -279,7 +393,7 @@ BladeTick Blade::step_rigid(const Pose& pose, double dt_s, const RuntimeSettings
   int rounds = 0;
   while (rounds < kMaxRigidRounds) {
     ++rounds;
-    const int known = contact_count_;
+    const int known = contacts_.changes();
     double advance = 1.0;
     if (probe_motion(trial, advance, true)) {
       accept_trial(trial);
@@ -290,19 +404,30 @@ BladeTick Blade::step_rigid(const Pose& pose, double dt_s, const RuntimeSettings
     // points (or the arc the turn makes of a chord) still meets rigid material.
     double fraction = advance;
     for (int h = 0; h <= kMaxAdvanceHalvings && fraction > kLeastAdvance; ++h, fraction *= 0.5) {
-      const EdgePose part = interpolate_edge(ideal_edge_, trial, fraction);
+      const EdgePose part =
+          interpolate_edge(ideal_edge_, trial, fraction, motion_pivot_, length_mm_);
       double ignored = 1.0;
       if (probe_motion(part, ignored, false)) {
         accept_trial(part);
         break;
       }
     }
-    if (contact_count_ == known && advance <= kLeastAdvance) break;  // Nothing new to fit.
+    if (contacts_.changes() == known && advance <= kLeastAdvance) break;  // Nothing new to fit.
     // Sequential: each fit linearised about the last one's answer, so a
     // turn's second-order error (the edge keeps its length) is gone before
     // the walks judge it.
     EdgePose base = lock ? EdgePose{ideal_edge_.start_mm, device.direction} : ideal_edge_;
-    const std::span<const EdgeContact> contacts(contacts_.data(), contact_count_);
+    const std::span<const EdgeContact> contacts = contacts_.constraints();
+    // The motion turns about the contact the pose is nearest to (the one it
+    // rests on): that sample then moves straight off its plane.
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const EdgeContact& c : contacts) {
+      const double d = c.plane.signed_distance(ideal_edge_.point(c.fraction, length_mm_));
+      if (d < nearest) {
+        nearest = d;
+        motion_pivot_ = c.fraction;
+      }
+    }
     bool feasible = true;
     for (int pass = 0; pass < (lock ? 1 : kFitPasses); ++pass) {
       if (fit_edge_constrained(base, fractions, targets, length_mm_, lock, contacts, margin,
@@ -319,6 +444,7 @@ BladeTick Blade::step_rigid(const Pose& pose, double dt_s, const RuntimeSettings
     }
     if (!feasible) break;
   }
+  apply_friction(start);
   update_ideal_pose(device_pose_);
   place_proxies_on_ideal(settings);
   Vec3 force;
@@ -330,7 +456,7 @@ BladeTick Blade::step_rigid(const Pose& pose, double dt_s, const RuntimeSettings
   tick.force_N = force;
   tick.torque_N_mm = cross(world_lever_, force) + cross(world_span_, weighted_force);
   tick.rigid_rounds = rounds;
-  tick.contacts = contact_count_;
+  tick.contacts = static_cast<int>(contacts_.constraints().size());
   tick.unresolved = !resolved;
   count(tick);
   return tick;

@@ -170,11 +170,14 @@ EdgeFitStatus fit_edge_constrained(const EdgePose& base, std::span<const double>
                                                : EdgeFitStatus::IterationLimit;
 }
 
-EdgePose interpolate_edge(const EdgePose& a, const EdgePose& b, double t) {
-  const Vec3 start = a.start_mm + (b.start_mm - a.start_mm) * t;
+EdgePose interpolate_edge(const EdgePose& a, const EdgePose& b, double t, double pivot_fraction,
+                          double length_mm) {
+  const Vec3 from = a.point(pivot_fraction, length_mm);
+  const Vec3 pivot = from + (b.point(pivot_fraction, length_mm) - from) * t;
   const Vec3 mixed = a.direction + (b.direction - a.direction) * t;
   const double size = norm(mixed);
-  return {start, size > 1e-9 ? mixed / size : a.direction};
+  const Vec3 direction = size > 1e-9 ? mixed / size : a.direction;
+  return {pivot - direction * (pivot_fraction * length_mm), direction};
 }
 
 }  // namespace hapticut

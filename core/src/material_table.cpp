@@ -17,17 +17,24 @@ constexpr MaterialParameterSpec kMaxLag{material_range::kMaxLag, &Material::max_
 constexpr MaterialParameterSpec kBreakForce{material_range::kBreakForce, &Material::break_force_N,
                                             true};
 
-constexpr std::array<MaterialParameterSpec, 4> kAllParameters{kDragDistance, kViscosity, kMaxLag,
-                                                              kBreakForce};
+constexpr MaterialParameterSpec kStaticFriction{material_range::kStaticFriction,
+                                                &Material::static_friction, false};
+constexpr MaterialParameterSpec kDynamicFriction{material_range::kDynamicFriction,
+                                                 &Material::dynamic_friction, false};
+
+constexpr std::array<MaterialParameterSpec, 6> kAllParameters{
+    kDragDistance, kViscosity, kMaxLag, kBreakForce, kStaticFriction, kDynamicFriction};
 constexpr std::array<MaterialParameterSpec, 1> kDragParameters{kDragDistance};
 constexpr std::array<MaterialParameterSpec, 2> kViscousParameters{kViscosity, kMaxLag};
 constexpr std::array<MaterialParameterSpec, 1> kMembraneParameters{kBreakForce};
+constexpr std::array<MaterialParameterSpec, 2> kRigidParameters{kStaticFriction, kDynamicFriction};
 
 constexpr std::array<MaterialModelSpec, 5> kModels{{
     {MaterialModel::Free, "free", "no resistance: the proxy follows the device point (air)", {}},
     {MaterialModel::Drag, "drag", "the proxy trails the device point at a fixed distance",
      kDragParameters},
-    {MaterialModel::Rigid, "rigid", "impenetrable: the proxy stays on the surface (bone)", {}},
+    {MaterialModel::Rigid, "rigid", "impenetrable: the proxy stays on the surface (bone)",
+     kRigidParameters},
     {MaterialModel::Viscous, "viscous", "drag whose lag grows with the stroke speed",
      kViscousParameters},
     {MaterialModel::Membrane, "membrane", "rigid until pushed hard enough, then free (skin)",
@@ -41,12 +48,17 @@ constexpr std::array<PresetValue, 2> kFatValues{
 // mm, so a first stroke at the default settings cuts through.
 constexpr std::array<PresetValue, 1> kSkinValues{{{"break_force_N", 0.3}}};
 
+// Bone against a steel blade: a knife pressed onto a round bone stays where it
+// landed until pulled along the bone at 0.4 times the push, then slides at 0.3.
+constexpr std::array<PresetValue, 2> kBoneValues{
+    {{"static_friction", 0.4}, {"dynamic_friction", 0.3}}};
+
 constexpr std::array<MaterialPreset, 5> kPresets{{
     {"air", "Air", MaterialModel::Free, {}},
     {"soft_tissue", "Soft tissue", MaterialModel::Drag, kSoftTissueValues},
     {"fat", "Fat", MaterialModel::Viscous, kFatValues},
     {"skin", "Skin", MaterialModel::Membrane, kSkinValues},
-    {"bone", "Bone", MaterialModel::Rigid, {}},
+    {"bone", "Bone", MaterialModel::Rigid, kBoneValues},
 }};
 
 }  // namespace

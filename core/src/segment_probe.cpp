@@ -68,6 +68,7 @@ SegmentProbe probe_segment(const Space& space, std::int32_t start_tet, const Vec
         result.hit = true;
         result.fraction = s;
         result.contact = mesh.boundary_plane(face);  // Outward: out of the rigid tet.
+        result.wall_tet = u;
         return result;
       }
       t = u;
@@ -100,6 +101,7 @@ SegmentProbe probe_segment(const Space& space, std::int32_t start_tet, const Vec
       result.fraction = s;
       const Plane& face = planes[exit_face];
       result.contact = Plane{face.normal * -1.0, -face.offset};
+      result.wall_tet = u;
       return result;
     }
     t = u;

@@ -44,7 +44,14 @@ TEST(MaterialTable, HasEveryModelInEnumOrderWithItsParameters) {
     EXPECT_FALSE(models[i].summary.empty());
   }
   EXPECT_TRUE(material_model_spec(MaterialModel::Free).parameters.empty());
-  EXPECT_TRUE(material_model_spec(MaterialModel::Rigid).parameters.empty());
+  // Rigid takes its friction, optional and frictionless when omitted.
+  for (const char* name : {"static_friction", "dynamic_friction"}) {
+    const MaterialParameterSpec* friction = find_material_parameter(MaterialModel::Rigid, name);
+    ASSERT_NE(friction, nullptr) << name;
+    EXPECT_FALSE(friction->required) << name;
+    EXPECT_EQ(friction->range.default_value, 0.0) << name;
+  }
+  EXPECT_EQ(material_model_spec(MaterialModel::Rigid).parameters.size(), 2U);
   ASSERT_NE(find_material_parameter(MaterialModel::Drag, "drag_distance_mm"), nullptr);
   EXPECT_EQ(find_material_parameter(MaterialModel::Drag, "break_force_N"), nullptr);
   const MaterialParameterSpec* max_lag =

@@ -90,11 +90,15 @@ def test_every_model_with_its_parameters_reads():
         {"name": "fluid", "model": "viscous", "viscosity_N_s_per_mm": 0.001, "max_lag_mm": 5},
         {"name": "thin", "model": "viscous", "viscosity_N_s_per_mm": 0.002},
         {"name": "skin", "model": "membrane", "break_force_N": 1.0},
+        {"name": "grip", "model": "rigid", "static_friction": 0.4, "dynamic_friction": 0.3},
     ]
     materials = parse_scene(json.dumps(tree).encode()).materials
     assert materials[3] == Material("fluid", "viscous", viscosity_N_s_per_mm=0.001, max_lag_mm=5.0)
     assert materials[4].max_lag_mm == 50.0  # The default cap.
     assert materials[5] == Material("skin", "membrane", break_force_N=1.0)
+    # Rigid: frictionless unless the file says.
+    assert (materials[2].static_friction, materials[2].dynamic_friction) == (0.0, 0.0)
+    assert materials[6] == Material("grip", "rigid", static_friction=0.4, dynamic_friction=0.3)
 
 
 def test_integral_floats_count_as_integers():
@@ -367,6 +371,8 @@ def test_scene_dict_round_trip(example: Scene):
         "viscosity_N_s_per_mm",
         "max_lag_mm",
         "break_force_N",
+        "static_friction",
+        "dynamic_friction",
     }
     assert scene_from_dict(as_dict) == example
     assert scene_from_dict(json.loads(json.dumps(as_dict, default=np.ndarray.tolist))) == example

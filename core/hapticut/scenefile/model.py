@@ -72,6 +72,9 @@ class Material:
     viscosity_N_s_per_mm: float = 0.0  # viscous: resistance c in f = c v.
     max_lag_mm: float = _default(PARAMETER_RANGES, "max_lag_mm")  # viscous: cap on the lag.
     break_force_N: float = 0.0  # membrane: rigid until k |p' - q| exceeds this.
+    # rigid: friction at a rigid blade's contacts, static and dynamic (0: frictionless).
+    static_friction: float = _default(PARAMETER_RANGES, "static_friction")
+    dynamic_friction: float = _default(PARAMETER_RANGES, "dynamic_friction")
 
 
 BLADE_COUPLINGS = ("rigid", "independent")

@@ -21,6 +21,10 @@ struct Aabb {
   void grow(const Vec3& p);
   void grow(const Aabb& b);
   bool contains(const Vec3& p, double pad) const;
+  bool overlaps(const Aabb& other) const {
+    return lo.x <= other.hi.x && other.lo.x <= hi.x && lo.y <= other.hi.y && other.lo.y <= hi.y &&
+           lo.z <= other.hi.z && other.lo.z <= hi.z;
+  }
   // Slab test: does the segment a->b touch the box inflated by pad?
   bool hits_segment(const Vec3& a, const Vec3& inv_dir, const Vec3& dir, double pad) const;
 };
@@ -65,6 +69,10 @@ class AabbTree {
   // Calls visit(item) for every item whose box (inflated by pad) the segment a->b touches.
   template <class Visit>
   void for_each_on_segment(const Vec3& a, const Vec3& b, double pad, Visit&& visit) const;
+
+  // Calls visit(item) for every item whose box overlaps `box`.
+  template <class Visit>
+  void for_each_overlapping(const Aabb& box, Visit&& visit) const;
 
   std::size_t node_count() const { return nodes_.size(); }
   std::size_t memory_bytes() const;
@@ -115,6 +123,25 @@ void AabbTree::for_each_on_segment(const Vec3& a, const Vec3& b, double pad, Vis
   while (top > 0) {
     const Node& node = nodes_[stack[--top]];
     if (!node.box.hits_segment(a, inv_dir, dir, pad)) continue;
+    if (node.count > 0) {
+      for (std::int32_t k = 0; k < node.count; ++k) visit(items_[node.first + k]);
+    } else {
+      stack[top++] = node.first;
+      stack[top++] = node.right;
+    }
+  }
+}
+
+template <class Visit>
+void AabbTree::for_each_overlapping(const Aabb& box, Visit&& visit) const {
+  if (nodes_.empty()) return;
+  // Not zeroed: only entries below top are read, and a walk need not pay to clear it.
+  std::array<std::int32_t, kMaxDepth + 1> stack;  // NOLINT(cppcoreguidelines-pro-type-member-init)
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& node = nodes_[stack[--top]];
+    if (!node.box.overlaps(box)) continue;
     if (node.count > 0) {
       for (std::int32_t k = 0; k < node.count; ++k) visit(items_[node.first + k]);
     } else {

@@ -16,11 +16,13 @@
 #include <span>
 #include <vector>
 
+#include "hapticut/edge_contact_set.h"
 #include "hapticut/edge_fit.h"
 #include "hapticut/force_shading.h"
 #include "hapticut/proxy.h"
 #include "hapticut/scene.h"
 #include "hapticut/segment_probe.h"
+#include "hapticut/swept_stretch.h"
 
 namespace hapticut {
 
@@ -37,6 +39,12 @@ struct Quaternion {
   Quaternion normalized() const;
   bool valid() const;
 };
+
+// q, or -q (the same rotation) when that is nearer `last` (a dot product < 0).
+inline Quaternion same_hemisphere(const Quaternion& q, const Quaternion& last) {
+  const double d = q.w * last.w + q.x * last.x + q.y * last.y + q.z * last.z;
+  return d < 0.0 ? Quaternion{-q.w, -q.x, -q.y, -q.z} : q;
+}
 
 struct Pose {
   Vec3 position_mm;  // The tool origin in the world.
@@ -192,7 +200,21 @@ class Blade {
   // between neighbours there; true when nothing met rigid material. `advance`
   // gets the least fraction any point got; contacts found are added when asked.
   bool probe_motion(const EdgePose& edge, double& advance, bool add_contacts);
-  void add_contact(double fraction, const Plane& plane);
+  // The swept test of every stretch between neighbours over one piece of the
+  // motion, from pose `first` to `last` (at from..to of the whole motion;
+  // swept_stretch.h): true when no rigid surface edge crosses any; else
+  // `advance` gets the earliest crossing and contacts are added when asked.
+  bool sweep_stretches(const EdgePose& first, const EdgePose& last, double from, double to,
+                       double& advance, bool add_contacts);
+  // `wall_tet` is the tet whose material holds the edge there (its friction).
+  void add_contact(double fraction, const Plane& plane, std::int32_t wall_tet);
+  // Friction at the contacts (docs/decisions.md, "Friction at rigid
+  // contacts"): from `start` (the tick's first verified pose, its points in
+  // start_points_) to the frictionless ideal pose, the blade sticks while the
+  // springs' pull along the contacts stays within the static coefficient
+  // times their push, else slides as far as leaves the pull at the dynamic
+  // coefficient times the push.
+  void apply_friction(const EdgePose& start);
   // Makes the probed edge (trial_*) the ideal one.
   void accept_trial(const EdgePose& edge);
   void update_ideal_pose(const Pose& device);
@@ -233,8 +255,27 @@ class Blade {
   std::vector<Vec3> targets_;
   std::vector<ProbeWalls> walls_;
   std::vector<Vec3> point_forces_;
-  std::array<EdgeContact, kMaxEdgeContacts> contacts_{};
-  int contact_count_ = 0;
+  EdgeContactSet contacts_;
+  // The sample of the edge a motion moves in a straight line (interpolate_edge):
+  // the middle, or once there are contacts the one the pose rests on, so a
+  // turn does not swing the held sample into its plane.
+  double motion_pivot_ = 0.5;
+  // Whether the Space has a material that holds a point back (drag, viscous,
+  // membrane): only then do a rigid blade's points tick for their targets.
+  bool resisting_materials_ = true;
+  // The largest friction coefficients of the materials met this tick, and
+  // whether the blade slid on the last tick (then the dynamic one decides).
+  double contact_static_friction_ = 0.0;
+  double contact_dynamic_friction_ = 0.0;
+  bool sliding_ = false;
+  // The tick's first verified pose's points and tets, and the frictionless
+  // pose's while a slide is verified.
+  std::vector<Vec3> start_points_;
+  std::vector<std::int32_t> start_tets_;
+  std::vector<Vec3> held_points_;
+  std::vector<std::int32_t> held_tets_;
+  // The rigid surface's edges, for the stretches' swept test (two points or more).
+  std::unique_ptr<const RigidSurfaceEdges> rigid_edges_;
 };
 
 }  // namespace hapticut

@@ -24,6 +24,9 @@ struct Material {
   // Viscous: cap on the speed-dependent lag (optional in a file: the table's default).
   double max_lag_mm = material_range::kMaxLag.default_value;
   double break_force_N = 0.0;  // Membrane: rigid until k|p'-q| exceeds this.
+  // Rigid: friction at a rigid blade's contacts, static and dynamic.
+  double static_friction = material_range::kStaticFriction.default_value;
+  double dynamic_friction = material_range::kDynamicFriction.default_value;
 };
 
 // What a move may depend on besides p' and q; fixed for the whole tick so a

@@ -12,7 +12,7 @@ namespace hapticut {
 
 struct ParameterRange {
   std::string_view name;  // As in the scene file ("stiffness_N_per_mm").
-  std::string_view unit;  // "mm", "N", "N/mm", "N s/mm", "Hz", "s", "" (a count).
+  std::string_view unit;  // "mm", "N", "N/mm", "N s/mm", "Hz", "s", "N/N" (a ratio), "" (a count).
   double minimum = 0.0;
   bool minimum_exclusive = true;  // true: value > minimum; false: value >= minimum.
   double maximum = 0.0;           // Inclusive.
@@ -140,6 +140,25 @@ inline constexpr ParameterRange kBreakForce{
     100.0,
     1.0,
     "rigid until the push k |p - q| exceeds this, then free"};
+// Friction at a rigid blade's contacts (docs/decisions.md, "Friction at rigid
+// contacts"): 0 is the frictionless surface. Beyond 2 no tissue grips steel.
+inline constexpr ParameterRange kStaticFriction{
+    "static_friction",
+    "N/N",
+    0.0,
+    false,
+    2.0,
+    0.0,
+    "a rigid blade held on this material stays put until the pull along it exceeds this times "
+    "the push"};
+inline constexpr ParameterRange kDynamicFriction{
+    "dynamic_friction",
+    "N/N",
+    0.0,
+    false,
+    2.0,
+    0.0,
+    "while it slides, the pull along it this times the push (at most the static friction)"};
 
 }  // namespace material_range
 

@@ -23,6 +23,9 @@ struct SegmentProbe {
   // Where it hit: the face's plane with its normal out of the rigid material,
   // so the free side is signed_distance >= 0.
   Plane contact;
+  // The wall's tet (its material gives the contact's friction), kNoTet when
+  // exhausted.
+  std::int32_t wall_tet = kNoTet;
   // The tet holding b (within the tolerance) when nothing was hit, kNoTet when
   // b lies outside the mesh.
   std::int32_t end_tet = kNoTet;

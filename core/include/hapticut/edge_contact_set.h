@@ -1,0 +1,59 @@
+// The rigid blade's contact set, reduced per plane (a contact manifold, as
+// Box2D's b2Manifold keeps at most two points per polygon edge). A straight
+// edge's signed distance to a plane is affine along the edge, so of all the
+// samples held by one plane only the two extreme ones along the edge can be
+// active: the set keeps, per plane, the least and the greatest fraction that
+// met it. A crease is then two planes and four constraints whatever the
+// number of points, and any number of contacts on few planes fits in fixed
+// storage. Never allocates.
+#pragma once
+
+#include <array>
+#include <span>
+
+#include "hapticut/edge_fit.h"
+
+namespace hapticut {
+
+class EdgeContactSet {
+ public:
+  // Planes kept at most: each gives two constraints of the fit.
+  static constexpr int kMaxPlanes = kMaxEdgeContacts / 2;
+  // Two planes are one when their unit normals differ by at most this much and
+  // their offsets by at most the tolerance given to add().
+  static constexpr double kSameNormal = 1e-6;
+
+  void clear() {
+    plane_count_ = 0;
+    changes_ = 0;
+  }
+  // Adds the sample at `fraction` of the edge held by `plane`: widens the
+  // range of a plane already kept (within same_offset_mm), or keeps a new
+  // one. False when the plane is new and the set is full (the walks still
+  // refuse every pose that enters the material; the fit only lacks it).
+  bool add(double fraction, const Plane& plane, double same_offset_mm);
+
+  int plane_count() const { return plane_count_; }
+  // Grows with every add() that changed the constraints (a new plane, or a
+  // plane's range widened): a round whose walks changed nothing has nothing
+  // new to fit.
+  int changes() const { return changes_; }
+  bool full() const { return plane_count_ == kMaxPlanes; }
+  // The fit's constraints: one per plane met at a single fraction, two (its
+  // extremes) per plane met along a stretch of the edge. Valid until the
+  // next add() or clear().
+  std::span<const EdgeContact> constraints();
+
+ private:
+  struct HeldPlane {
+    Plane plane;
+    double least_fraction = 0.0;
+    double greatest_fraction = 0.0;
+  };
+  std::array<HeldPlane, kMaxPlanes> planes_{};
+  int plane_count_ = 0;
+  int changes_ = 0;
+  std::array<EdgeContact, kMaxEdgeContacts> constraints_{};
+};
+
+}  // namespace hapticut

@@ -1,0 +1,144 @@
+// Friction at a rigid blade's contacts: pressed onto a round bone it stays
+// where it landed (without friction it slides round to the side); pulled
+// along a flat bone it sticks until the pull reaches the static coefficient
+// times the push, then slides once and for all at the dynamic one.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "hapticut/blade.h"
+#include "hapticut/scene_io.h"
+#include "test_support.h"
+
+namespace hapticut {
+namespace {
+
+constexpr double kDt = 0.001;
+constexpr double kK = 0.1;  // N/mm, the paper's.
+
+std::vector<double> axis(double from, double to, double step) {
+  std::vector<double> v;
+  for (double x = from; x <= to + 1e-9; x += step) v.push_back(x);
+  return v;
+}
+
+Material bone(double static_friction, double dynamic_friction) {
+  Material m = testing::rigid_material();
+  m.static_friction = static_friction;
+  m.dynamic_friction = dynamic_friction;
+  return m;
+}
+
+// Bone where in_bone(centroid) (material 2), air elsewhere.
+template <class InBone>
+std::shared_ptr<const Space> space_of(const MeshData& mesh, InBone in_bone, const Material& rigid) {
+  std::vector<std::int32_t> labels(mesh.tets.size());
+  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+    Vec3 c;
+    for (std::int32_t v : mesh.tets[t]) c += mesh.vertices_mm[v] * 0.25;
+    labels[t] = in_bone(c) ? 2 : 0;
+  }
+  return testing::make_space(mesh, labels,
+                             {testing::free_material(), testing::drag_material(1.0), rigid});
+}
+
+TEST(RigidBladeFriction, PressedPastARoundBonesCentreItStaysWhereItLanded) {
+  // The example sphere of bone (320 faces); the blade level across it,
+  // landing 13 degrees off its top, pressed to 3 mm under its centre.
+  Scene scene = load_scene(std::string(HAPTICUT_EXAMPLES_DIR) + "/sphere320.hapticut.msgpack");
+  double radius = 0.0;
+  for (const Vec3& v : scene.vertices_mm) radius = std::max(radius, v.z);
+  std::printf("%-22s %12s %12s %12s\n", "friction (static/dyn)", "landed y mm", "end y mm",
+              "end z mm");
+  for (const double mu : {0.0, 0.4}) {
+    for (Material& m : scene.materials) {
+      if (m.model == MaterialModel::Rigid) m = bone(mu, 0.75 * mu);
+    }
+    const auto space = Space::from_scene(scene);
+    radius = 0.0;
+    for (std::int32_t t = 0; t < space->mesh().tet_count(); ++t) {
+      if (!space->tet_is_rigid(t)) continue;
+      for (std::int32_t v : space->mesh().tet(t))
+        radius = std::max(radius, space->mesh().vertex(v).z);
+    }
+    const double y = radius * std::sin(13.0 * M_PI / 180.0);
+    for (BladeOrientation orientation : {BladeOrientation::Free, BladeOrientation::Locked}) {
+      BladeSpec spec{"knife", {-20, 0, 0}, {20, 0, 0}, 50};
+      spec.orientation = orientation;
+      Blade blade(*space, spec);
+      const double top = radius + 2.0;
+      blade.reset({{0, y, top}, {}});
+      double landed_y = 0.0;
+      const int ticks = static_cast<int>((top + 3.0) / 0.01);
+      for (int k = 1; k <= ticks + 20; ++k) {
+        const BladeTick tick = blade.step({{0, y, std::max(-3.0, top - 0.01 * k)}, {}}, kDt);
+        if (landed_y == 0.0 && tick.contacts > 0) landed_y = blade.ideal_point(25).y;
+      }
+      const Vec3 end = blade.ideal_point(25);
+      std::printf("%-6.2f %-6.2f %-8s %12.4f %12.4f %12.4f\n", mu, 0.75 * mu,
+                  orientation == BladeOrientation::Free ? "free" : "locked", landed_y, end.y,
+                  end.z);
+      if (mu > 0.0) {
+        EXPECT_NEAR(end.y, landed_y, 0.1) << "orientation " << int(orientation);
+        EXPECT_GT(end.z, 0.9 * radius);  // Still on the top.
+      } else {
+        EXPECT_GT(end.y, landed_y + 5.0) << "orientation " << int(orientation);  // Slid round.
+      }
+    }
+  }
+}
+
+TEST(RigidBladeFriction, PulledAlongAFlatBoneItSticksThenSlidesOnce) {
+  const MeshData mesh = grid_mesh(axis(-60, 60, 4), axis(-16, 16, 4), axis(-16, 8, 4));
+  std::printf("%-14s %-7s %10s %10s %10s %9s\n", "friction", "orient", "max Fy N", "end Fy N",
+              "max dF N", "releases");
+  for (const double mu : {0.0, 0.4}) {
+    const double mu_dynamic = 0.75 * mu;
+    const auto space = space_of(
+        mesh, [](const Vec3& c) { return c.z < 0.0; }, bone(mu, mu_dynamic));
+    for (BladeOrientation orientation : {BladeOrientation::Free, BladeOrientation::Locked}) {
+      BladeSpec spec{"knife", {-50, 0, 0}, {50, 0, 0}, 50};
+      spec.orientation = orientation;
+      Blade blade(*space, spec);
+      blade.reset({{0, 0, 1}, {}});
+      Vec3 force;
+      for (int k = 1; k <= 330; ++k) {
+        force = blade.step({{0, 0, std::max(-2.0, 1.0 - 0.01 * k)}, {}}, kDt).force_N;
+      }
+      const double push_N = 50 * kK * 2.0;
+      ASSERT_NEAR(force.z, push_N, 1e-4);
+      // Sideways at 10 mm/s for 3 mm.
+      double most = 0.0;
+      double largest_change = 0.0;
+      int releases = 0;
+      for (int k = 1; k <= 300; ++k) {
+        const Vec3 last = force;
+        force = blade.step({{0, 0.01 * k, -2.0}, {}}, kDt).force_N;
+        most = std::max(most, std::abs(force.y));
+        largest_change = std::max(largest_change, norm(force - last));
+        releases += std::abs(force.y) < std::abs(last.y) - 0.1 ? 1 : 0;
+      }
+      std::printf("%-6.2f %-6.2f  %-7s %10.4f %10.4f %10.4f %9d\n", mu, mu_dynamic,
+                  orientation == BladeOrientation::Free ? "free" : "locked", most, force.y,
+                  largest_change, releases);
+      // The hand pulls the blade: the force on it points back, -y.
+      if (mu == 0.0) {
+        EXPECT_LT(most, 1e-6);
+        EXPECT_EQ(releases, 0);
+      } else {
+        EXPECT_LE(most, mu * push_N + 50 * kK * 0.01 + 1e-9);
+        EXPECT_GE(most, mu * push_N - 50 * kK * 0.01);
+        EXPECT_NEAR(-force.y, mu_dynamic * push_N, 0.05 * push_N);
+        EXPECT_EQ(releases, 1);
+      }
+      EXPECT_NEAR(force.z, push_N, 1e-4);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace hapticut
