@@ -57,9 +57,10 @@ def start_build(context) -> str:
         checking.record(scene, [problem])
         raise BuildRefusedError(str(problem)) from None
     out_dir = os.path.join(work_dir, build_job.BUILD_FOLDER)
-    if digest == work_folder.digest_on_disk(out_dir) and _shown(scene, out_dir, digest):
+    if digest == work_folder.digest_on_disk(out_dir) and _show_again(scene, out_dir, digest):
         shutil.rmtree(job_dir, ignore_errors=True)
         settings.status = "unchanged: not rebuilt"
+        undo_steps.push("Tetrahedralize preview")
         return "unchanged"
     build_job.start(
         executable,
@@ -200,11 +201,12 @@ def _failed(scene, error: str) -> None:
     settings.report_json, settings.build_hash = "", ""
 
 
-def _shown(scene, out_dir: str, digest: str) -> bool:
-    """The build on disk (the scene's own: its digest) is shown; False when it cannot be."""
-    if digest == scene.hapticut.build_hash:
-        return True
-    try:  # Undone since, or a failed build cleared it: show it again rather than rebuild.
+def _show_again(scene, out_dir: str, digest: str) -> bool:
+    """The build on disk (the scene's own: its digest) shown again, its preview and report
+    read from disk; False when it cannot be (then it is built). Always from disk, even when
+    the scene's digest is already this one: an undo may have brought back another build's
+    report and preview, or the preview may have been deleted."""
+    try:
         _show_build(scene, out_dir, digest)
     except (OSError, ValueError, KeyError):
         return False

@@ -6,7 +6,7 @@ import json
 
 import bpy
 
-from ..authoring import build_job
+from ..authoring import build_job, work_folder
 from ..authoring.report_text import cost_lines, report_lines
 from ..toolkit import materials
 from .sidebar import SidebarPanel, SidebarSubpanel, draw_properties, draw_status
@@ -142,6 +142,8 @@ class HAPTICUT_PT_build(SidebarSubpanel, bpy.types.Panel):
         else:
             layout.operator("hapticut.tetrahedralize", icon="MESH_ICOSPHERE")
         draw_status(layout, settings.status, settings.error)
+        if work_folder.shared_with(context.scene) is not None:
+            layout.operator("hapticut.fork_work_folder", icon="DUPLICATE")
         row = layout.row()
         row.operator("hapticut.export_scene", icon="EXPORT")
         row.operator("hapticut.import_scene", icon="IMPORT")
