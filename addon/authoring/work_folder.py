@@ -150,6 +150,18 @@ def built_folder(scene) -> str | None:
     return folder if os.path.isfile(os.path.join(folder, exchange.SCENE_FILE)) else None
 
 
+def no_build_reason(scene) -> str:
+    """Why the scene has no build to use (built_folder is None), with the remedy."""
+    digest = scene.hapticut.build_hash
+    if not digest:
+        return "no scene built yet: Tetrahedralize first"
+    return (
+        f"no scene built yet: this scene's build ({digest[:8]}) is not the one on disk (an "
+        "undo brought back an older one, or the folder was removed or rebuilt by another "
+        "file): Tetrahedralize shows the build on disk or rebuilds"
+    )
+
+
 def settle_after_load(scene) -> None:
     """What a reopened scene says: no build runs (a build is cancelled when a file loads), the
     status is the build on disk's, not the one saved with the file, and a work folder another

@@ -182,7 +182,7 @@ def requested_settings(live) -> dict:
 def built_scene(scene) -> tuple[str, str]:
     path = building.scene_file(scene)
     if path is None:
-        raise live_session.LiveServoError("no scene built yet: Tetrahedralize first")
+        raise live_session.LiveServoError(work_folder.no_build_reason(scene))
     preview = os.path.join(os.path.dirname(path), building.PREVIEW_FILE)
     return path, preview
 
