@@ -180,8 +180,8 @@ def _finished(scene_name: str, job: build_job.Job, ok: bool) -> None:
     settings.running = False
     settings.progress, settings.stage = (1.0, "done") if ok else (0.0, "")
     if not ok:
-        _failed(scene, f"{job.error_object}: {job.error}" if job.error_object else job.error)
-        checking.record(scene, [exchange.SceneProblemError(job.error_object, job.error)])
+        messages = checking.record(scene, [exchange.SceneProblemError(job.error_object, job.error)])
+        _failed(scene, messages[0])
         return
     try:
         _show_build(scene, job.out_dir, job.digest)

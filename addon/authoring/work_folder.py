@@ -51,19 +51,22 @@ def work_directory(scene) -> str:
     if not settings.work_directory and (not settings.work_id or _id_shared(scene)):
         settings.work_id = uuid.uuid4().hex
     work = existing_work_directory(scene)
-    if work_owner.other_owner(work, bpy.data.filepath) is None:
-        if work_owner.owner_of(work) != bpy.data.filepath:
-            work_owner.claim(work, bpy.data.filepath)
-        return work
     if settings.work_directory:
-        return work  # The folder the user chose: shared as they said (the load status names it).
-    return fork(scene, bpy.data.filepath)
+        return work  # The folder the user chose is theirs: nothing of ours is written into it.
+    if work_owner.other_owner(work, bpy.data.filepath) is not None:
+        return fork(scene, bpy.data.filepath)
+    if work_owner.owner_of(work) != bpy.data.filepath:
+        work_owner.claim(work, bpy.data.filepath)
+    return work
 
 
 def shared_with(scene) -> str | None:
-    """The other .blend that owns the scene's work folder (None: the folder is this file's)."""
+    """The other .blend that owns the scene's work folder (None: the folder is this file's,
+    or one the user chose, whose sharing is theirs)."""
     work = existing_work_directory(scene)
-    return work_owner.other_owner(work, bpy.data.filepath) if work else None
+    if not work or scene.hapticut.work_directory:
+        return None
+    return work_owner.other_owner(work, bpy.data.filepath)
 
 
 def fork(scene, blend: str) -> str:

@@ -2,6 +2,7 @@ import bpy
 from bpy.props import StringProperty
 
 from ..authoring import recording_stamp
+from ..authoring.properties import BLEND_RELATIVE
 from ..background import jobs, undo_steps
 from ..bake import baking
 from ..live import live_link, live_session
@@ -18,7 +19,10 @@ class HAPTICUT_OT_bake_recording(jobs.FollowsJob, bpy.types.Operator):
     bl_options = {"REGISTER"}
 
     filepath: StringProperty(
-        name="Recording", subtype="FILE_PATH", description="Empty: the scene's last recording"
+        name="Recording",
+        subtype="FILE_PATH",
+        options=BLEND_RELATIVE,
+        description="Empty: the scene's last recording",
     )
 
     def execute(self, context):

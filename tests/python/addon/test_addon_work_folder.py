@@ -142,3 +142,16 @@ def test_undo_steps(addon, data_home, monkeypatch):
     assert bpy.ops.hapticut.bake_recording() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert pushed == ["Tetrahedralize preview", "Bake stroke", "Bake"]
+
+
+def test_a_work_directory_relative_to_the_blend_is_taken_without_a_warning(addon, tmp_path):
+    import warnings
+
+    from addon.authoring import work_folder
+
+    scene = blender_scene.empty_scene("")
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "relative.blend"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # Blender 5.0 warns for a path without the option.
+        scene.hapticut.work_directory = "//hapticut-work"
+    assert work_folder.existing_work_directory(scene) == str(tmp_path / "hapticut-work")
