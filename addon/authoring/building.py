@@ -14,7 +14,7 @@ import bpy
 
 from ..background import undo_steps
 from ..toolkit import preferences, runner
-from . import build_job, checking, exchange, work_folder
+from . import build_job, checking, exchange, work_folder, work_owner
 from .preview import show_preview
 
 PREVIEW_FILE = "preview.npz"
@@ -184,13 +184,23 @@ def _finished(scene_name: str, job: build_job.Job, ok: bool) -> None:
         _failed(scene, messages[0])
         return
     try:
-        _show_build(scene, job.out_dir, job.digest)
+        _show_build(scene, _into_current_folder(scene, job.out_dir), job.digest)
     except (OSError, ValueError, KeyError) as error:
         _failed(scene, f"cannot read the preview: {error}")
         return
     settings.status = f"built in {job.done_event.get('seconds', 0):.1f} s"
     checking.record(scene, [])
     undo_steps.push("Tetrahedralize preview")
+
+
+def _into_current_folder(scene, out_dir: str) -> str:
+    """Where the finished build is the scene's: out_dir, or, when the scene's folder was
+    forked while it built (a Save As), a share of it in the scene's folder now."""
+    folder = work_folder.build_folder(scene)
+    if folder is None or work_owner.same_file(folder, out_dir):
+        return out_dir
+    work_owner.share_tree(out_dir, folder)
+    return folder
 
 
 def _failed(scene, error: str) -> None:

@@ -71,8 +71,9 @@ def shared_with(scene) -> str | None:
 
 def fork(scene, blend: str) -> str:
     """Give the scene a work folder of its own, owned by blend: a new id, this scene's build
-    shared into it (work_owner.share_tree) and its last recording copied, the recording path
-    moved along. What cannot be copied is left behind: the status says to build again."""
+    and its last recording shared into it (work_owner: links, else copies), the recording
+    and preview paths moved along. What cannot be shared stays behind: the status says to
+    build again."""
     settings, live = scene.hapticut, scene.hapticut_live
     old_work, old_build = existing_work_directory(scene), build_folder(scene)
     settings.work_directory, settings.work_id = "", uuid.uuid4().hex
@@ -87,7 +88,7 @@ def fork(scene, blend: str) -> str:
             moved = _moved(getattr(live, field), old_work, work)
             if moved is not None:
                 if field == "recording_path":
-                    _copy_recording(bpy.path.abspath(getattr(live, field)), moved)
+                    _share_recording(bpy.path.abspath(getattr(live, field)), moved)
                 setattr(live, field, moved)
     except OSError as error:
         settings.status = f"forked without the build ({error}): Tetrahedralize again"
@@ -98,14 +99,16 @@ def _moved(path: str, old_work: str, work: str) -> str | None:
     """path's place in work when it lies in old_work (None when it lies elsewhere)."""
     if not path:
         return None
-    absolute = bpy.path.abspath(path)
-    inside = os.path.relpath(absolute, old_work)
+    try:
+        inside = os.path.relpath(bpy.path.abspath(path), old_work)
+    except ValueError:  # Another drive (Windows): not inside.
+        return None
     if inside.startswith(os.pardir) or os.path.isabs(inside):
         return None
     return os.path.join(work, inside)
 
 
-def _copy_recording(source: str, target: str) -> None:
+def _share_recording(source: str, target: str) -> None:
     if not os.path.isfile(source):
         return
     work_owner.share_file(source, target)

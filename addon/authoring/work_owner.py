@@ -53,15 +53,21 @@ def share_tree(source: str, target: str) -> None:
     """A copy of the folder source at target, its files hard links where the file system
     allows (instant, no space): a build is never written in place (the toolkit renames a
     new one into place, the digest is replaced whole), so neither folder's writes reach the
-    other: copy-on-write in effect. A partial copy is removed before the error is raised."""
-    staged = target + ".fork-tmp"
-    shutil.rmtree(staged, ignore_errors=True)
+    other: copy-on-write in effect. A folder at target is replaced; a partial copy is removed
+    before the error is raised."""
+    staged, replaced = target + ".fork-tmp", target + ".replaced-tmp"
+    for leftover in (staged, replaced):
+        shutil.rmtree(leftover, ignore_errors=True)
     try:
         shutil.copytree(source, staged, copy_function=_link_or_copy)
+        if os.path.isdir(target):  # An older build there: set aside, so target is never half.
+            os.replace(target, replaced)
         os.replace(staged, target)
     except OSError:
         shutil.rmtree(staged, ignore_errors=True)
         raise
+    finally:
+        shutil.rmtree(replaced, ignore_errors=True)
 
 
 def _link_or_copy(source: str, target: str) -> None:

@@ -7,6 +7,7 @@ copy only; a file copied outside Blender says whose folder it found and forks be
 import json
 import os
 import shutil
+import time
 
 import bpy
 import pytest
@@ -152,3 +153,19 @@ def test_a_moved_file_takes_its_folder(addon, data_home, tmp_path):
     bpy.ops.wm.save_mainfile()
     assert scene.hapticut.work_id == work_id
     assert owner(scene) == after
+
+
+def test_a_build_running_through_save_as_lands_in_the_new_files_folder(addon, data_home, tmp_path):
+    from addon.authoring import building, work_folder
+
+    scene = cube_scene()
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "first.blend"))
+    assert bpy.ops.hapticut.tetrahedralize() == {"FINISHED"}
+    started_in = work_folder.existing_work_directory(scene)
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "second.blend"))
+    assert work_folder.existing_work_directory(scene) != started_in
+    while building.update(scene.name):
+        time.sleep(0.1)
+    assert scene.hapticut.status.startswith("built"), scene.hapticut.error
+    assert work_folder.built_folder(scene) == work_folder.build_folder(scene)
+    assert exports(tmp_path, "second")
