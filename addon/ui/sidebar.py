@@ -39,7 +39,8 @@ def draw_status(layout, status: str = "", error: str = "") -> None:
 def wrapped(context, text: str) -> list[str]:
     """text in lines that fit the sidebar's width (a label does not wrap by itself)."""
     region = getattr(context, "region", None)
-    scale = context.preferences.system.ui_scale if context.preferences else 1.0
+    # Without a window (background mode) the scale reads 0.
+    scale = (context.preferences.system.ui_scale if context.preferences else 0.0) or 1.0
     width = region.width if region is not None else 300
     return textwrap.wrap(text, max(24, int(width / (CHARACTER_PX * scale)))) or [""]
 
