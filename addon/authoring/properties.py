@@ -145,8 +145,8 @@ class HAPTICUT_PG_scene(bpy.types.PropertyGroup):
         description="Where builds go; // is the .blend's folder (empty: a folder of this "
         "file's own in the user's data folder, forked by Save As)",
     )
-    # Names the scene's folder in the user's data folder (work_folder.py): set once, kept by
-    # the .blend, so the build follows the file through Save As.
+    # Names the scene's folder in the user's data folder (work_folder.py): kept by the .blend,
+    # a new one when Save As forks the folder (file_handlers.py).
     work_id: StringProperty(name="Work folder id")
     # The last build (kept in the .blend).
     build_hash: StringProperty(name="Build hash")
