@@ -11,7 +11,7 @@ from __future__ import annotations
 import bpy
 
 from . import operators
-from .authoring import build_job, properties, work_folder
+from .authoring import build_job, file_handlers, properties
 from .background import jobs
 from .live import live_link, live_properties
 from .toolkit import preferences, runner
@@ -33,7 +33,7 @@ def register() -> None:
     properties.attach()
     live_properties.attach()
     live_link.add_handlers()
-    work_folder.add_handlers()
+    file_handlers.add_handlers()
     if not bpy.app.background:  # Read the material table once, soon after startup.
         bpy.app.timers.register(_read_material_table, first_interval=1.0)
 
@@ -54,7 +54,7 @@ def unregister() -> None:
     jobs.stop_timer()
     live_link.stop()
     live_link.remove_handlers()
-    work_folder.remove_handlers()
+    file_handlers.remove_handlers()
     if bpy.app.timers.is_registered(_read_material_table):
         bpy.app.timers.unregister(_read_material_table)
     build_job.cancel_all()

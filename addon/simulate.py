@@ -7,7 +7,7 @@ from __future__ import annotations
 import os
 import time
 
-from .authoring import work_folder
+from .authoring import recording_stamp, work_folder
 from .authoring.exchange import scene_objects
 from .background import jobs, steps, undo_steps
 from .bake import baking
@@ -49,6 +49,7 @@ def simulate_steps(scene_name: str) -> steps.Steps[dict]:
     yield from live_link.check_limits_steps(scene_name, bindings, settings, rate_Hz)
     session = yield from live_link.ensure_session_steps(scene_name)
     record = os.path.join(folder, "stroke.rec")
+    recording_stamp.write(record, scene.hapticut.build_hash, scene_name)
     yield from live_session.run_steps(
         session,
         path,

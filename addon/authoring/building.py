@@ -14,7 +14,7 @@ import bpy
 
 from ..background import undo_steps
 from ..toolkit import preferences, runner
-from . import build_job, checking, exchange, work_folder
+from . import build_job, checking, exchange, work_folder, work_owner
 from .preview import show_preview
 
 PREVIEW_FILE = "preview.npz"
@@ -57,9 +57,10 @@ def start_build(context) -> str:
         checking.record(scene, [problem])
         raise BuildRefusedError(str(problem)) from None
     out_dir = os.path.join(work_dir, build_job.BUILD_FOLDER)
-    if digest == work_folder.digest_on_disk(out_dir) and _shown(scene, out_dir, digest):
+    if digest == work_folder.digest_on_disk(out_dir) and _show_again(scene, out_dir, digest):
         shutil.rmtree(job_dir, ignore_errors=True)
         settings.status = "unchanged: not rebuilt"
+        undo_steps.push("Tetrahedralize preview")
         return "unchanged"
     build_job.start(
         executable,
@@ -179,17 +180,27 @@ def _finished(scene_name: str, job: build_job.Job, ok: bool) -> None:
     settings.running = False
     settings.progress, settings.stage = (1.0, "done") if ok else (0.0, "")
     if not ok:
-        _failed(scene, f"{job.error_object}: {job.error}" if job.error_object else job.error)
-        checking.record(scene, [exchange.SceneProblemError(job.error_object, job.error)])
+        messages = checking.record(scene, [exchange.SceneProblemError(job.error_object, job.error)])
+        _failed(scene, messages[0])
         return
     try:
-        _show_build(scene, job.out_dir, job.digest)
+        _show_build(scene, _into_current_folder(scene, job.out_dir), job.digest)
     except (OSError, ValueError, KeyError) as error:
         _failed(scene, f"cannot read the preview: {error}")
         return
     settings.status = f"built in {job.done_event.get('seconds', 0):.1f} s"
     checking.record(scene, [])
     undo_steps.push("Tetrahedralize preview")
+
+
+def _into_current_folder(scene, out_dir: str) -> str:
+    """Where the finished build is the scene's: out_dir, or, when the scene's folder was
+    forked while it built (a Save As), a share of it in the scene's folder now."""
+    folder = work_folder.build_folder(scene)
+    if folder is None or work_owner.same_file(folder, out_dir):
+        return out_dir
+    work_owner.share_tree(out_dir, folder)
+    return folder
 
 
 def _failed(scene, error: str) -> None:
@@ -200,11 +211,12 @@ def _failed(scene, error: str) -> None:
     settings.report_json, settings.build_hash = "", ""
 
 
-def _shown(scene, out_dir: str, digest: str) -> bool:
-    """The build on disk (the scene's own: its digest) is shown; False when it cannot be."""
-    if digest == scene.hapticut.build_hash:
-        return True
-    try:  # Undone since, or a failed build cleared it: show it again rather than rebuild.
+def _show_again(scene, out_dir: str, digest: str) -> bool:
+    """The build on disk (the scene's own: its digest) shown again, its preview and report
+    read from disk; False when it cannot be (then it is built). Always from disk, even when
+    the scene's digest is already this one: an undo may have brought back another build's
+    report and preview, or the preview may have been deleted."""
+    try:
         _show_build(scene, out_dir, digest)
     except (OSError, ValueError, KeyError):
         return False

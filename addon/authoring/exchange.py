@@ -19,12 +19,21 @@ SCENE_FILE = "scene.hapticut.msgpack"
 
 
 class SceneProblemError(Exception):
-    """An object the scene cannot use: ``object_name`` and ``problem`` for the panel."""
+    """An object the scene cannot use: ``object_name`` and ``problem`` for the panel, with
+    ``place`` (where on the object, mesh_places) and ``remedy`` (what to do) when known."""
 
-    def __init__(self, object_name: str, problem: str) -> None:
-        super().__init__(f"{object_name}: {problem}" if object_name else problem)
-        self.object_name = object_name
-        self.problem = problem
+    def __init__(self, object_name: str, problem: str, place: str = "", remedy: str = ""):
+        self.object_name, self.problem = object_name, problem
+        self.place, self.remedy = place, remedy
+        super().__init__(self.message())
+
+    def __str__(self) -> str:
+        return self.message()
+
+    def message(self) -> str:
+        text = f"{self.object_name}: {self.problem}" if self.object_name else self.problem
+        text += f", {self.place}" if self.place else ""
+        return text + (f". To fix: {self.remedy}" if self.remedy else "")
 
 
 def scene_objects(scene, role: str) -> list:

@@ -16,6 +16,10 @@ from bpy.props import (
 
 from ..toolkit import materials
 
+# A path property that may start with "//" (relative to the .blend) says so from Blender 5.0
+# on, which warns otherwise; Blender 4.2 has no such option and takes "//" everywhere.
+BLEND_RELATIVE = {"PATH_SUPPORTS_BLEND_RELATIVE"} if bpy.app.version >= (5, 0, 0) else set()
+
 ROLES = (
     ("NONE", "None", "Not part of the scene"),
     ("REGION", "Region", "A closed mesh filled with one material"),
@@ -89,6 +93,8 @@ class HAPTICUT_PG_object(bpy.types.PropertyGroup):
 class HAPTICUT_PG_problem(bpy.types.PropertyGroup):
     object_name: StringProperty(name="Object")
     problem: StringProperty(name="Problem")
+    place: StringProperty(name="Place")  # Where on the object (mesh_places), or "".
+    remedy: StringProperty(name="Remedy")  # What to do (problem_remedies), or "".
 
 
 class HAPTICUT_PG_scene(bpy.types.PropertyGroup):
@@ -135,11 +141,12 @@ class HAPTICUT_PG_scene(bpy.types.PropertyGroup):
     work_directory: StringProperty(
         name="Work directory",
         subtype="DIR_PATH",
-        description="Where builds go (empty: a folder of this scene's own in the user's data "
-        "folder, which Save As and reopening keep)",
+        options=BLEND_RELATIVE,
+        description="Where builds go; // is the .blend's folder (empty: a folder of this "
+        "file's own in the user's data folder, forked by Save As)",
     )
-    # Names the scene's folder in the user's data folder (work_folder.py): set once, kept by
-    # the .blend, so the build follows the file through Save As.
+    # Names the scene's folder in the user's data folder (work_folder.py): kept by the .blend,
+    # a new one when Save As forks the folder (file_handlers.py).
     work_id: StringProperty(name="Work folder id")
     # The last build (kept in the .blend).
     build_hash: StringProperty(name="Build hash")

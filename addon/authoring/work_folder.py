@@ -1,7 +1,8 @@
 """Where a scene's build, servo log, stroke and recordings live: the scene's *Work directory*
-when set, else a folder named by an id the scene keeps (``scene.hapticut.work_id``, set once)
-under the user's data folder. The .blend's name plays no part, so *Save As* and reopening
-find the same build (docs/addon.md, "The work folder").
+when set, else a folder named by an id the scene keeps (``scene.hapticut.work_id``) under the
+user's data folder. A folder is one .blend's (work_owner): *Save As* to a new path forks it
+(file_handlers), and a file that finds its folder owned by another forks before it writes
+(docs/addon.md, "The work folder").
 
 A build on disk is the scene's when the digest written beside it at the end of the build is
 the scene's ``build_hash``: a build that finished while Blender was closed, or another file's
@@ -15,9 +16,8 @@ import sys
 import uuid
 
 import bpy
-from bpy.app.handlers import persistent
 
-from . import build_job, exchange
+from . import build_job, exchange, recording_stamp, work_owner
 
 # Written into build/ by the add-on once the build is shown; a new build replaces build/
 # whole (the toolkit renames it into place), so an old digest never outlives its build.
@@ -44,12 +44,77 @@ def _id_shared(scene) -> bool:
 
 
 def work_directory(scene) -> str:
-    """The scene's work folder; gives the scene its id first when it has none (so call it
-    where data may change: an operator, a timer, a handler; never from a panel's draw)."""
+    """The scene's work folder, to write into: gives the scene its id first when it has none,
+    and forks a folder another .blend owns (so call it where data may change: an operator, a
+    timer, a handler; never from a panel's draw)."""
     settings = scene.hapticut
     if not settings.work_directory and (not settings.work_id or _id_shared(scene)):
         settings.work_id = uuid.uuid4().hex
-    return existing_work_directory(scene)
+    work = existing_work_directory(scene)
+    if settings.work_directory:
+        return work  # The folder the user chose is theirs: nothing of ours is written into it.
+    if work_owner.other_owner(work, bpy.data.filepath) is not None:
+        return fork(scene, bpy.data.filepath)
+    if work_owner.owner_of(work) != bpy.data.filepath:
+        work_owner.claim(work, bpy.data.filepath)
+    return work
+
+
+def shared_with(scene) -> str | None:
+    """The other .blend that owns the scene's work folder (None: the folder is this file's,
+    or one the user chose, whose sharing is theirs)."""
+    work = existing_work_directory(scene)
+    if not work or scene.hapticut.work_directory:
+        return None
+    return work_owner.other_owner(work, bpy.data.filepath)
+
+
+def fork(scene, blend: str) -> str:
+    """Give the scene a work folder of its own, owned by blend: a new id, this scene's build
+    and its last recording shared into it (work_owner: links, else copies), the recording
+    and preview paths moved along. What cannot be shared stays behind: the status says to
+    build again."""
+    settings, live = scene.hapticut, scene.hapticut_live
+    old_work, old_build = existing_work_directory(scene), build_folder(scene)
+    settings.work_directory, settings.work_id = "", uuid.uuid4().hex
+    work = existing_work_directory(scene)
+    work_owner.claim(work, blend)
+    if old_work is None:
+        return work
+    try:
+        if settings.build_hash and digest_on_disk(old_build) == settings.build_hash:
+            work_owner.share_tree(old_build, os.path.join(work, build_job.BUILD_FOLDER))
+        for field in ("recording_path", "preview_path"):
+            moved = _moved(getattr(live, field), old_work, work)
+            if moved is not None:
+                if field == "recording_path":
+                    _share_recording(bpy.path.abspath(getattr(live, field)), moved)
+                setattr(live, field, moved)
+    except OSError as error:
+        settings.status = f"forked without the build ({error}): Tetrahedralize again"
+    return work
+
+
+def _moved(path: str, old_work: str, work: str) -> str | None:
+    """path's place in work when it lies in old_work (None when it lies elsewhere)."""
+    if not path:
+        return None
+    try:
+        inside = os.path.relpath(bpy.path.abspath(path), old_work)
+    except ValueError:  # Another drive (Windows): not inside.
+        return None
+    if inside.startswith(os.pardir) or os.path.isabs(inside):
+        return None
+    return os.path.join(work, inside)
+
+
+def _share_recording(source: str, target: str) -> None:
+    if not os.path.isfile(source):
+        return
+    work_owner.share_file(source, target)
+    stamp = recording_stamp.stamp_path(source)
+    if os.path.isfile(stamp):
+        work_owner.share_file(stamp, recording_stamp.stamp_path(target))
 
 
 def existing_work_directory(scene) -> str | None:
@@ -75,8 +140,11 @@ def digest_on_disk(folder: str) -> str:
 
 
 def write_digest(folder: str, digest: str) -> None:
-    with open(os.path.join(folder, DIGEST_FILE), "w", encoding="utf-8") as file:
+    """Replaced whole, never written in place: a forked folder may share the file (a link)."""
+    staged = os.path.join(folder, DIGEST_FILE + ".tmp")
+    with open(staged, "w", encoding="utf-8") as file:
         file.write(digest + "\n")
+    os.replace(staged, os.path.join(folder, DIGEST_FILE))
 
 
 def built_folder(scene) -> str | None:
@@ -88,47 +156,42 @@ def built_folder(scene) -> str | None:
     return folder if os.path.isfile(os.path.join(folder, exchange.SCENE_FILE)) else None
 
 
+def no_build_reason(scene) -> str:
+    """Why the scene has no build to use (built_folder is None), with the remedy."""
+    digest = scene.hapticut.build_hash
+    if not digest:
+        return "no scene built yet: Tetrahedralize first"
+    return (
+        f"no scene built yet: this scene's build ({digest[:8]}) is not the one on disk (an "
+        "undo brought back an older one, or the folder was removed or rebuilt by another "
+        "file): Tetrahedralize shows the build on disk or rebuilds"
+    )
+
+
 def settle_after_load(scene) -> None:
-    """What a reopened scene says: no build runs (a build is cancelled when a file loads), and
-    the status is the build on disk's, not the one saved with the file."""
+    """What a reopened scene says: no build runs (a build is cancelled when a file loads), the
+    status is the build on disk's, not the one saved with the file, and a work folder another
+    .blend owns is named, with the remedy."""
     settings = scene.hapticut
     settings.running, settings.progress, settings.stage = False, 0.0, ""
+    settings.status = _status_on_disk(scene)
+    other = shared_with(scene)
+    if other is not None:
+        settings.status = (
+            f"{settings.status or 'not built'}; the work folder is also {other}'s: "
+            f"Fork Work Folder (else it forks before this file writes)"
+        )
+
+
+def _status_on_disk(scene) -> str:
+    settings = scene.hapticut
     if not settings.build_hash:
-        settings.status = ""
-        return
+        return ""
     if built_folder(scene) is not None:
-        settings.status = "built"
-        return
+        return "built"
     folder = build_folder(scene)
     if folder is not None and not settings.work_directory and digest_on_disk(folder):
-        # Another file's build (a Save As copy that built since): a new id keeps both.
+        # Another file's build (a copy that built since): a new id keeps both.
         settings.work_id = uuid.uuid4().hex
     settings.build_hash, settings.report_json = "", ""
-    settings.status = NO_BUILD_STATUS
-
-
-@persistent
-def _on_load_pre(*_args) -> None:
-    # A build's result belongs to the file it started in: none may land in the next one.
-    build_job.cancel_all()
-
-
-@persistent
-def _on_load_post(*_args) -> None:
-    for scene in bpy.data.scenes:
-        if scene.library is None:  # A linked scene is another file's, read-only here.
-            settle_after_load(scene)
-
-
-def add_handlers() -> None:
-    if _on_load_pre not in bpy.app.handlers.load_pre:
-        bpy.app.handlers.load_pre.append(_on_load_pre)
-    if _on_load_post not in bpy.app.handlers.load_post:
-        bpy.app.handlers.load_post.append(_on_load_post)
-
-
-def remove_handlers() -> None:
-    if _on_load_pre in bpy.app.handlers.load_pre:
-        bpy.app.handlers.load_pre.remove(_on_load_pre)
-    if _on_load_post in bpy.app.handlers.load_post:
-        bpy.app.handlers.load_post.remove(_on_load_post)
+    return NO_BUILD_STATUS

@@ -13,8 +13,9 @@ import bpy
 
 
 def push(message: str) -> None:
-    """An undo step named message for the scene as it is now. Background mode keeps no undo
-    stack (``ed.undo`` cannot run there): nothing to push."""
+    """An undo step named message for the scene as it is now. None in background mode: a
+    script or a render farm has no one to press Ctrl+Z, and every step is a copy of the
+    file's data in memory."""
     if bpy.app.background:
         return
     # No undo stack in this context: the edit stays, without a step of its own.

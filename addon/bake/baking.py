@@ -23,7 +23,7 @@ from ..toolkit import runner
 from ..toolkit.runner import last_error_line
 from ..toolkit.toolkit_link import ToolkitLink
 from ..toolkit.units import mm_per_unit
-from . import cut_reveal
+from . import cut_reveal, cut_slit
 
 COLLECTION = "Hapticut Bake"
 TAG = "hapticut_bake"
@@ -145,10 +145,13 @@ def arrow_mm_per_N(setting: float, peak_force_N: float, diagonal_mm: float) -> f
     return ARROW_SCENE_FRACTION * diagonal_mm / peak_force_N
 
 
-def cut_mesh(name: str, surface, mm: float):
+def cut_mesh(name: str, surface, mm: float, slit_mm: float = 0.0):
+    """The cut surface's mesh (Blender units), as a slit of half-width slit_mm (cut_slit)."""
     mesh = bpy.data.meshes.new(name)
-    vertices = np.asarray(surface.vertices, np.float64) / mm
-    faces = np.asarray(surface.faces, np.int64)
+    vertices, faces, face_frames = cut_slit.slit(
+        surface.vertices, surface.faces, surface.face_frames, slit_mm
+    )
+    vertices = vertices / mm
     mesh.vertices.add(len(vertices))
     mesh.vertices.foreach_set("co", vertices.astype(np.float32).ravel())
     mesh.loops.add(3 * len(faces))
@@ -157,9 +160,21 @@ def cut_mesh(name: str, surface, mm: float):
     mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * len(faces), 3, dtype=np.int32))
     mesh.update(calc_edges=True)
     attribute = mesh.attributes.new(cut_reveal.FRAME_ATTRIBUTE, "INT", "FACE")
-    attribute.data.foreach_set("value", np.asarray(surface.face_frames, np.int32))
+    attribute.data.foreach_set("value", np.asarray(face_frames, np.int32))
     mesh.materials.append(_material("Hapticut Cut", CUT_COLOUR))
     return mesh
+
+
+def blade_half_thickness_mm(name: str, mm: float) -> float:
+    """Half the thickness of the blade object's mesh in the world (its scale applied), in mm;
+    0 when the blade is gone or not a mesh."""
+    blade = bpy.data.objects.get(name)
+    if blade is None or blade.type != "MESH" or not len(blade.data.vertices):
+        return 0.0
+    vertices = np.empty((len(blade.data.vertices), 3))
+    blade.data.vertices.foreach_get("co", vertices.ravel())
+    scaled = vertices @ np.array(blade.matrix_world.to_3x3()).T
+    return cut_slit.half_thickness(scaled) * mm
 
 
 def load_preview_tets(link: ToolkitLink, path: str) -> dict:
@@ -225,7 +240,8 @@ def bake_steps(
     peak_force_N = max(
         (float(np.max(np.linalg.norm(f, axis=1))) for f in forces_by_blade.values()), default=0.0
     )
-    mm_per_N = arrow_mm_per_N(arrow_setting, peak_force_N, scene_diagonal_mm(tets))
+    diagonal_mm = scene_diagonal_mm(tets)
+    mm_per_N = arrow_mm_per_N(arrow_setting, peak_force_N, diagonal_mm)
     figures = _bake_figures(link, recording, recording_path, times, frames, fps, mm_per_N)
     folder = tempfile.mkdtemp(prefix="hapticut-cut-")
     cuts_path = os.path.join(folder, "cuts.npz")
@@ -259,13 +275,15 @@ def bake_steps(
     for name in recording.blade_names:
         yield f"meshing {name}'s cut"
         surface = surfaces[name]
+        slit_mm = blade_half_thickness_mm(name, mm) + cut_slit.SLIT_SHARE * diagonal_mm
         cut = _new_object(
-            _collection(scene_now()), f"Cut {name}", cut_mesh(f"Cut {name}", surface, mm)
+            _collection(scene_now()), f"Cut {name}", cut_mesh(f"Cut {name}", surface, mm, slit_mm)
         )
         cut["hapticut_blade"] = name
         cut_reveal.add_reveal(cut)
         figures["blades"][name] = {
             "cut_faces": len(surface.faces),
+            "cut_slit_mm": slit_mm,
             "max_force_N": float(np.max(np.linalg.norm(forces_by_blade[name], axis=1))),
         }
     figures["seconds"] = time.perf_counter() - began

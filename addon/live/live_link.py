@@ -17,7 +17,7 @@ import time
 import bpy
 from bpy.app.handlers import persistent
 
-from ..authoring import building, work_folder
+from ..authoring import building, recording_stamp, work_folder
 from ..authoring.exchange import scene_objects
 from ..background import jobs, steps
 from ..toolkit import preferences, runner, toolkit_link
@@ -182,7 +182,7 @@ def requested_settings(live) -> dict:
 def built_scene(scene) -> tuple[str, str]:
     path = building.scene_file(scene)
     if path is None:
-        raise live_session.LiveServoError("no scene built yet: Tetrahedralize first")
+        raise live_session.LiveServoError(work_folder.no_build_reason(scene))
     preview = os.path.join(os.path.dirname(path), building.PREVIEW_FILE)
     return path, preview
 
@@ -231,8 +231,10 @@ def go_live_steps(scene_name: str) -> steps.Steps[None]:
     bindings, settings, rate_Hz = devices(scene), requested_settings(live), live.rate_Hz
     yield from check_limits_steps(scene_name, bindings, settings, rate_Hz)
     path, preview = built_scene(scene_named(scene_name))
+    digest = scene_named(scene_name).hapticut.build_hash
     session = yield from ensure_session_steps(scene_name)
     yield from live_session.run_steps(session, path, bindings, rate_Hz, settings=settings)
+    session.build_digest = digest
     live = scene_named(scene_name).hapticut_live
     session.preview_path = live.preview_path = preview
     live.error = ""
@@ -263,6 +265,7 @@ def record_live(scene) -> str:
     folder = os.path.join(work_folder.work_directory(scene), "recordings")
     path = os.path.join(folder, time.strftime("live-%Y%m%d-%H%M%S.rec"))
     os.makedirs(folder, exist_ok=True)
+    recording_stamp.write(path, session.build_digest, scene.name)
     live_session.request(session, "record", path)
     session.recording_path = path
     session.status = live_session.request(session, "status")

@@ -55,6 +55,7 @@ class LiveServo:
     status: dict = field(default_factory=dict)
     blades: list = field(default_factory=list)  # load reply's blades
     scene_path: str = ""
+    build_digest: str = ""  # The add-on's digest of the build loaded (recording_stamp).
     preview_path: str = ""
     recording_path: str = ""  # The recording being written (or last written).
     simulate: dict | None = None  # While a stroke simulates: what the bake needs.

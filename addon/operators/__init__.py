@@ -8,6 +8,7 @@ from .check_toolkit import HAPTICUT_OT_check_toolkit
 from .clear_bake import HAPTICUT_OT_clear_bake
 from .engage_servo import HAPTICUT_OT_engage_servo
 from .export_scene import HAPTICUT_OT_export_scene
+from .fork_work_folder import HAPTICUT_OT_fork_work_folder
 from .go_live import HAPTICUT_OT_go_live
 from .import_scene import HAPTICUT_OT_import_scene
 from .open_servo_log import HAPTICUT_OT_open_servo_log
@@ -29,6 +30,7 @@ classes = (
     HAPTICUT_OT_tetrahedralize,
     HAPTICUT_OT_cancel_build,
     HAPTICUT_OT_cancel_job,
+    HAPTICUT_OT_fork_work_folder,
     HAPTICUT_OT_export_scene,
     HAPTICUT_OT_import_scene,
     HAPTICUT_OT_refresh_devices,

@@ -1,8 +1,11 @@
 import bpy
 from bpy.props import StringProperty
 
+from ..authoring import recording_stamp
+from ..authoring.properties import BLEND_RELATIVE
 from ..background import jobs, undo_steps
 from ..bake import baking
+from ..live import live_link, live_session
 from ..toolkit import preferences, toolkit_link
 
 
@@ -16,7 +19,10 @@ class HAPTICUT_OT_bake_recording(jobs.FollowsJob, bpy.types.Operator):
     bl_options = {"REGISTER"}
 
     filepath: StringProperty(
-        name="Recording", subtype="FILE_PATH", description="Empty: the scene's last recording"
+        name="Recording",
+        subtype="FILE_PATH",
+        options=BLEND_RELATIVE,
+        description="Empty: the scene's last recording",
     )
 
     def execute(self, context):
@@ -26,7 +32,15 @@ class HAPTICUT_OT_bake_recording(jobs.FollowsJob, bpy.types.Operator):
         if not path:
             self.report({"ERROR"}, "no recording yet: Simulate Stroke, or Record while live")
             return {"CANCELLED"}
-        preview = bpy.path.abspath(settings.preview_path)
+        try:  # The build on disk that is the scene's now: never an older one an undo named.
+            _, preview = live_link.built_scene(scene)
+        except live_session.LiveServoError as error:
+            self.report({"ERROR"}, f"cannot bake: {error}")
+            return {"CANCELLED"}
+        refusal = recording_stamp.refusal(scene, path, chosen=bool(self.filepath))
+        if refusal:
+            self.report({"ERROR"}, f"cannot bake: {refusal}")
+            return {"CANCELLED"}
         shown = jobs.shows_error_in(scene.name, "hapticut_live")
         jobs.start("Bake", scene.name, _bake_steps(scene.name, path, preview), on_error=shown)
         return {"FINISHED"}

@@ -2,7 +2,7 @@ import bpy
 from bpy.props import StringProperty
 from bpy_extras.io_utils import ExportHelper
 
-from ..authoring import building
+from ..authoring import building, work_folder
 from ..background import jobs
 from ..toolkit import preferences, runner
 
@@ -23,7 +23,7 @@ class HAPTICUT_OT_export_scene(bpy.types.Operator, ExportHelper):
         scene = context.scene
         source = building.scene_file(scene)
         if source is None:
-            self.report({"ERROR"}, "no scene built yet: Tetrahedralize first")
+            self.report({"ERROR"}, work_folder.no_build_reason(scene))
             return {"CANCELLED"}
         if not self.filepath.endswith((".hapticut.msgpack", ".hapticut.json")):
             self.report(

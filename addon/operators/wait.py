@@ -20,6 +20,13 @@ class HAPTICUT_OT_wait(bpy.types.Operator):
         min=0.0,
         description="Seconds before giving up (the work goes on)",
     )
+    live_s: FloatProperty(
+        name="Run live",
+        default=0.0,
+        min=0.0,
+        description="Then run the live session this many seconds as its timer would (a script "
+        "drives a live session headless: move the blade, run, read, again)",
+    )
 
     def execute(self, context):
         scene = context.scene
@@ -38,5 +45,12 @@ class HAPTICUT_OT_wait(bpy.types.Operator):
         if problem:
             self.report({"ERROR"}, problem)
             return {"CANCELLED"}
+        if self.live_s > 0:
+            try:
+                waiting.run_live(self.live_s)
+            except waiting.NoLiveSessionError as error:
+                self.report({"ERROR"}, str(error))
+                return {"CANCELLED"}
+            seconds += self.live_s
         self.report({"INFO"}, f"done after {seconds:.1f} s")
         return {"FINISHED"}

@@ -6,10 +6,16 @@ import json
 
 import bpy
 
-from ..authoring import build_job
-from ..authoring.report_text import cost_lines, report_lines
+from ..authoring import build_job, work_folder
+from ..authoring.report_text import cost_lines, report_lines, warnings
 from ..toolkit import materials
-from .sidebar import SidebarPanel, SidebarSubpanel, draw_properties, draw_status
+from .sidebar import (
+    SidebarPanel,
+    SidebarSubpanel,
+    draw_properties,
+    draw_status,
+    draw_wrapped,
+)
 
 
 def draw_job(layout, settings, job: build_job.Job | None) -> None:
@@ -57,7 +63,11 @@ class HAPTICUT_PT_scene(SidebarPanel, bpy.types.Panel):
                 if problem.object_name
                 else problem.problem
             )
-            layout.label(text=text, icon="ERROR")
+            draw_wrapped(layout, context, text, icon="ERROR")
+            if problem.place:
+                draw_wrapped(layout, context, problem.place, icon="ORIENTATION_LOCAL")
+            if problem.remedy:
+                draw_wrapped(layout, context, f"To fix: {problem.remedy}", icon="TOOL_SETTINGS")
         job = build_job.running(scene.name)
         if job is not None and job.kind == "check":
             draw_job(layout, settings, job)
@@ -142,6 +152,12 @@ class HAPTICUT_PT_build(SidebarSubpanel, bpy.types.Panel):
         else:
             layout.operator("hapticut.tetrahedralize", icon="MESH_ICOSPHERE")
         draw_status(layout, settings.status, settings.error)
+        for warning, remedy in warnings(report):  # The build's, where they are seen.
+            draw_wrapped(layout, context, warning, icon="ERROR")
+            if remedy:
+                draw_wrapped(layout, context, f"To fix: {remedy}", icon="TOOL_SETTINGS")
+        if work_folder.shared_with(context.scene) is not None:
+            layout.operator("hapticut.fork_work_folder", icon="DUPLICATE")
         row = layout.row()
         row.operator("hapticut.export_scene", icon="EXPORT")
         row.operator("hapticut.import_scene", icon="IMPORT")

@@ -15,3 +15,11 @@ def addon():
     blender_scene.enable_addon()
     yield
     blender_scene.disable_addon()
+
+
+@pytest.fixture
+def data_home(tmp_path, monkeypatch):
+    """The user's data folder (where work folders go) inside the test's temporary directory."""
+    home = tmp_path / "data"
+    monkeypatch.setenv("XDG_DATA_HOME", str(home))
+    return home

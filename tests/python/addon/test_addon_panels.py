@@ -14,6 +14,7 @@ class CheckingLayout:
 
     def __init__(self) -> None:
         self.texts: list[str] = []
+        self.operators: list[str] = []
 
     def prop(self, data, name, **options):
         assert name in data.bl_rna.properties, f"{type(data).__name__} has no {name!r}"
@@ -22,6 +23,7 @@ class CheckingLayout:
         module, name = idname.split(".")
         assert hasattr(getattr(bpy.ops, module), name), idname
         getattr(getattr(bpy.ops, module), name).get_rna_type()  # Raises when unregistered.
+        self.operators.append(idname)
         return types.SimpleNamespace()  # Its properties, set by the panel.
 
     def label(self, text="", **options):
@@ -87,6 +89,47 @@ def test_every_panel_draws_for_each_role_and_state(addon, tmp_path):
     }), bpy.context)  # fmt: skip
     assert any(text.startswith("Install: ") for text in layout.texts)
     prefs.toolkit_error = ""
+
+
+def test_problems_and_warnings_show_their_place_and_remedy_and_a_shared_folder_its_fork(
+    addon, data_home, tmp_path
+):
+    from addon.authoring import work_folder, work_owner
+    from addon.ui import scene_panels
+
+    scene = blender_scene.finger_scene("")
+    settings = scene.hapticut
+    problem = settings.problems.add()
+    problem.object_name, problem.problem = "Skin", "the mesh is open (4 boundary edges)"
+    problem.place, problem.remedy = "near (1, 2, 3) in Skin's own units", "close the holes"
+    layout = CheckingLayout()
+    draw(scene_panels.HAPTICUT_PT_scene, layout)
+    shown = " ".join(layout.texts)
+    assert "Skin: the mesh is open" in shown and "near (1, 2, 3) in Skin's own units" in shown
+    assert "To fix: close the holes" in shown
+    settings.report_json = json.dumps(
+        {
+            "tets": 10,
+            "settings": {"edge_near_mm": 2.0},
+            "accuracy_not_held": [
+                {"region": "Skin", "deviation_mm": 1.43, "accuracy_mm": 1.21, "lost_mm": 1.43,
+                 "strayed_mm": 0.2, "lost_features": []}
+            ],
+        }
+    )  # fmt: skip
+    layout = CheckingLayout()
+    draw(scene_panels.HAPTICUT_PT_build, layout)
+    shown = " ".join(layout.texts)
+    assert "accuracy not held: Skin lies up to 1.43 mm" in shown
+    assert "To fix: lower Edge near (now 2 mm)" in shown
+    assert "hapticut.fork_work_folder" not in layout.operators
+    # The folder owned by another file on disk: the panel offers the fork.
+    other = tmp_path / "other.blend"
+    other.write_bytes(b"")
+    work_owner.claim(work_folder.work_directory(scene), str(other))
+    layout = CheckingLayout()
+    draw(scene_panels.HAPTICUT_PT_build, layout)
+    assert "hapticut.fork_work_folder" in layout.operators
 
 
 def test_set_cutting_edge_takes_the_two_selected_vertices(addon, tmp_path):

@@ -10,6 +10,7 @@ import tempfile
 
 import blender_scene
 import bpy
+import numpy as np
 import pytest
 
 DOCS = blender_scene.REPO / "docs" / "addon.md"
@@ -77,9 +78,9 @@ def test_the_recipe_runs_as_a_script(addon, tmp_path, monkeypatch):
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     bpy.ops.wm.read_homefile(use_empty=True)
     blocks = code_blocks(scripting_section())
-    assert len(blocks) == 3
+    assert len(blocks) == 4
     namespace = {"__name__": "__main__"}
-    for block in blocks:
+    for block in blocks[:3]:
         exec(compile(block, str(DOCS), "exec"), namespace)
     scene = bpy.context.scene
     # Built and exported.
@@ -100,6 +101,21 @@ def test_the_recipe_runs_as_a_script(addon, tmp_path, monkeypatch):
     again = json.loads(scene.hapticut_live.bake_report)
     assert again["frames"] == namespace["baked"]["frames"]
     assert again["blades"]["Plane"]["max_force_N"] > 0
+    # The headless live session: driven, recorded, stopped, baked.
+    stroke = scene.hapticut_live.recording_path
+    exec(compile(blocks[3], str(DOCS), "exec"), namespace)
+    live = namespace["live_path"]
+    assert live != stroke and os.path.basename(live).startswith("live-")
+    from addon.live import live_link
+
+    assert live_link.current() is None  # Stopped.
+    baked_live = json.loads(scene.hapticut_live.bake_report)
+    assert baked_live["recording"] == live and baked_live["ticks"] > 100
+    # The knife went where the script moved it: down to 2 mm (into the cube) and back up.
+    poses = live_link.link().read_recording(live).ideal_pose("Plane")
+    posed = np.abs(poses[:, :3]).sum(axis=1) > 0  # Ticks before the first pose hold zeros.
+    heights = poses[np.argmax(posed) :, 2]
+    assert heights.min() == pytest.approx(2.0, abs=0.01) and heights[-1] > 19.0
 
 
 def test_wait_raises_the_build_error(addon, tmp_path, monkeypatch):

@@ -7,76 +7,12 @@ The scenes leave *Work directory* empty (the default), with the user's data fold
 the test's temporary directory (XDG_DATA_HOME)."""
 
 import json
-import os
 import shutil
 import time
 
 import blender_scene
 import bpy
-import live_support
-import pytest
-
-STROKE = ((1, (0.0, 0.0, 20.0)), (12, (0.0, 0.0, 0.0)))  # The knife down into the cube.
-
-
-@pytest.fixture
-def data_home(tmp_path, monkeypatch):
-    home = tmp_path / "data"
-    monkeypatch.setenv("XDG_DATA_HOME", str(home))
-    return home
-
-
-def cube_scene(size_mm: float = 10.0):
-    """A soft cube and the test knife over it, Work directory left empty."""
-    scene = blender_scene.empty_scene("")
-    vertices = [
-        (x * size_mm / 2, y * size_mm / 2, z * size_mm / 2)
-        for x in (-1, 1)
-        for y in (-1, 1)
-        for z in (-1, 1)
-    ]
-    faces = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
-    body = blender_scene.mesh_object("Body", vertices, faces)
-    body.hapticut.role = "REGION"
-    body.hapticut.material_preset = "soft_tissue"
-    knife = blender_scene.knife()
-    live_support.keyframe_stroke(knife, STROKE)
-    scene.hapticut_live.realtime = False  # Shared test machines: no SCHED_FIFO.
-    scene.hapticut.accuracy = 1.0  # Coarse: the tests are about files, not meshes.
-    scene.hapticut.edge_near = blender_scene.TEST_EDGE_NEAR_MM
-    return scene
-
-
-def build(scene) -> float:
-    began = time.perf_counter()
-    live_support.build(scene)
-    assert scene.hapticut.status.startswith("built"), scene.hapticut.status
-    return time.perf_counter() - began
-
-
-def exports(tmp_path, name: str) -> bool:
-    path = str(tmp_path / f"{name}.hapticut.msgpack")
-    try:
-        bpy.ops.hapticut.export_scene(filepath=path)
-        bpy.ops.hapticut.wait()
-    except RuntimeError as error:
-        assert "no scene built yet" in str(error)
-        return False
-    return os.path.getsize(path) > 0
-
-
-def simulate_and_bake(scene) -> dict:
-    from addon.bake import baking
-    from addon.live import live_link
-
-    try:
-        assert bpy.ops.hapticut.simulate_stroke() == {"FINISHED"}
-        assert bpy.ops.hapticut.wait() == {"FINISHED"}
-        assert scene.hapticut_live.error == ""
-        assert baking.baked_objects()
-        return json.loads(scene.hapticut_live.bake_report)
-    finally:
-        live_link.stop()
+from file_scenes import build, cube_scene, exports, simulate_and_bake
 
 
 def test_save_as_and_reopen_keep_the_build(addon, data_home, tmp_path):
@@ -206,3 +142,16 @@ def test_undo_steps(addon, data_home, monkeypatch):
     assert bpy.ops.hapticut.bake_recording() == {"FINISHED"}
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
     assert pushed == ["Tetrahedralize preview", "Bake stroke", "Bake"]
+
+
+def test_a_work_directory_relative_to_the_blend_is_taken_without_a_warning(addon, tmp_path):
+    import warnings
+
+    from addon.authoring import work_folder
+
+    scene = blender_scene.empty_scene("")
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "relative.blend"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # Blender 5.0 warns for a path without the option.
+        scene.hapticut.work_directory = "//hapticut-work"
+    assert work_folder.existing_work_directory(scene) == str(tmp_path / "hapticut-work")

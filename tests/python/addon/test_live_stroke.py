@@ -215,8 +215,11 @@ def test_the_cut_surface_is_in_cuttable_material_only_and_opens_over_time(baked)
     cut = bpy.data.objects["Cut Knife"]
     mesh = cut.data
     assert len(mesh.polygons) > 50
-    vertices = np.array([v.co for v in mesh.vertices])
-    corners = vertices[np.array([p.vertices[:] for p in mesh.polygons])]
+    # The swept surface lies halfway between the slit's two sheets (test_cut_slit.py).
+    sheets = np.array([v.co for v in mesh.vertices])
+    vertices = (sheets[: len(sheets) // 2] + sheets[len(sheets) // 2 :]) / 2
+    front = np.array([p.vertices[:] for p in mesh.polygons])[: len(mesh.polygons) // 2]
+    corners = vertices[front]
     centres = corners.mean(axis=1)
     midpoints = (corners + np.roll(corners, 1, axis=1)).reshape(-1, 3) / 2
     samples = np.vstack([centres, midpoints, vertices])
@@ -235,6 +238,27 @@ def test_the_cut_surface_is_in_cuttable_material_only_and_opens_over_time(baked)
         evaluated = cut.evaluated_get(bpy.context.evaluated_depsgraph_get())
         shown.append(len(evaluated.data.polygons))
     assert shown[0] == 0 < shown[1] < shown[2] == len(mesh.polygons)
+
+
+def test_the_cut_is_a_slit_on_either_side_of_the_blade(baked):
+    """Two sheets, slit_mm off the swept surface each side (the blade's plane), facing away
+    from each other: the blade's faces never share their depth."""
+    mesh = bpy.data.objects["Cut Knife"].data
+    slit_mm = json.loads(baked.hapticut_live.bake_report)["blades"]["Knife"]["cut_slit_mm"]
+    assert 0.0 < slit_mm < 1.0  # The test knife is flat: the scene's share alone.
+    sheets = np.array([v.co for v in mesh.vertices])
+    front, back = sheets[: len(sheets) // 2], sheets[len(sheets) // 2 :]
+    gaps = np.linalg.norm(front - back, axis=1) * blender_scene_mm(baked)
+    assert np.median(gaps) == pytest.approx(2 * slit_mm, rel=1e-3)
+    normals = np.array([p.normal for p in mesh.polygons])
+    half = len(normals) // 2
+    facing = np.einsum("ij,ij->i", normals[:half], normals[half:])
+    print(f"\ncut slit {slit_mm:.3f} mm on {half} faces")
+    assert facing.max() < 0  # Back to back.
+
+
+def blender_scene_mm(scene) -> float:
+    return 1000.0 * scene.unit_settings.scale_length
 
 
 def test_clear_removes_the_bake_and_bake_remakes_it_from_the_recording(baked):
