@@ -7,7 +7,7 @@ MessageReader::Result MessageReader::next(std::string& message, std::uint32_t& l
   const auto* b = reinterpret_cast<const unsigned char*>(buffer_.data());
   length = (std::uint32_t(b[0]) << 24) | (std::uint32_t(b[1]) << 16) | (std::uint32_t(b[2]) << 8) |
            std::uint32_t(b[3]);
-  if (length > kMaxMessageBytes) return Result::TooLarge;
+  if (length > limit_) return Result::TooLarge;
   if (buffer_.size() < 4 + std::size_t(length)) return Result::NeedMore;
   message.assign(buffer_, 4, length);
   buffer_.erase(0, 4 + std::size_t(length));
@@ -19,7 +19,7 @@ bool MessageReader::has_message() const {
   const auto* b = reinterpret_cast<const unsigned char*>(buffer_.data());
   const std::uint32_t length = (std::uint32_t(b[0]) << 24) | (std::uint32_t(b[1]) << 16) |
                                (std::uint32_t(b[2]) << 8) | std::uint32_t(b[3]);
-  return length > kMaxMessageBytes || buffer_.size() >= 4 + std::size_t(length);
+  return length > limit_ || buffer_.size() >= 4 + std::size_t(length);
 }
 
 std::string frame_message(const std::string& json_text) {

@@ -1,7 +1,7 @@
 // The control channel's framing (docs/protocol.md): every message is a
 // 4-byte big-endian length, then that many bytes of UTF-8 JSON (an object).
-// MessageReader cuts a byte stream into messages; a length over
-// kMaxMessageBytes is refused before any of it is buffered.
+// MessageReader cuts a byte stream into messages; a length over its limit
+// (kMaxMessageBytes unless lowered) is refused before any of it is buffered.
 #pragma once
 
 #include <cstddef>
@@ -20,6 +20,11 @@ class MessageReader {
   enum class Result { NeedMore, Message, TooLarge };
 
   void feed(const char* data, std::size_t size) { buffer_.append(data, size); }
+  // The longest message taken from now on (at most kMaxMessageBytes).
+  void set_limit(std::uint32_t limit) {
+    limit_ = limit < kMaxMessageBytes ? limit : kMaxMessageBytes;
+  }
+  std::uint32_t limit() const { return limit_; }
   // Message: `message` holds the next one. TooLarge: `length` is the refused
   // prefix; the stream cannot be resynchronised (close it).
   Result next(std::string& message, std::uint32_t& length);
@@ -29,6 +34,7 @@ class MessageReader {
 
  private:
   std::string buffer_;
+  std::uint32_t limit_ = kMaxMessageBytes;
 };
 
 // The length prefix and the text.
