@@ -93,6 +93,7 @@ Session::Session(const SessionConfig& config) {
   if (request.ramp_time_s < 0.0) request.ramp_time_s = setting_range::kRampTime.default_value;
   request.watchdog_ticks =
       std::max(1, static_cast<int>(std::lround(config.watchdog_ms / 1000.0 * rate_Hz_)));
+  request.late_tick_s = config.watchdog_ms / 1000.0;
 
   bindings_.reserve(scene_.blades.size());
   for (const BladeSpec& blade_spec : scene_.blades) {

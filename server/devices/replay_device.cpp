@@ -2,8 +2,10 @@
 
 #include <cstdio>
 #include <cstring>
+#include <limits>
 
 #include "recording/recording_file.h"
+#include "safety.h"
 
 namespace hapticut::servo {
 
@@ -59,6 +61,11 @@ std::unique_ptr<Device> make_replay_device(const DeviceSpec& spec, const DeviceC
     tick.sample.pose = {{pose[0], pose[1], pose[2]}, {pose[3], pose[4], pose[5], pose[6]}};
     tick.sample.buttons = block.buttons;
     tick.sample.dt_s = block.step_dt_s;
+    // A recorded late tick did not step; a gap no watchdog admits makes the
+    // replay's safety refuse it the same way.
+    if ((block.safety_flags & kSafetyLateTick) != 0U && block.step_kind == 0) {
+      tick.sample.dt_s = std::numeric_limits<double>::infinity();
+    }
     if (tick.status == DeviceStatus::Fresh) ++sequence;
     tick.sample.sequence = sequence;
     ticks.push_back(tick);
