@@ -22,7 +22,7 @@ Scene read_scene_source(const SessionConfig& config) {
   if (config.scene_path.empty()) throw SceneError("(file)", "no scene given");
   std::vector<std::uint8_t> bytes;
   try {
-    bytes = read_regular_file(config.scene_path, config.max_scene_bytes);
+    bytes = read_regular_file(config.scene_path, config.max_scene_bytes, "--max-scene-bytes");
   } catch (const FileRefused& e) {
     throw SceneError("(file)", e.what());
   }
@@ -82,6 +82,7 @@ Session::Session(const SessionConfig& config) {
   context.rate_Hz = rate_Hz_;
   context.as_fast_as_possible = as_fast_as_possible_;
   context.watchdog_s = config.watchdog_ms / 1000.0;
+  context.remote_bridge_allowed = config.remote_bridge_allowed;
   bounds(scene_, context.scene_min_mm, context.scene_max_mm);
 
   SafetySettings request = config.safety_request;
