@@ -17,13 +17,13 @@ namespace hapticut::servo {
 // Clients that said hello: each has a stream slot.
 inline constexpr std::size_t kMaxClients = 16;
 // Connections waiting for their hello; the oldest is closed for a new one.
-inline constexpr std::size_t kMaxWaitingConnections = 64;
+inline constexpr std::size_t kMaxWaitingConnections = 256;
 // A connection accepted this long ago without a successful hello is closed.
 inline constexpr double kHelloDeadline_s = 5.0;
 // Accepted per round of the control thread, so that a connection lives at
 // least kMaxWaitingConnections / kAcceptsPerRound rounds, each of which reads
 // it, before a flood of newer ones can close it.
-inline constexpr std::size_t kAcceptsPerRound = 16;
+inline constexpr std::size_t kAcceptsPerRound = 64;
 // The largest message before hello: a hello with a token of kMaxTokenBytes fits.
 inline constexpr std::uint32_t kMaxHelloMessageBytes = 8192;
 // A wrong token's refusal waits this long (the connection then closes).
@@ -36,7 +36,7 @@ inline constexpr std::size_t kNoConnection = static_cast<std::size_t>(-1);
 // What admission needs to know of a connection.
 struct ConnectionTimes {
   bool said_hello = false;
-  bool closing = false;  // Already on its way out: never chosen.
+  bool closing = false;  // Already on its way out: never chosen, never counted.
   double accepted_s = 0.0;
   double last_message_s = 0.0;  // The last whole message it sent (accepted_s before one).
 };

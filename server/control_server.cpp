@@ -227,7 +227,10 @@ std::vector<ConnectionTimes> ControlServer::connection_times() const {
   std::vector<ConnectionTimes> times;
   times.reserve(clients_.size());
   for (const Client& c : clients_) {
-    times.push_back({c.hello, c.closing || c.fd < 0, c.accepted_s, c.last_message_s});
+    // A connection that never said hello counts until it is closed, even with
+    // its refusal held (a wrong token): so wrong tokens cannot pile up descriptors.
+    const bool gone = c.fd < 0 || (c.hello && c.closing);
+    times.push_back({c.hello, gone, c.accepted_s, c.last_message_s});
   }
   return times;
 }
@@ -427,28 +430,62 @@ nlohmann::json ControlServer::dispatch(Client& client, const ControlMessage& req
   };
   // Every message type of the control channel (docs/protocol.md) and what
   // answers it: the connection's own commands here, the servo's in Servo.
+  // Each refuses the fields it does not take, by name; `set` names its own.
   static const std::array<Command, 12> kCommands{{
-      {"hello", [](ControlServer& s, Client& c, const ControlJson& m) { return s.hello(c, m); }},
+      {"hello",
+       [](ControlServer& s, Client& c, const ControlJson& m) {
+         refuse_unknown_fields(m, {"version", "token"});
+         return s.hello(c, m);
+       }},
       {"subscribe",
-       [](ControlServer& s, Client& c, const ControlJson& m) { return s.subscribe(c, m); }},
+       [](ControlServer& s, Client& c, const ControlJson& m) {
+         refuse_unknown_fields(m, {"port", "rate_Hz"});
+         return s.subscribe(c, m);
+       }},
       {"unsubscribe",
-       [](ControlServer& s, Client& c, const ControlJson&) { return s.unsubscribe(c); }},
-      {"status", [](ControlServer& s, Client&, const ControlJson&) { return s.status(); }},
+       [](ControlServer& s, Client& c, const ControlJson& m) {
+         refuse_unknown_fields(m, {});
+         return s.unsubscribe(c);
+       }},
+      {"status",
+       [](ControlServer& s, Client&, const ControlJson& m) {
+         refuse_unknown_fields(m, {});
+         return s.status();
+       }},
       {"set", [](ControlServer& s, Client& c, const ControlJson& m) { return s.set(c, m); }},
       {"load",
-       [](ControlServer& s, Client&, const ControlJson& m) { return s.servo_.load_command(m); }},
+       [](ControlServer& s, Client&, const ControlJson& m) {
+         refuse_unknown_fields(m, {"path", "scene", "devices", "rate_Hz", "as_fast_as_possible"});
+         return s.servo_.load_command(m);
+       }},
       {"start",
-       [](ControlServer& s, Client&, const ControlJson&) { return s.servo_.start_command(); }},
+       [](ControlServer& s, Client&, const ControlJson& m) {
+         refuse_unknown_fields(m, {});
+         return s.servo_.start_command();
+       }},
       {"stop",
-       [](ControlServer& s, Client&, const ControlJson&) { return s.servo_.stop_command(); }},
+       [](ControlServer& s, Client&, const ControlJson& m) {
+         refuse_unknown_fields(m, {});
+         return s.servo_.stop_command();
+       }},
       {"engage",
-       [](ControlServer& s, Client&, const ControlJson& m) { return s.servo_.engage_command(m); }},
+       [](ControlServer& s, Client&, const ControlJson& m) {
+         refuse_unknown_fields(m, {"engaged"});
+         return s.servo_.engage_command(m);
+       }},
       {"record",
-       [](ControlServer& s, Client&, const ControlJson& m) { return s.servo_.record_command(m); }},
+       [](ControlServer& s, Client&, const ControlJson& m) {
+         refuse_unknown_fields(m, {"action", "path"});
+         return s.servo_.record_command(m);
+       }},
       {"pose",
-       [](ControlServer& s, Client&, const ControlJson& m) { return s.servo_.pose_command(m); }},
+       [](ControlServer& s, Client&, const ControlJson& m) {
+         refuse_unknown_fields(m, {"blade", "pose", "buttons"});
+         return s.servo_.pose_command(m);
+       }},
       {"shutdown",
-       [](ControlServer& s, Client&, const ControlJson&) {
+       [](ControlServer& s, Client&, const ControlJson& m) {
+         refuse_unknown_fields(m, {});
          s.servo_.request_shutdown();
          return nlohmann::json::object();
        }},

@@ -449,6 +449,9 @@ nlohmann::json Servo::set_parameters(const ControlJson& message) {
 nlohmann::json Servo::load_command(const ControlJson& message) {
   SessionConfig config = config_from_options();
   config.scene_path.clear();
+  if (has_field(message, "path") && has_field(message, "scene")) {
+    throw CommandError("load takes \"path\" or \"scene\", not both");
+  }
   if (has_field(message, "path")) {
     config.scene_path = string_field(message, "path", kMaxPathBytes);
   } else if (has_field(message, "scene")) {

@@ -117,8 +117,8 @@ def test_wrong_tokens_at_any_rate_never_keep_the_right_token_out(tmp_path):
         with socket.create_connection(("127.0.0.1", servo.port), timeout=2) as sock:
             sock.settimeout(2)
             sock.sendall(hello_text("another-wrong-guess-yyyyyyyyyyy"))
-            reply = read_reply(sock)
-            assert reply is not None and "wrong or missing token" in reply["error"]
+            reply = read_reply(sock)  # None or "closed: ...": made room for newer ones
+            assert reply is None or not reply["ok"], reply
 
     with ServoProcess([*LIVE, "--token-file", str(token_file)]) as servo:
         with Attacker(guess_without_waiting, 3) as fast, Attacker(guess_and_wait, 2) as waiting:
