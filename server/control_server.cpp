@@ -2,6 +2,8 @@
 
 #include <arpa/inet.h>
 #include <fcntl.h>
+#include <malloc.h>
+#include <netinet/tcp.h>
 #include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -54,6 +56,10 @@ void close_after_reply(int fd) {
 
 ControlServer::ControlServer(Servo& servo, const Options& options)
     : servo_(servo), options_(options) {
+  // A large message's buffers come from mmap and go back to the system when
+  // freed, whatever came before (a fixed threshold: glibc's own rises after
+  // the first large free, and memory freed in its heap may stay).
+  mallopt(M_MMAP_THRESHOLD, static_cast<int>(kFreeBytesPerClient * 4));
   in_addr address{};
   if (inet_pton(AF_INET, options.listen_address.c_str(), &address) != 1) {
     throw NetworkError("--listen: '" + options.listen_address + "' is not an IPv4 address");
@@ -80,6 +86,11 @@ ControlServer::ControlServer(Servo& servo, const Options& options)
   getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&bind_address), &length);
   port_ = ntohs(bind_address.sin_port);
   set_nonblocking(listen_fd_);
+  // A connection is handed over only once it has sent something: silent ones
+  // never reach the waiting pool, and a client's hello is there to be read in
+  // the round that accepts it, before any newer connection can close it.
+  const int defer_s = static_cast<int>(kHelloDeadline_s);
+  setsockopt(listen_fd_, IPPROTO_TCP, TCP_DEFER_ACCEPT, &defer_s, sizeof(defer_s));
 
   udp_fd_ = socket(AF_INET, SOCK_DGRAM, 0);
   sockaddr_in udp_address{};
@@ -141,11 +152,13 @@ void ControlServer::serve() {
     fds.push_back({udp_fd_, static_cast<short>(stray_paused ? 0 : POLLIN), 0});
     bool pending = false;  // Whole messages left over from the last round.
     const double round_s = monotonic_now_s();
-    for (const Client& c : clients_) {
+    for (Client& c : clients_) {
       // Not read while its unsent replies are over the budget: it is not reading them.
-      // A held refusal is neither read after nor written until its time.
+      // A held refusal is neither read after nor written until its time. Nor while
+      // the memory for its next message cannot be reserved.
       const bool held = round_s < c.hold_replies_until_s;
-      const bool readable = !held && c.out.size() <= kClientBacklogBudget;
+      const bool readable = !held && c.out.size() <= kClientBacklogBudget &&
+                            (c.reader.has_message() || read_allowance(c) > 0);
       pending = pending || (readable && c.reader.has_message());
       const bool writable = !held && !c.out.empty();
       fds.push_back(
@@ -181,6 +194,7 @@ void ControlServer::serve() {
                                     if (c.fd >= 0 && !(c.closing && c.out.empty())) return false;
                                     if (c.fd >= 0) close_after_reply(c.fd);
                                     if (c.has_slot) set_subscription(c, 0, 0.0);
+                                    release_reservation(c);
                                     return true;
                                   }),
                    clients_.end());
@@ -283,7 +297,35 @@ void ControlServer::accept_clients() {
     client.last_message_s = client.accepted_s;
     client.reader.set_limit(kMaxHelloMessageBytes);
     clients_.push_back(std::move(client));
+    // Its hello is usually here already: handled now, it cannot be closed
+    // to make room for the connections accepted after it.
+    Client& accepted_client = clients_.back();
+    read_client(accepted_client);
+    if (accepted_client.fd >= 0) handle_pending(accepted_client);
   }
+}
+
+std::size_t ControlServer::read_allowance(Client& client) {
+  std::size_t room = kFreeBytesPerClient;
+  std::uint32_t length = 0;
+  if (client.reader.next_length(length) && length <= client.reader.limit() &&
+      4 + std::size_t(length) > kFreeBytesPerClient) {
+    const std::size_t needed = 4 + std::size_t(length);
+    if (client.reservation < needed) {
+      if (large_message_bytes_ - client.reservation + needed > kMaxLargeMessageBytes) return 0;
+      large_message_bytes_ += needed - client.reservation;
+      client.reservation = needed;
+      client.reader.reserve(needed);
+    }
+    room = needed;
+  }
+  const std::size_t buffered = client.reader.buffered();
+  return buffered < room ? room - buffered : 0;
+}
+
+void ControlServer::release_reservation(Client& client) {
+  large_message_bytes_ -= client.reservation;
+  client.reservation = 0;
 }
 
 void ControlServer::read_client(Client& client) {
@@ -292,7 +334,9 @@ void ControlServer::read_client(Client& client) {
   // At most a round's budget, and never more than one whole message beyond
   // what is buffered: a flooding client waits for its own messages.
   while (read_bytes < kReadBytesPerRound && !client.reader.has_message()) {
-    const ssize_t n = recv(client.fd, buffer, sizeof(buffer), 0);
+    const std::size_t allowance = std::min(sizeof(buffer), read_allowance(client));
+    if (allowance == 0) break;
+    const ssize_t n = recv(client.fd, buffer, allowance, 0);
     if (n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) {
       close(client.fd);  // Gone: its subscription goes with it.
       client.fd = -1;
@@ -324,7 +368,16 @@ void ControlServer::handle_pending(Client& client) {
       return;
     }
     client.last_message_s = monotonic_now_s();
+    // A large message's reservation covers it until it is handled.
+    const bool large = client.reservation != 0;
     handle(client, message);
+    release_reservation(client);
+    if (large) {
+      // Give the memory of a large message back: to the system, not only to the heap.
+      message = std::string();
+      client.reader.release_spare_capacity();
+      malloc_trim(0);
+    }
   }
 }
 
@@ -338,6 +391,9 @@ void ControlServer::write_client(Client& client) {
       return;
     }
     client.out.erase(0, static_cast<std::size_t>(n));
+  }
+  if (client.out.empty() && client.out.capacity() > kFreeBytesPerClient) {
+    std::string().swap(client.out);
   }
   if (client.out.size() > kMaxClientBacklog) cut_off(client);  // Not reading its replies.
 }

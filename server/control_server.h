@@ -80,6 +80,7 @@ class ControlServer {
     double accepted_s = 0.0;
     double last_message_s = 0.0;
     double hold_replies_until_s = 0.0;  // A wrong token's refusal waits until then.
+    std::size_t reservation = 0;        // Of large_message_bytes_, for its next message.
   };
   // A subscription, shared by the two threads under subscribers_mutex_.
   struct Subscriber {
@@ -96,6 +97,8 @@ class ControlServer {
   void set_subscription(Client& client, int port, double rate_Hz);
   void accept_clients();
   void read_client(Client& client);
+  std::size_t read_allowance(Client& client);
+  void release_reservation(Client& client);
   void handle_pending(Client& client);
   void cut_off(Client& client);
   void close_now(Client& client, const std::string& why);
@@ -130,8 +133,9 @@ class ControlServer {
   std::atomic<std::uint64_t> frames_dropped_{0};  // Send buffer full (slow client).
   // Tick to sendto, per frame sent (the servo's share of a frame's age).
   std::unique_ptr<LatencyHistogram> send_age_us_ = std::make_unique<LatencyHistogram>();
-  double last_frame_time_s_ = 0.0;    // servo_time_s of the last frame fetched (stream thread).
-  double stray_pause_until_s_ = 0.0;  // Stream socket not read until then.
+  double last_frame_time_s_ = 0.0;       // servo_time_s of the last frame fetched (stream thread).
+  double stray_pause_until_s_ = 0.0;     // Stream socket not read until then.
+  std::size_t large_message_bytes_ = 0;  // Reserved by clients for messages being read.
   std::thread thread_;
   std::thread stream_thread_;
   std::atomic<bool> quit_{false};
@@ -145,6 +149,12 @@ inline constexpr double kBacklogCutOff_s = 2.0;
 // Per client per round of the control thread, so that one client's messages
 // wait behind each other, not another client's.
 inline constexpr std::size_t kReadBytesPerRound = 256U << 10;
+// The control channel's input memory: each connection buffers up to
+// kFreeBytesPerClient; a longer message is read only once its whole length
+// is reserved from kMaxLargeMessageBytes, shared by all clients (room for
+// four messages of the largest size), so that every message begun can end.
+inline constexpr std::size_t kFreeBytesPerClient = 64U << 10;
+inline constexpr std::size_t kMaxLargeMessageBytes = 64U << 20;
 inline constexpr int kMessagesPerRound = 32;
 inline constexpr double kMinStreamRate_Hz = 1.0;
 inline constexpr double kMaxStreamRate_Hz = 1000.0;

@@ -31,6 +31,14 @@ class MessageReader {
   std::size_t buffered() const { return buffer_.size(); }
   // Whether next() would return a message (or refuse one) without more bytes.
   bool has_message() const;
+  // The next message's length, once its prefix is buffered.
+  bool next_length(std::uint32_t& length) const;
+  // Makes room for `bytes` at once, so that a large message is never copied
+  // while it grows.
+  void reserve(std::size_t bytes) { buffer_.reserve(bytes); }
+  // Gives memory back once a large message has gone: the buffer keeps what it
+  // holds, not the capacity the large one needed.
+  void release_spare_capacity();
 
  private:
   std::string buffer_;
