@@ -250,6 +250,14 @@ std::vector<ConnectionTimes> ControlServer::connection_times() const {
 }
 
 void ControlServer::make_room_for_hello() {
+  // Clients on their way out (an error that closes them, a peer gone) give
+  // up their slots first, so that the slots held are those of the clients counted.
+  for (Client& c : clients_) {
+    if (c.has_slot && (c.fd < 0 || c.closing)) {
+      set_subscription(c, 0, 0.0);
+      c.has_slot = false;
+    }
+  }
   const std::size_t idle = client_to_close_for_hello(connection_times());
   if (idle == kNoConnection) return;
   ++counters_.idle_clients_closed;
