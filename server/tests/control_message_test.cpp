@@ -27,7 +27,9 @@ std::string field_refusal(const std::string& text, const char* key) {
 }
 
 TEST(ControlMessage, AByteOrderMarkAndAnEscapedNulAreRefused) {
-  EXPECT_NE(refusal("\xEF\xBB\xBF" R"({"type":"status"})").find("byte order mark"),
+  EXPECT_NE(refusal("\xEF\xBB\xBF"
+                    R"({"type":"status"})")
+                .find("byte order mark"),
             std::string::npos);
   EXPECT_NE(refusal(R"({"type":"load","path":"a\u0000b"})").find("NUL"), std::string::npos);
   EXPECT_NE(refusal(R"({"type":"status","a\u0000":1})").find("NUL"), std::string::npos);
