@@ -133,7 +133,8 @@ std::string below_directory(const std::string& directory, const std::string& res
 
 }  // namespace
 
-std::vector<std::uint8_t> read_regular_file(const std::string& path, std::uint64_t max_bytes) {
+int open_regular_file(const std::string& path, std::uint64_t max_bytes, std::uint64_t& size,
+                      const char* limit_source) {
   struct stat info {};
   if (::stat(path.c_str(), &info) != 0) refuse_errno(path, errno);
   require_regular(path, info);
@@ -141,11 +142,18 @@ std::vector<std::uint8_t> read_regular_file(const std::string& path, std::uint64
   if (fd.get() < 0) refuse_errno(path, errno);
   if (::fstat(fd.get(), &info) != 0) refuse_errno(path, errno);
   require_regular(path, info);
-  const auto size = static_cast<std::uint64_t>(info.st_size);
+  size = static_cast<std::uint64_t>(info.st_size);
   if (size > max_bytes) {
     refuse(path, size_text(size) + " is over the limit of " + size_text(max_bytes) +
-                     " (--max-scene-bytes)");
+                     (limit_source != nullptr ? std::string(" (") + limit_source + ")" : ""));
   }
+  return fd.release();
+}
+
+std::vector<std::uint8_t> read_regular_file(const std::string& path, std::uint64_t max_bytes,
+                                            const char* limit_source) {
+  std::uint64_t size = 0;
+  Descriptor fd(open_regular_file(path, max_bytes, size, limit_source));
   std::vector<std::uint8_t> bytes(size);
   std::size_t done = 0;
   while (done < bytes.size()) {

@@ -24,7 +24,14 @@ inline constexpr std::uint64_t kDefaultMaxSceneBytes = 256ULL << 20;
 // it is opened (a FIFO, a device, a socket or a directory is refused without
 // opening it), it is opened with O_NONBLOCK so that opening never waits, and
 // checked again on the open descriptor (the name may have changed between).
-std::vector<std::uint8_t> read_regular_file(const std::string& path, std::uint64_t max_bytes);
+// A refusal on size names `limit_source` (the option that sets the limit) when given.
+std::vector<std::uint8_t> read_regular_file(const std::string& path, std::uint64_t max_bytes,
+                                            const char* limit_source = nullptr);
+
+// The same rules, for a file read a part at a time: the descriptor (the caller
+// closes it) and, in `size`, the file's size (at most max_bytes).
+int open_regular_file(const std::string& path, std::uint64_t max_bytes, std::uint64_t& size,
+                      const char* limit_source = nullptr);
 
 // $XDG_STATE_HOME/hapticut/recordings, else $HOME/.local/state/hapticut/recordings.
 std::string default_recording_directory();

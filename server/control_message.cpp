@@ -1,5 +1,6 @@
 #include "control_message.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -21,7 +22,38 @@ const ControlJson& field(const ControlJson& message, const char* key) {
   return *it;
 }
 
+// Whether a key or a string anywhere in `value` holds a NUL (JSON's \u0000),
+// which the decoder lets through and which would cut a C string short.
+bool holds_nul(const ControlJson& value) {
+  if (value.is_string()) return value.get_ref<const std::string&>().find('\0') != std::string::npos;
+  if (value.is_object()) {
+    for (const auto& [key, item] : value.items()) {
+      if (key.find('\0') != std::string::npos || holds_nul(item)) return true;
+    }
+  }
+  if (value.is_array()) {
+    for (const ControlJson& item : value) {
+      if (holds_nul(item)) return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace
+
+void refuse_unknown_fields(const ControlJson& message, std::initializer_list<const char*> known) {
+  for (const auto& [key, value] : message.items()) {
+    if (key == "type" || key == "id") continue;
+    const bool found = std::any_of(known.begin(), known.end(),
+                                   [&key = key](const char* name) { return key == name; });
+    if (found) continue;
+    std::string names;
+    for (const char* name : known) names += (names.empty() ? "" : ", ") + std::string(name);
+    throw CommandError("unknown field " + quoted_excerpt(key) + " (\"" +
+                       message.at("type").get<std::string>() + "\" takes " +
+                       (names.empty() ? std::string("none") : names) + ")");
+  }
+}
 
 std::string quoted_excerpt(std::string_view text) {
   const bool cut = text.size() > kMaxEchoBytes;
@@ -30,6 +62,10 @@ std::string quoted_excerpt(std::string_view text) {
 }
 
 ControlMessage parse_control_message(std::string_view text) {
+  // JSON text exchanged between systems must not begin with a byte order mark (RFC 8259, 8.1).
+  if (text.substr(0, 3) == "\xEF\xBB\xBF") {
+    throw MalformedMessage("malformed JSON: a byte order mark before the object");
+  }
   ControlMessage message;
   try {
     message.body = decode_scene_tree(text, SceneEncoding::Json);
@@ -38,6 +74,9 @@ ControlMessage parse_control_message(std::string_view text) {
   }
   const ControlJson& body = message.body;
   if (!body.is_object()) throw MalformedMessage("malformed message: expected an object");
+  if (holds_nul(body)) {
+    throw MalformedMessage("malformed message: a key or string holds \\u0000 (NUL)");
+  }
   const auto type = body.find("type");
   if (type == body.end() || !type->is_string()) {
     throw MalformedMessage("malformed message: expected an object with a string \"type\"");
@@ -68,7 +107,10 @@ std::int64_t integer_field(const ControlJson& message, const char* key, std::int
   if (!value.is_number_integer()) refuse(key, "expected an integer, " + range);
   if (value.is_number_unsigned()) {
     const auto v = value.get<std::uint64_t>();
-    if (v > static_cast<std::uint64_t>(maximum)) refuse(key, "out of range (" + range + ")");
+    const bool below = minimum > 0 && v < static_cast<std::uint64_t>(minimum);
+    if (below || v > static_cast<std::uint64_t>(maximum)) {
+      refuse(key, "out of range (" + range + ")");
+    }
     return static_cast<std::int64_t>(v);
   }
   const auto v = value.get<std::int64_t>();

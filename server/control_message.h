@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
@@ -49,6 +50,10 @@ struct ControlMessage {
 // not an object, no string "type" of 1 to kMaxTypeBytes bytes, an "id" that is
 // neither an integer nor a string of at most kMaxIdBytes bytes.
 ControlMessage parse_control_message(std::string_view text);
+
+// Throws CommandError naming the first field of `message` that is neither
+// "type", "id" nor one of `known`, and the fields the message type takes.
+void refuse_unknown_fields(const ControlJson& message, std::initializer_list<const char*> known);
 
 // The field readers: each throws CommandError "<key>: <reason>".
 bool has_field(const ControlJson& message, const char* key);

@@ -2,6 +2,8 @@
 
 #include <arpa/inet.h>
 #include <fcntl.h>
+#include <malloc.h>
+#include <netinet/tcp.h>
 #include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -54,6 +56,10 @@ void close_after_reply(int fd) {
 
 ControlServer::ControlServer(Servo& servo, const Options& options)
     : servo_(servo), options_(options) {
+  // A large message's buffers come from mmap and go back to the system when
+  // freed, whatever came before (a fixed threshold: glibc's own rises after
+  // the first large free, and memory freed in its heap may stay).
+  mallopt(M_MMAP_THRESHOLD, static_cast<int>(kFreeBytesPerClient * 4));
   in_addr address{};
   if (inet_pton(AF_INET, options.listen_address.c_str(), &address) != 1) {
     throw NetworkError("--listen: '" + options.listen_address + "' is not an IPv4 address");
@@ -70,7 +76,7 @@ ControlServer::ControlServer(Servo& servo, const Options& options)
   bind_address.sin_addr = address;
   bind_address.sin_port = htons(static_cast<std::uint16_t>(options.control_port));
   if (bind(listen_fd_, reinterpret_cast<sockaddr*>(&bind_address), sizeof(bind_address)) != 0 ||
-      listen(listen_fd_, 8) != 0) {
+      listen(listen_fd_, SOMAXCONN) != 0) {
     const std::string why = errno_text();
     close(listen_fd_);
     throw NetworkError("control port " + options.listen_address + ":" +
@@ -80,6 +86,11 @@ ControlServer::ControlServer(Servo& servo, const Options& options)
   getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&bind_address), &length);
   port_ = ntohs(bind_address.sin_port);
   set_nonblocking(listen_fd_);
+  // A connection is handed over only once it has sent something: silent ones
+  // never reach the waiting pool, and a client's hello is there to be read in
+  // the round that accepts it, before any newer connection can close it.
+  const int defer_s = static_cast<int>(kHelloDeadline_s);
+  setsockopt(listen_fd_, IPPROTO_TCP, TCP_DEFER_ACCEPT, &defer_s, sizeof(defer_s));
 
   udp_fd_ = socket(AF_INET, SOCK_DGRAM, 0);
   sockaddr_in udp_address{};
@@ -140,12 +151,18 @@ void ControlServer::serve() {
     const bool stray_paused = monotonic_now_s() < stray_pause_until_s_;
     fds.push_back({udp_fd_, static_cast<short>(stray_paused ? 0 : POLLIN), 0});
     bool pending = false;  // Whole messages left over from the last round.
-    for (const Client& c : clients_) {
+    const double round_s = monotonic_now_s();
+    for (Client& c : clients_) {
       // Not read while its unsent replies are over the budget: it is not reading them.
-      const bool readable = c.out.size() <= kClientBacklogBudget;
+      // A held refusal is neither read after nor written until its time. Nor while
+      // the memory for its next message cannot be reserved.
+      const bool held = round_s < c.hold_replies_until_s;
+      const bool readable = !held && c.out.size() <= kClientBacklogBudget &&
+                            (c.reader.has_message() || read_allowance(c) > 0);
       pending = pending || (readable && c.reader.has_message());
+      const bool writable = !held && !c.out.empty();
       fds.push_back(
-          {c.fd, static_cast<short>((readable ? POLLIN : 0) | (c.out.empty() ? 0 : POLLOUT)), 0});
+          {c.fd, static_cast<short>((readable ? POLLIN : 0) | (writable ? POLLOUT : 0)), 0});
     }
     const timespec timeout = to_timespec(pending ? 0.0 : 0.05);
     const int ready = ppoll(fds.data(), fds.size(), &timeout, nullptr);
@@ -157,9 +174,11 @@ void ControlServer::serve() {
     for (std::size_t i = 0; i < polled && i < clients_.size(); ++i) {
       Client& c = clients_[i];
       const short events = ready > 0 ? fds[i + 2].revents : 0;
+      if (c.fd >= 0 && now_s < c.hold_replies_until_s) continue;
       if (c.fd >= 0 && (events & (POLLIN | POLLHUP | POLLERR))) read_client(c);
       if (c.fd >= 0 && c.out.size() <= kClientBacklogBudget) handle_pending(c);
-      if (c.fd >= 0 && !c.out.empty()) write_client(c);
+      if (c.fd >= 0) enforce_hello_deadline(c, now_s);
+      if (c.fd >= 0 && !c.out.empty() && now_s >= c.hold_replies_until_s) write_client(c);
       if (c.fd < 0) continue;
       if (c.out.size() <= kClientBacklogBudget) {
         c.backlog_since_s = 0.0;
@@ -174,7 +193,8 @@ void ControlServer::serve() {
                                   [this](Client& c) {
                                     if (c.fd >= 0 && !(c.closing && c.out.empty())) return false;
                                     if (c.fd >= 0) close_after_reply(c.fd);
-                                    set_subscription(c, 0, 0.0);
+                                    if (c.has_slot) set_subscription(c, 0, 0.0);
+                                    release_reservation(c);
                                     return true;
                                   }),
                    clients_.end());
@@ -193,6 +213,59 @@ void ControlServer::cut_off(Client& client) {
   client.fd = -1;
 }
 
+void ControlServer::close_now(Client& client, const std::string& why) {
+  // One try at saying why; the connection closes whether or not it is read.
+  const nlohmann::json reply = {{"type", "error"}, {"ok", false}, {"error", why}};
+  const std::string text = frame_message(reply.dump());
+  (void)!send(client.fd, text.data(), text.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+  close(client.fd);
+  client.fd = -1;
+  if (client.has_slot) set_subscription(client, 0, 0.0);
+  client.has_slot = false;
+  client.hello = false;
+}
+
+void ControlServer::enforce_hello_deadline(Client& client, double now_s) {
+  if (client.hello || client.closing || now_s - client.accepted_s <= kHelloDeadline_s) return;
+  ++counters_.hello_timeouts;
+  client.out += frame_message(nlohmann::json{
+      {"type", "error"},
+      {"ok", false},
+      {"error", "no hello within " + std::to_string(static_cast<int>(kHelloDeadline_s)) +
+                    " s; closing the connection"}}
+                                  .dump());
+  client.closing = true;
+}
+
+std::vector<ConnectionTimes> ControlServer::connection_times() const {
+  std::vector<ConnectionTimes> times;
+  times.reserve(clients_.size());
+  for (const Client& c : clients_) {
+    // A connection that never said hello counts until it is closed, even with
+    // its refusal held (a wrong token): so wrong tokens cannot pile up descriptors.
+    const bool gone = c.fd < 0 || (c.hello && c.closing);
+    times.push_back({c.hello, gone, c.accepted_s, c.last_message_s});
+  }
+  return times;
+}
+
+void ControlServer::make_room_for_hello() {
+  // Clients on their way out (an error that closes them, a peer gone) give
+  // up their slots first, so that the slots held are those of the clients counted.
+  for (Client& c : clients_) {
+    if (c.has_slot && (c.fd < 0 || c.closing)) {
+      set_subscription(c, 0, 0.0);
+      c.has_slot = false;
+    }
+  }
+  const std::size_t idle = client_to_close_for_hello(connection_times());
+  if (idle == kNoConnection) return;
+  ++counters_.idle_clients_closed;
+  close_now(clients_[idle], "closed: a new client said hello while all " +
+                                std::to_string(kMaxClients) +
+                                " client slots were taken, and this one had been idle longest");
+}
+
 void ControlServer::stream() {
   // Frames: wake just after the next one is due (then every 0.1 ms until it
   // is there); else every 20 ms to see whether anyone subscribed.
@@ -209,27 +282,58 @@ void ControlServer::stream() {
 }
 
 void ControlServer::accept_clients() {
-  for (;;) {
+  for (std::size_t accepted = 0; accepted < kAcceptsPerRound; ++accepted) {
     sockaddr_in peer{};
     socklen_t length = sizeof(peer);
     const int fd = accept(listen_fd_, reinterpret_cast<sockaddr*>(&peer), &length);
     if (fd < 0) return;
     ++counters_.connections;
-    if (clients_.size() >= kMaxClients) {
-      ++counters_.refused_clients;
-      const std::string reply = frame_message(
-          R"({"type":"error","ok":false,"error":"too many clients (16); try again later"})");
-      (void)!send(fd, reply.data(), reply.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
-      close(fd);
-      continue;
+    // A new connection always gets in: a flood of connections that never say
+    // hello closes only the oldest of them, never a client that said hello.
+    const std::size_t oldest = waiting_connection_to_close(connection_times());
+    if (oldest != kNoConnection) {
+      ++counters_.waiting_closed;
+      close_now(clients_[oldest], "closed: too many connections waiting for their hello (" +
+                                      std::to_string(kMaxWaitingConnections) +
+                                      "); this one was the oldest");
     }
     set_nonblocking(fd);
     Client client;
     client.fd = fd;
     client.peer = peer;
-    client.slot = free_slot();
+    client.accepted_s = monotonic_now_s();
+    client.last_message_s = client.accepted_s;
+    client.reader.set_limit(kMaxHelloMessageBytes);
     clients_.push_back(std::move(client));
+    // Its hello is usually here already: handled now, it cannot be closed
+    // to make room for the connections accepted after it.
+    Client& accepted_client = clients_.back();
+    read_client(accepted_client);
+    if (accepted_client.fd >= 0) handle_pending(accepted_client);
   }
+}
+
+std::size_t ControlServer::read_allowance(Client& client) {
+  std::size_t room = kFreeBytesPerClient;
+  std::uint32_t length = 0;
+  if (client.reader.next_length(length) && length <= client.reader.limit() &&
+      4 + std::size_t(length) > kFreeBytesPerClient) {
+    const std::size_t needed = 4 + std::size_t(length);
+    if (client.reservation < needed) {
+      if (large_message_bytes_ - client.reservation + needed > kMaxLargeMessageBytes) return 0;
+      large_message_bytes_ += needed - client.reservation;
+      client.reservation = needed;
+      client.reader.reserve(needed);
+    }
+    room = needed;
+  }
+  const std::size_t buffered = client.reader.buffered();
+  return buffered < room ? room - buffered : 0;
+}
+
+void ControlServer::release_reservation(Client& client) {
+  large_message_bytes_ -= client.reservation;
+  client.reservation = 0;
 }
 
 void ControlServer::read_client(Client& client) {
@@ -238,7 +342,9 @@ void ControlServer::read_client(Client& client) {
   // At most a round's budget, and never more than one whole message beyond
   // what is buffered: a flooding client waits for its own messages.
   while (read_bytes < kReadBytesPerRound && !client.reader.has_message()) {
-    const ssize_t n = recv(client.fd, buffer, sizeof(buffer), 0);
+    const std::size_t allowance = std::min(sizeof(buffer), read_allowance(client));
+    if (allowance == 0) break;
+    const ssize_t n = recv(client.fd, buffer, allowance, 0);
     if (n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) {
       close(client.fd);  // Gone: its subscription goes with it.
       client.fd = -1;
@@ -263,12 +369,23 @@ void ControlServer::handle_pending(Client& client) {
           {"type", "error"},
           {"ok", false},
           {"error", "message of " + std::to_string(length) + " bytes exceeds the limit of " +
-                        std::to_string(kMaxMessageBytes) + " bytes; closing the connection"}};
+                        std::to_string(client.reader.limit()) + " bytes" +
+                        (client.hello ? "" : " before hello") + "; closing the connection"}};
       client.out += frame_message(reply.dump());
       client.closing = true;
       return;
     }
+    client.last_message_s = monotonic_now_s();
+    // A large message's reservation covers it until it is handled.
+    const bool large = client.reservation != 0;
     handle(client, message);
+    release_reservation(client);
+    if (large) {
+      // Give the memory of a large message back: to the system, not only to the heap.
+      message = std::string();
+      client.reader.release_spare_capacity();
+      malloc_trim(0);
+    }
   }
 }
 
@@ -282,6 +399,9 @@ void ControlServer::write_client(Client& client) {
       return;
     }
     client.out.erase(0, static_cast<std::size_t>(n));
+  }
+  if (client.out.empty() && client.out.capacity() > kFreeBytesPerClient) {
+    std::string().swap(client.out);
   }
   if (client.out.size() > kMaxClientBacklog) cut_off(client);  // Not reading its replies.
 }
@@ -338,28 +458,25 @@ nlohmann::json ControlServer::hello(Client& client, const ControlJson& message) 
                        ")");
   }
   if (!options_.token.empty()) {
-    const double now_s = monotonic_now_s();
-    if (now_s < token_locked_until_s_) {
-      ++counters_.unauthenticated;
-      ++counters_.token_lockouts;
-      client.closing = true;
-      throw CommandError(
-          "too many wrong tokens; hello is refused for " +
-          std::to_string(static_cast<int>(std::ceil(token_locked_until_s_ - now_s))) + " s more");
-    }
     const std::string token = message.contains("token") && message.at("token").is_string()
                                   ? message.at("token").get<std::string>()
                                   : std::string();
     if (!same_token(token, options_.token)) {
+      // One try per connection, refused only after a while: a guesser pays a
+      // connection and the delay for each guess, and the right token, checked
+      // on its own connection, is never held up by the wrong ones.
       ++counters_.unauthenticated;
+      ++counters_.wrong_tokens;
       client.closing = true;
-      if (++wrong_tokens_ >= kMaxWrongTokens) {
-        wrong_tokens_ = 0;
-        token_locked_until_s_ = now_s + kTokenLockout_s;
-      }
+      client.hold_replies_until_s = monotonic_now_s() + kWrongTokenDelay_s;
       throw CommandError("wrong or missing token");
     }
-    wrong_tokens_ = 0;
+  }
+  if (!client.hello) {
+    make_room_for_hello();
+    client.slot = free_slot();
+    client.has_slot = true;
+    client.reader.set_limit(kMaxMessageBytes);
   }
   client.hello = true;
   return {{"version", kProtocolVersion},
@@ -377,28 +494,62 @@ nlohmann::json ControlServer::dispatch(Client& client, const ControlMessage& req
   };
   // Every message type of the control channel (docs/protocol.md) and what
   // answers it: the connection's own commands here, the servo's in Servo.
+  // Each refuses the fields it does not take, by name; `set` names its own.
   static const std::array<Command, 12> kCommands{{
-      {"hello", [](ControlServer& s, Client& c, const ControlJson& m) { return s.hello(c, m); }},
+      {"hello",
+       [](ControlServer& s, Client& c, const ControlJson& m) {
+         refuse_unknown_fields(m, {"version", "token"});
+         return s.hello(c, m);
+       }},
       {"subscribe",
-       [](ControlServer& s, Client& c, const ControlJson& m) { return s.subscribe(c, m); }},
+       [](ControlServer& s, Client& c, const ControlJson& m) {
+         refuse_unknown_fields(m, {"port", "rate_Hz"});
+         return s.subscribe(c, m);
+       }},
       {"unsubscribe",
-       [](ControlServer& s, Client& c, const ControlJson&) { return s.unsubscribe(c); }},
-      {"status", [](ControlServer& s, Client&, const ControlJson&) { return s.status(); }},
+       [](ControlServer& s, Client& c, const ControlJson& m) {
+         refuse_unknown_fields(m, {});
+         return s.unsubscribe(c);
+       }},
+      {"status",
+       [](ControlServer& s, Client&, const ControlJson& m) {
+         refuse_unknown_fields(m, {});
+         return s.status();
+       }},
       {"set", [](ControlServer& s, Client& c, const ControlJson& m) { return s.set(c, m); }},
       {"load",
-       [](ControlServer& s, Client&, const ControlJson& m) { return s.servo_.load_command(m); }},
+       [](ControlServer& s, Client&, const ControlJson& m) {
+         refuse_unknown_fields(m, {"path", "scene", "devices", "rate_Hz", "as_fast_as_possible"});
+         return s.servo_.load_command(m);
+       }},
       {"start",
-       [](ControlServer& s, Client&, const ControlJson&) { return s.servo_.start_command(); }},
+       [](ControlServer& s, Client&, const ControlJson& m) {
+         refuse_unknown_fields(m, {});
+         return s.servo_.start_command();
+       }},
       {"stop",
-       [](ControlServer& s, Client&, const ControlJson&) { return s.servo_.stop_command(); }},
+       [](ControlServer& s, Client&, const ControlJson& m) {
+         refuse_unknown_fields(m, {});
+         return s.servo_.stop_command();
+       }},
       {"engage",
-       [](ControlServer& s, Client&, const ControlJson& m) { return s.servo_.engage_command(m); }},
+       [](ControlServer& s, Client&, const ControlJson& m) {
+         refuse_unknown_fields(m, {"engaged"});
+         return s.servo_.engage_command(m);
+       }},
       {"record",
-       [](ControlServer& s, Client&, const ControlJson& m) { return s.servo_.record_command(m); }},
+       [](ControlServer& s, Client&, const ControlJson& m) {
+         refuse_unknown_fields(m, {"action", "path"});
+         return s.servo_.record_command(m);
+       }},
       {"pose",
-       [](ControlServer& s, Client&, const ControlJson& m) { return s.servo_.pose_command(m); }},
+       [](ControlServer& s, Client&, const ControlJson& m) {
+         refuse_unknown_fields(m, {"blade", "pose", "buttons"});
+         return s.servo_.pose_command(m);
+       }},
       {"shutdown",
-       [](ControlServer& s, Client&, const ControlJson&) {
+       [](ControlServer& s, Client&, const ControlJson& m) {
+         refuse_unknown_fields(m, {});
          s.servo_.request_shutdown();
          return nlohmann::json::object();
        }},
@@ -456,10 +607,12 @@ nlohmann::json ControlServer::set(Client& client, const ControlJson& message) {
 
 std::size_t ControlServer::free_slot() const {
   std::array<bool, kMaxClients> used{};
-  for (const Client& c : clients_) used[c.slot] = true;
+  for (const Client& c : clients_) {
+    if (c.has_slot) used[c.slot] = true;
+  }
   std::size_t slot = 0;
   while (slot < kMaxClients && used[slot]) ++slot;
-  return slot;  // accept_clients keeps clients_ below kMaxClients.
+  return slot;  // make_room_for_hello keeps the clients with a slot below kMaxClients.
 }
 
 void ControlServer::set_subscription(Client& client, int port, double rate_Hz) {
@@ -549,8 +702,10 @@ nlohmann::json ControlServer::counters_json() const {
           {"oversized", c.oversized},
           {"out_of_order", c.out_of_order},
           {"unauthenticated", c.unauthenticated},
-          {"token_lockouts", c.token_lockouts},
-          {"refused_clients", c.refused_clients},
+          {"wrong_tokens", c.wrong_tokens},
+          {"hello_timeouts", c.hello_timeouts},
+          {"waiting_closed", c.waiting_closed},
+          {"idle_clients_closed", c.idle_clients_closed},
           {"cut_off_clients", c.cut_off_clients},
           {"frames_sent", frames_sent_.load()},
           {"frames_dropped", frames_dropped_.load()},

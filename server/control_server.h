@@ -23,6 +23,7 @@
 #include <thread>
 #include <vector>
 
+#include "client_admission.h"
 #include "control_message.h"
 #include "protocol.h"
 #include "rt/histogram.h"
@@ -38,18 +39,18 @@ class NetworkError : public std::runtime_error {
 struct ControlCounters {
   std::uint64_t connections = 0;
   std::uint64_t messages = 0;
-  std::uint64_t errors = 0;           // Every message answered with an error.
-  std::uint64_t malformed = 0;        // Not JSON, not an object, no type.
-  std::uint64_t oversized = 0;        // Length prefix over the limit (connection closed).
-  std::uint64_t out_of_order = 0;     // Before hello.
-  std::uint64_t unauthenticated = 0;  // Wrong token or protocol version.
-  std::uint64_t token_lockouts = 0;   // Hellos refused while wrong tries lock the token.
-  std::uint64_t refused_clients = 0;  // Over the client limit.
-  std::uint64_t cut_off_clients = 0;  // Replies left unread past the budget's time.
-  std::uint64_t stray_datagrams = 0;  // Datagrams that arrived at the stream socket.
+  std::uint64_t errors = 0;               // Every message answered with an error.
+  std::uint64_t malformed = 0;            // Not JSON, not an object, no type.
+  std::uint64_t oversized = 0;            // Length prefix over the limit (connection closed).
+  std::uint64_t out_of_order = 0;         // Before hello.
+  std::uint64_t unauthenticated = 0;      // Wrong token or protocol version.
+  std::uint64_t wrong_tokens = 0;         // Hellos with a wrong or missing token.
+  std::uint64_t hello_timeouts = 0;       // No hello within kHelloDeadline_s (closed).
+  std::uint64_t waiting_closed = 0;       // Closed before hello to make room for newer connections.
+  std::uint64_t idle_clients_closed = 0;  // Closed to make room for a new hello.
+  std::uint64_t cut_off_clients = 0;      // Replies left unread past the budget's time.
+  std::uint64_t stray_datagrams = 0;      // Datagrams that arrived at the stream socket.
 };
-
-inline constexpr std::size_t kMaxClients = 16;
 
 class ControlServer {
  public:
@@ -72,9 +73,14 @@ class ControlServer {
     std::string out;
     bool hello = false;
     bool closing = false;        // Close once `out` is sent.
+    bool has_slot = false;       // Said hello: `slot` is its own.
     std::size_t slot = 0;        // Its entry in subscribers_.
     bool subscribed = false;     // Its slot is streamed to.
     double backlog_since_s = 0;  // When `out` went over the budget (0: under it).
+    double accepted_s = 0.0;
+    double last_message_s = 0.0;
+    double hold_replies_until_s = 0.0;  // A wrong token's refusal waits until then.
+    std::size_t reservation = 0;        // Of large_message_bytes_, for its next message.
   };
   // A subscription, shared by the two threads under subscribers_mutex_.
   struct Subscriber {
@@ -91,8 +97,14 @@ class ControlServer {
   void set_subscription(Client& client, int port, double rate_Hz);
   void accept_clients();
   void read_client(Client& client);
+  std::size_t read_allowance(Client& client);
+  void release_reservation(Client& client);
   void handle_pending(Client& client);
   void cut_off(Client& client);
+  void close_now(Client& client, const std::string& why);
+  void enforce_hello_deadline(Client& client, double now_s);
+  void make_room_for_hello();
+  std::vector<ConnectionTimes> connection_times() const;
   std::size_t free_slot() const;
   void write_client(Client& client);
   void handle(Client& client, const std::string& text);
@@ -121,10 +133,9 @@ class ControlServer {
   std::atomic<std::uint64_t> frames_dropped_{0};  // Send buffer full (slow client).
   // Tick to sendto, per frame sent (the servo's share of a frame's age).
   std::unique_ptr<LatencyHistogram> send_age_us_ = std::make_unique<LatencyHistogram>();
-  double last_frame_time_s_ = 0.0;     // servo_time_s of the last frame fetched (stream thread).
-  double stray_pause_until_s_ = 0.0;   // Stream socket not read until then.
-  int wrong_tokens_ = 0;               // In a row, from any client.
-  double token_locked_until_s_ = 0.0;  // Every hello refused until then.
+  double last_frame_time_s_ = 0.0;       // servo_time_s of the last frame fetched (stream thread).
+  double stray_pause_until_s_ = 0.0;     // Stream socket not read until then.
+  std::size_t large_message_bytes_ = 0;  // Reserved by clients for messages being read.
   std::thread thread_;
   std::thread stream_thread_;
   std::atomic<bool> quit_{false};
@@ -138,11 +149,14 @@ inline constexpr double kBacklogCutOff_s = 2.0;
 // Per client per round of the control thread, so that one client's messages
 // wait behind each other, not another client's.
 inline constexpr std::size_t kReadBytesPerRound = 256U << 10;
+// The control channel's input memory: each connection buffers up to
+// kFreeBytesPerClient; a longer message is read only once its whole length
+// is reserved from kMaxLargeMessageBytes, shared by all clients (room for
+// four messages of the largest size), so that every message begun can end.
+inline constexpr std::size_t kFreeBytesPerClient = 64U << 10;
+inline constexpr std::size_t kMaxLargeMessageBytes = 64U << 20;
 inline constexpr int kMessagesPerRound = 32;
 inline constexpr double kMinStreamRate_Hz = 1.0;
 inline constexpr double kMaxStreamRate_Hz = 1000.0;
-// Wrong tokens in a row (from any client) before every hello is refused for a while.
-inline constexpr int kMaxWrongTokens = 5;
-inline constexpr double kTokenLockout_s = 10.0;
 
 }  // namespace hapticut::servo

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "client_admission.h"
 #include "devices/device_factory.h"
 #include "session.h"
 
@@ -41,7 +42,8 @@ constexpr const char* kUsage =
     "                          needs --token\n"
     "  --token-file FILE       clients must present the token FILE holds (its first\n"
     "                          line) in \"hello\"; or $HAPTICUT_SERVO_TOKEN; --token\n"
-    "                          TOKEN works too but shows in the process list\n"
+    "                          TOKEN works too but shows in the process list; at\n"
+    "                          least 16 bytes\n"
     "  --stream-rate HZ        default frame rate of a subscription (120)\n"
     "  --engage                engaged from the start (else: an \"engage\" message or\n"
     "                          a button of --engage-buttons)\n"
@@ -231,6 +233,15 @@ Options parse_options(int argc, const char* const* argv) {
   if (o.token.empty()) {
     const char* token = std::getenv("HAPTICUT_SERVO_TOKEN");
     if (token != nullptr) o.token = token;
+  }
+  // Wrong tokens are slowed, never locked out (client_admission.h), so the
+  // token's length is what keeps a guesser out.
+  if (!o.token.empty() && o.token.size() < kMinTokenBytes) {
+    throw UsageError("the token (--token-file, $HAPTICUT_SERVO_TOKEN or --token) has " +
+                     std::to_string(o.token.size()) + " bytes; at least " +
+                     std::to_string(kMinTokenBytes) +
+                     " are needed (make one with: python3 -c \"import secrets; "
+                     "print(secrets.token_urlsafe(32))\")");
   }
   if (o.record_dir.empty()) o.record_dir = default_recording_directory();
   if (o.json && !o.list_devices) throw UsageError("--json goes with --list-devices");

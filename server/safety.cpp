@@ -11,7 +11,7 @@ constexpr const char* kFlagNames[kSafetyFlagCount] = {
     "engaged",          "ramping",   "force_clamped",   "torque_clamped",
     "device_lost",      "watchdog",  "non_finite_pose", "outside_workspace",
     "non_finite_force", "passivity", "no_force_output", "stale",
-    "waiting",          "stopping",  "engine_rejected"};
+    "waiting",          "stopping",  "engine_rejected", "late_tick"};
 
 bool pose_is_finite(const Pose& pose) {
   const Quaternion& r = pose.rotation;
@@ -54,6 +54,7 @@ SafetySettings limit_to_device(const SafetySettings& requested, const DeviceLimi
   s.ramp_time_s = std::max(0.0, s.ramp_time_s);
   s.stop_ramp_time_s = std::max(0.0, s.stop_ramp_time_s);
   s.watchdog_ticks = std::max(1, s.watchdog_ticks);
+  if (!(s.late_tick_s > 0.0)) s.late_tick_s = SafetySettings{}.late_tick_s;
   return s;
 }
 
@@ -71,8 +72,14 @@ void SafetyChannel::restart() {
   if (passivity_) passivity_->reset();
 }
 
-bool SafetyChannel::admit(DeviceStatus status, const DeviceSample& sample) {
+bool SafetyChannel::admit(DeviceStatus status, const DeviceSample& sample, double tick_gap_s) {
   tick_flags_ = 0;
+  // Whatever the device says, nothing it reported across a stall is current,
+  // and a device with force output has held the last force all along.
+  if (tick_gap_s > settings_.late_tick_s || sample.dt_s > settings_.late_tick_s) {
+    tick_flags_ |= kSafetyLateTick;
+    return false;
+  }
   if (status == DeviceStatus::Lost) {
     // Before the first sample a device is only waiting (a viewport client not
     // yet sending); after it, losing it is a fault.

@@ -1,12 +1,15 @@
 // SafetyChannel: the layer between the engine and one device, on by default.
 // Per tick, in this order:
-//   before the engine steps (admit): the device's status and sample are
-//     checked: lost, watchdog (no new sample for N ticks), a pose that is not
-//     finite or lies outside the device's workspace. Any of these is a fault:
+//   before the engine steps (admit): the tick's own lateness and the device's
+//     status and sample are checked: a tick that starts more than the watchdog
+//     time after the last one (a stall: SIGSTOP, a swap storm), lost, watchdog
+//     (no new sample for N ticks), a pose that is not finite or lies outside
+//     the device's workspace. Any of these is a fault:
 //     the engine does not step and the force is zero in this same tick. The
 //     engine's own refusal of a sample (outside the scene's workspace, zero
 //     rotation) is reported by engine_refused as the same kind of fault.
-//   after it steps (render): a force or torque that is not finite is a fault;
+//   after it steps (render): a tick whose compute itself outlasted the watchdog
+//     time (late_in_tick) and a force or torque that is not finite are faults;
 //     then the passivity controller (if any), the clamp to the limits (the
 //     device's, lowered by the scene or a control message), and the ramp
 //     (0 -> 1 over ramp_time_s at start, at engage and after every fault;
@@ -44,11 +47,15 @@ enum SafetyFlag : std::uint32_t {
   // of zero norm, settings out of range). A sample outside the scene's
   // workspace, which the engine also refuses, is kSafetyOutsideWorkspace.
   kSafetyEngineRejected = 1U << 14,
+  // Fault: the tick started more than late_tick_s after the last one, or its
+  // device sample spans more than that (a replayed late tick), or its compute
+  // lasted longer. The engine does not step across such a gap.
+  kSafetyLateTick = 1U << 15,
 };
-inline constexpr int kSafetyFlagCount = 15;
-inline constexpr std::uint32_t kSafetyFaults = kSafetyDeviceLost | kSafetyWatchdog |
-                                               kSafetyNonFinitePose | kSafetyOutsideWorkspace |
-                                               kSafetyNonFiniteForce | kSafetyEngineRejected;
+inline constexpr int kSafetyFlagCount = 16;
+inline constexpr std::uint32_t kSafetyFaults =
+    kSafetyDeviceLost | kSafetyWatchdog | kSafetyNonFinitePose | kSafetyOutsideWorkspace |
+    kSafetyNonFiniteForce | kSafetyEngineRejected | kSafetyLateTick;
 // Names in bit order, for messages and the protocol's status.
 const char* safety_flag_name(int bit);
 
@@ -59,6 +66,9 @@ struct SafetySettings {
   double ramp_time_s = setting_range::kRampTime.default_value;
   double stop_ramp_time_s = 0.1;  // Ramp down on stop, SIGINT, SIGTERM.
   int watchdog_ticks = 50;
+  // A tick later than this after the last one is a fault, and no engine step
+  // spans more (--watchdog-ms).
+  double late_tick_s = 0.1;
   std::uint32_t engage_buttons = 0;  // Device buttons that engage while held (0: none).
 };
 
@@ -109,8 +119,12 @@ class SafetyChannel {
     passivity_ = std::move(controller);
   }
 
-  // Before the engine steps: may it step with this sample?
-  bool admit(DeviceStatus status, const DeviceSample& sample);
+  // Before the engine steps: may it step with this sample, `tick_gap_s` after
+  // the last tick? A gap (or the sample's own dt_s) over late_tick_s is a fault.
+  bool admit(DeviceStatus status, const DeviceSample& sample, double tick_gap_s = 0.0);
+  // After admit, before render: the tick's compute outlasted late_tick_s, so
+  // the force it computed is stale (a fault: zero force this tick).
+  void late_in_tick() { tick_flags_ |= kSafetyLateTick; }
   // After admit: the engine refused the sample (a fault flag: kSafetyOutsideWorkspace
   // or kSafetyEngineRejected); render then makes the force zero this tick.
   void engine_refused(std::uint32_t fault_flag) { tick_flags_ |= fault_flag; }

@@ -109,6 +109,7 @@ SessionConfig Servo::config_from_options() const {
   c.safety_request.engage_buttons = options_.engage_buttons;
   c.passivity = options_.passivity;
   c.passivity_link_delay_s = options_.passivity_delay_ms / 1000.0;
+  c.remote_bridge_allowed = !options_.token.empty();
   return c;
 }
 
@@ -448,6 +449,9 @@ nlohmann::json Servo::set_parameters(const ControlJson& message) {
 nlohmann::json Servo::load_command(const ControlJson& message) {
   SessionConfig config = config_from_options();
   config.scene_path.clear();
+  if (has_field(message, "path") && has_field(message, "scene")) {
+    throw CommandError("load takes \"path\" or \"scene\", not both");
+  }
   if (has_field(message, "path")) {
     config.scene_path = string_field(message, "path", kMaxPathBytes);
   } else if (has_field(message, "scene")) {
@@ -463,6 +467,7 @@ nlohmann::json Servo::load_command(const ControlJson& message) {
                          " --device texts");
     }
     config.devices.clear();
+    config.remote_bridge_allowed = false;  // A client's texts bind loopback only.
     for (const ControlJson& d : devices) {
       if (!d.is_string() || d.get_ref<const std::string&>().empty() ||
           d.get_ref<const std::string&>().size() > kMaxNameBytes) {

@@ -30,7 +30,10 @@ std::uint32_t engine_refusal(const Blade& blade, const Pose& pose) {
 // lowered to the device's limit), render, write. Returns the tick's result in
 // binding.result. A change of the sample's kEngageRequestBit (a HID puck's
 // engage button toggles it) sets the servo's engage state, from this tick on.
-void tick_blade(Binding& b, double now_s, double dt_s, std::atomic<bool>& engage_state,
+// A tick late after the last one does not step (admit), and one whose compute
+// outlasted the watchdog time writes zero: its force was computed from a pose
+// the stall made stale (never when as fast as possible, whose time is virtual).
+void tick_blade(Binding& b, double now_s, double dt_s, bool fast, std::atomic<bool>& engage_state,
                 bool stopping, const RuntimeSettings& tick_settings) {
   RuntimeSettings settings = tick_settings;  // Trivially copyable: no allocation.
   settings.stiffness_N_per_mm =
@@ -44,7 +47,7 @@ void tick_blade(Binding& b, double now_s, double dt_s, std::atomic<bool>& engage
   r.force_shading = settings.force_shading;
   r.engine_rejected = false;
   bool engine_ok = false;
-  const bool admitted = b.safety->admit(r.status, r.sample);
+  const bool admitted = b.safety->admit(r.status, r.sample, dt_s);
   if (admitted) {
     const bool engage_bit = (r.sample.buttons & kEngageRequestBit) != 0U;
     if (engage_bit != b.engage_bit) {
@@ -78,6 +81,9 @@ void tick_blade(Binding& b, double now_s, double dt_s, std::atomic<bool>& engage
       r.engine_torque_N_mm = tick.torque_N_mm;
     }
     b.snapshot_stale = true;
+  }
+  if (!fast && monotonic_now_s() - now_s > b.safety->settings().late_tick_s) {
+    b.safety->late_in_tick();
   }
   r.safety =
       b.safety->render(r.engine_force_N, r.engine_torque_N_mm, engine_ok, dt_s, engaged, stopping);
@@ -192,7 +198,9 @@ void run_loop(Session& session, LoopShared& shared) {
     shared.recording.store(recording, std::memory_order_release);
 
     // The tick: devices -> engine -> safety -> devices.
-    for (Binding& b : bindings) tick_blade(b, now_s, dt_s, shared.engaged, stopping, settings);
+    for (Binding& b : bindings) {
+      tick_blade(b, now_s, dt_s, fast, shared.engaged, stopping, settings);
+    }
     const double compute_us = (monotonic_now_s() - woke_s) * 1e6;
 
     // Counters.

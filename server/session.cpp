@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "devices/viewport_device.h"
 #include "hapticut/parameter_range.h"
 #include "hapticut/scene_io.h"
+#include "hapticut/tet_mesh.h"
 #include "passivity.h"
 
 namespace hapticut::servo {
@@ -22,7 +24,7 @@ Scene read_scene_source(const SessionConfig& config) {
   if (config.scene_path.empty()) throw SceneError("(file)", "no scene given");
   std::vector<std::uint8_t> bytes;
   try {
-    bytes = read_regular_file(config.scene_path, config.max_scene_bytes);
+    bytes = read_regular_file(config.scene_path, config.max_scene_bytes, "--max-scene-bytes");
   } catch (const FileRefused& e) {
     throw SceneError("(file)", e.what());
   }
@@ -49,10 +51,18 @@ Session::Session(const SessionConfig& config) {
   if (scene_.blades.empty()) throw SceneError("/blades", "the scene has no blade to drive");
   rate_Hz_ = config.rate_Hz > 0.0 ? config.rate_Hz : scene_.servo_rate_Hz;
   if (!(rate_Hz_ >= 1.0 && rate_Hz_ <= kMaxRate_Hz)) {
-    throw DeviceError("rate " + std::to_string(rate_Hz_) + " Hz is outside 1 to 10000 Hz");
+    const std::string reason = format_value(rate_Hz_) + " Hz is outside the servo's 1 to 10000 Hz";
+    if (config.rate_Hz > 0.0) throw DeviceError("rate " + reason);
+    throw SceneError("/coupling/servo_rate_Hz", reason);
   }
   as_fast_as_possible_ = config.as_fast_as_possible;
-  space_ = Space::from_scene(scene_);
+  // The engine's own checks of what the scene reader passed (a mesh whose
+  // tets repeat, a blade beyond the engine's points) name the scene's field too.
+  try {
+    space_ = Space::from_scene(scene_);
+  } catch (const MeshError& e) {
+    throw SceneError("/mesh/tets", e.what());
+  }
   shading_ = std::make_shared<const ForceShading>(*space_);
 
   std::vector<DeviceSpec> specs;
@@ -82,6 +92,7 @@ Session::Session(const SessionConfig& config) {
   context.rate_Hz = rate_Hz_;
   context.as_fast_as_possible = as_fast_as_possible_;
   context.watchdog_s = config.watchdog_ms / 1000.0;
+  context.remote_bridge_allowed = config.remote_bridge_allowed;
   bounds(scene_, context.scene_min_mm, context.scene_max_mm);
 
   SafetySettings request = config.safety_request;
@@ -93,6 +104,7 @@ Session::Session(const SessionConfig& config) {
   if (request.ramp_time_s < 0.0) request.ramp_time_s = setting_range::kRampTime.default_value;
   request.watchdog_ticks =
       std::max(1, static_cast<int>(std::lround(config.watchdog_ms / 1000.0 * rate_Hz_)));
+  request.late_tick_s = config.watchdog_ms / 1000.0;
 
   bindings_.reserve(scene_.blades.size());
   for (const BladeSpec& blade_spec : scene_.blades) {
@@ -116,7 +128,11 @@ Session::Session(const SessionConfig& config) {
     binding.device_text = spec->text;
     binding.device = make_device(*spec, context);
     binding.viewport = dynamic_cast<ViewportDevice*>(binding.device.get());
-    binding.blade = std::make_unique<Blade>(space_, blade_spec, shading_);
+    try {
+      binding.blade = std::make_unique<Blade>(space_, blade_spec, shading_);
+    } catch (const std::invalid_argument& e) {
+      throw SceneError("/blades/" + std::to_string(bindings_.size()), e.what());
+    }
     binding.requested = request;
     binding.safety = std::make_unique<SafetyChannel>(request, binding.device->limits());
     binding.device_max_stiffness_N_per_mm = stiffness_limit(binding.device->limits(), rate_Hz_);
@@ -133,9 +149,10 @@ Session::Session(const SessionConfig& config) {
     bindings_.push_back(std::move(binding));
   }
   if (frame_bytes() > kMaxFrameBytes) {
-    throw DeviceError("a stream frame of this scene's blades would be " +
-                      std::to_string(frame_bytes()) + " bytes, over the " +
-                      std::to_string(kMaxFrameBytes) + "-byte datagram limit (fewer points)");
+    throw SceneError("/blades", "a stream frame of this scene's blades would be " +
+                                    std::to_string(frame_bytes()) + " bytes, over the " +
+                                    std::to_string(kMaxFrameBytes) +
+                                    "-byte datagram limit (fewer points)");
   }
   recording_info_.rate_Hz = rate_Hz_;
   recording_info_.as_fast_as_possible = as_fast_as_possible_;

@@ -36,6 +36,8 @@ struct SessionConfig {
   // A Hannaford-Ryu passivity controller on every device with force output.
   bool passivity = true;
   double passivity_link_delay_s = 0.0;  // The device link's delay beyond one tick.
+  // `devices` are the operator's and the servo has a token (DeviceContext).
+  bool remote_bridge_allowed = false;
 };
 
 struct Binding {

@@ -121,6 +121,7 @@ SAFETY_FLAGS = (
     "waiting",
     "stopping",
     "engine_rejected",
+    "late_tick",
 )
 FAULT_FLAGS = (
     "device_lost",
@@ -129,6 +130,7 @@ FAULT_FLAGS = (
     "outside_workspace",
     "non_finite_force",
     "engine_rejected",
+    "late_tick",
 )
 DEVICE_STATUS = ("fresh", "stale", "lost")
 STEP_KINDS = ("none", "step", "reset_and_step")

@@ -1,5 +1,8 @@
 #include "devices/device_factory.h"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+
 #include <exception>
 
 #include "devices/replay_device.h"
@@ -32,9 +35,19 @@ std::unique_ptr<Device> make_hid(const DeviceSpec& spec, const DeviceContext& /*
   return as_device_error(spec, [&] { return make_hid_device(spec.value, spec.options); });
 }
 
-std::unique_ptr<Device> make_bridge(const DeviceSpec& spec, const DeviceContext& /*context*/) {
+std::unique_ptr<Device> make_bridge(const DeviceSpec& spec, const DeviceContext& context) {
   if (!spec.value.empty()) {
     throw DeviceError(spec.describe() + ": bridge: option '" + spec.value + "' is not key=value");
+  }
+  // Bridge datagrams carry no token: beyond loopback, any host could steer the
+  // blade. Only the operator may open that, on a servo that asks for a token.
+  const auto bind = spec.options.find("bind");
+  in_addr address{};
+  if (bind != spec.options.end() && inet_pton(AF_INET, bind->second.c_str(), &address) == 1 &&
+      (ntohl(address.s_addr) >> 24) != 127 && !context.remote_bridge_allowed) {
+    throw DeviceError(spec.describe() + ": bind=" + bind->second +
+                      ": a bridge binds only to loopback (127.x.x.x) unless the servo's own "
+                      "command line gives the address (--device) and a token (--token-file)");
   }
   return as_device_error(spec, [&] { return make_bridge_device(spec.options); });
 }

@@ -22,6 +22,9 @@ struct DeviceContext {
   double watchdog_s = 0.1;  // A sample older than this is a lost device.
   Vec3 scene_min_mm;        // The scene's bounding box.
   Vec3 scene_max_mm;
+  // The device text is the operator's (the command line's) and the servo has
+  // a token: a bridge may bind beyond loopback.
+  bool remote_bridge_allowed = false;
 };
 
 struct DeviceKind {

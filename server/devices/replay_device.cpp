@@ -1,44 +1,100 @@
 #include "devices/replay_device.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 
-#include "recording/recording_file.h"
+#include "safety.h"
 
 namespace hapticut::servo {
 
+ReplayDevice::ReplayDevice(std::unique_ptr<RecordingReader> reader, std::size_t blade_offset)
+    : reader_(std::move(reader)), blade_offset_(blade_offset) {
+  const std::size_t record_bytes = reader_->info().record_bytes;
+  chunk_records_ = std::max<std::uint64_t>(1, kReplayChunkBytes / record_bytes);
+  chunk_.resize(chunk_records_ * record_bytes);
+}
+
+void ReplayDevice::start() {
+  next_ = 0;
+  sequence_ = 0;
+  chunk_count_ = 0;
+  last_sample_ = DeviceSample{};
+  finished_.store(reader_->record_count() == 0, std::memory_order_relaxed);
+  reader_->prefetch(0, chunk_records_);
+}
+
+bool ReplayDevice::load_chunk(std::uint64_t index) {
+  chunk_first_ = index;
+  chunk_count_ = std::min(chunk_records_, reader_->record_count() - index);
+  if (!reader_->read_records(chunk_first_, chunk_count_, chunk_.data())) {
+    chunk_count_ = 0;
+    return false;
+  }
+  // The kernel reads the next chunk while this one plays.
+  reader_->prefetch(chunk_first_ + chunk_count_, chunk_records_);
+  return true;
+}
+
 DeviceStatus ReplayDevice::read(double now_s, DeviceSample& sample) {
-  if (next_ >= ticks_.size()) {
+  const std::uint64_t count = reader_->record_count();
+  if (next_ >= count) {
     finished_.store(true, std::memory_order_relaxed);
-    if (ticks_.empty()) return DeviceStatus::Lost;
-    sample = ticks_.back().sample;
+    if (count == 0) return DeviceStatus::Lost;
+    sample = last_sample_;
     return DeviceStatus::Stale;
   }
-  const ReplayTick& tick = ticks_[next_++];
-  if (next_ == ticks_.size()) finished_.store(true, std::memory_order_relaxed);
-  sample = tick.sample;
+  if (next_ < chunk_first_ || next_ >= chunk_first_ + chunk_count_) {
+    if (!load_chunk(next_)) {
+      // The file changed under the replay (cut, unreadable): it ends here, lost.
+      finished_.store(true, std::memory_order_relaxed);
+      return DeviceStatus::Lost;
+    }
+  }
+  const std::size_t record_bytes = reader_->info().record_bytes;
+  BladeBlock block;
+  std::memcpy(&block, chunk_.data() + (next_ - chunk_first_) * record_bytes + blade_offset_,
+              sizeof(block));
+  ++next_;
+  if (next_ == count) finished_.store(true, std::memory_order_relaxed);
+  const DeviceStatus status = block.device_status <= 2
+                                  ? static_cast<DeviceStatus>(block.device_status)
+                                  : DeviceStatus::Lost;
+  const double* pose = block.pose;
+  sample.pose = {{pose[0], pose[1], pose[2]}, {pose[3], pose[4], pose[5], pose[6]}};
+  sample.buttons = block.buttons;
+  sample.dt_s = block.step_dt_s;
+  // A recorded late tick did not step; a gap no watchdog admits makes the
+  // replay's safety refuse it the same way.
+  if ((block.safety_flags & kSafetyLateTick) != 0U && block.step_kind == 0) {
+    sample.dt_s = std::numeric_limits<double>::infinity();
+  }
+  if (status == DeviceStatus::Fresh) ++sequence_;
+  sample.sequence = sequence_;
   sample.time_s = now_s;
-  return tick.status;
+  last_sample_ = sample;
+  return status;
 }
 
 std::unique_ptr<Device> make_replay_device(const DeviceSpec& spec, const DeviceContext& context) {
   spec.check_options({"blade"});
   if (spec.value.empty()) throw DeviceError(spec.describe() + ": replay needs a recording file");
   const std::string blade = spec.string("blade", context.blade);
-  RecordingContents recording = read_recording(spec.value);
+  auto reader = std::make_unique<RecordingReader>(spec.value);
   // A cut recording still holds a usable stroke up to its cut: play that
   // and say so, so that a short replay is not taken for the whole run.
-  if (recording.truncated) {
-    if (recording.record_count() == 0) {
-      throw DeviceError(spec.describe() + ": " + recording.truncation_message() +
+  if (reader->truncated()) {
+    if (reader->record_count() == 0) {
+      throw DeviceError(spec.describe() + ": " + reader->truncation_message() +
                         ": nothing to replay");
     }
     std::fprintf(stderr, "warning: %s: %s; replaying those\n", spec.describe().c_str(),
-                 recording.truncation_message().c_str());
+                 reader->truncation_message().c_str());
   }
   const RecordingBlade* found = nullptr;
   std::string names;
-  for (const RecordingBlade& b : recording.info.blades) {
+  for (const RecordingBlade& b : reader->info().blades) {
     if (b.name == blade) found = &b;
     names += (names.empty() ? "" : ", ") + b.name;
   }
@@ -46,24 +102,8 @@ std::unique_ptr<Device> make_replay_device(const DeviceSpec& spec, const DeviceC
     throw DeviceError(spec.describe() + ": recording has no blade '" + blade +
                       "' (it has: " + names + ")");
   }
-  std::vector<ReplayTick> ticks;
-  ticks.reserve(recording.record_count());
-  std::uint64_t sequence = 0;
-  for (std::size_t i = 0; i < recording.record_count(); ++i) {
-    BladeBlock block;
-    std::memcpy(&block, recording.record(i) + found->offset, sizeof(block));
-    ReplayTick tick{};
-    tick.status = block.device_status <= 2 ? static_cast<DeviceStatus>(block.device_status)
-                                           : DeviceStatus::Lost;
-    const double* pose = block.pose;
-    tick.sample.pose = {{pose[0], pose[1], pose[2]}, {pose[3], pose[4], pose[5], pose[6]}};
-    tick.sample.buttons = block.buttons;
-    tick.sample.dt_s = block.step_dt_s;
-    if (tick.status == DeviceStatus::Fresh) ++sequence;
-    tick.sample.sequence = sequence;
-    ticks.push_back(tick);
-  }
-  return std::make_unique<ReplayDevice>(std::move(ticks));
+  const std::size_t offset = found->offset;
+  return std::make_unique<ReplayDevice>(std::move(reader), offset);
 }
 
 }  // namespace hapticut::servo

@@ -2,7 +2,10 @@
 // servo tick: the device status, pose, buttons and the dt the engine stepped
 // with. With the same scene it gives bit-identical proxy paths and engine
 // forces. Input only: nothing is rendered. A truncated recording (no end
-// trailer) plays its whole records, with a warning on stderr.
+// trailer) plays its whole records, with a warning on stderr. The file is read
+// a chunk of records at a time (the next one read ahead by the kernel), so its
+// memory does not grow with the recording and opening it reads only its
+// header and trailer.
 #pragma once
 
 #include <atomic>
@@ -11,6 +14,7 @@
 
 #include "devices/device_args.h"
 #include "devices/device_factory.h"
+#include "recording/recording_reader.h"
 
 namespace hapticut::servo {
 
@@ -19,28 +23,34 @@ inline constexpr const char* kReplayDeviceUsage =
     "      bound blade's name) tick by tick, with the recorded dt (a truncated\n"
     "      recording: its whole records, with a warning)\n";
 
-struct ReplayTick {
-  DeviceStatus status;
-  DeviceSample sample;
-};
+// The bytes of records held at once.
+inline constexpr std::size_t kReplayChunkBytes = 1U << 20;
 
 class ReplayDevice : public Device {
  public:
-  explicit ReplayDevice(std::vector<ReplayTick> ticks) : ticks_(std::move(ticks)) {}
+  // Plays the blade whose block is at `blade_offset` in each record.
+  ReplayDevice(std::unique_ptr<RecordingReader> reader, std::size_t blade_offset);
 
   const char* kind() const override { return "replay"; }
   DeviceLimits limits() const override { return {}; }
-  void start() override {
-    next_ = 0;
-    finished_.store(ticks_.empty(), std::memory_order_relaxed);
-  }
+  void start() override;
   DeviceStatus read(double now_s, DeviceSample& sample) override;
   void write(const Vec3& /*force_N*/, const Vec3& /*torque_N_mm*/) override {}
   bool finished() const override { return finished_.load(std::memory_order_relaxed); }
 
  private:
-  std::vector<ReplayTick> ticks_;
-  std::size_t next_ = 0;
+  // Makes the chunk hold record `index`; false when the file cannot give it.
+  bool load_chunk(std::uint64_t index);
+
+  std::unique_ptr<RecordingReader> reader_;
+  std::size_t blade_offset_ = 0;
+  std::uint64_t chunk_records_ = 1;
+  std::vector<unsigned char> chunk_;  // Sized once: no allocation in a tick.
+  std::uint64_t chunk_first_ = 0;
+  std::uint64_t chunk_count_ = 0;
+  std::uint64_t next_ = 0;
+  std::uint64_t sequence_ = 0;
+  DeviceSample last_sample_;
   std::atomic<bool> finished_{false};
 };
 

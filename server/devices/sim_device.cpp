@@ -1,5 +1,7 @@
 #include "devices/sim_device.h"
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace hapticut::servo {
@@ -43,7 +45,7 @@ DeviceStatus SimDevice::read(double now_s, DeviceSample& sample) {
   if (failed) return DeviceStatus::Lost;
   const Pose target = path_.at(t);
   if (options_.hand) {
-    hand_.step(target.position_mm, rendered_force_N_, dt);
+    step_hand(t, dt);
     sample_.pose = {hand_.position_mm(), target.rotation};
   } else {
     sample_.pose = target;
@@ -60,6 +62,23 @@ DeviceStatus SimDevice::read(double now_s, DeviceSample& sample) {
     sample.pose.position_mm.x += 1e6;
   }
   return DeviceStatus::Fresh;
+}
+
+void SimDevice::step_hand(double t_s, double dt_s) {
+  // The hand's integration is stable for steps up to kMaxHandStep_s
+  // (virtual_hand.h); a longer gap (a stalled servo) is integrated in steps
+  // that short, along the path, with the force last written held as a real
+  // device would hold it. A gap too long to be worth integrating puts the hand
+  // on its path, at rest.
+  if (dt_s > kMaxHandCatchUp_s) {
+    hand_.reset(path_.at(t_s).position_mm);
+    return;
+  }
+  const int steps = std::max(1, static_cast<int>(std::ceil(dt_s / kMaxHandStep_s)));
+  const double step_s = dt_s / steps;
+  for (int i = steps - 1; i >= 0; --i) {
+    hand_.step(path_.at(t_s - i * step_s).position_mm, rendered_force_N_, step_s);
+  }
 }
 
 void SimDevice::write(const Vec3& force_N, const Vec3& /*torque_N_mm*/) {

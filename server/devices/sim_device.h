@@ -47,6 +47,11 @@ struct SimOptions {
 // only when max_stiffness_N_per_mm is given).
 DeviceLimits sim_device_limits(const SimOptions& options);
 
+// The virtual hand's longest stable step, and the longest gap between two
+// reads it catches up on step by step (beyond it, it is put on its path).
+inline constexpr double kMaxHandStep_s = 0.004;
+inline constexpr double kMaxHandCatchUp_s = 10.0;
+
 class SimDevice : public Device {
  public:
   SimDevice(SimPath path, const SimOptions& options);
@@ -59,6 +64,9 @@ class SimDevice : public Device {
   bool finished() const override { return finished_.load(std::memory_order_relaxed); }
 
  private:
+  // Advances the hand by dt_s to the path's time t_s.
+  void step_hand(double t_s, double dt_s);
+
   SimPath path_;
   SimOptions options_;
   VirtualHand hand_;

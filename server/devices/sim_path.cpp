@@ -2,10 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
-#include <nlohmann/json.hpp>
 
+#include "client_files.h"
 #include "devices/device_args.h"
+#include "hapticut/scene_io.h"
+#include "hapticut/scene_tree.h"
 
 namespace hapticut::servo {
 
@@ -21,12 +22,15 @@ Quaternion nlerp(const Quaternion& a, Quaternion b, double s) {
 }  // namespace
 
 SimPath SimPath::from_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw DeviceError("sim path '" + path + "': cannot open");
-  nlohmann::json doc;
+  // The file rules of every path the servo opens (client_files.h): a regular
+  // file, opened without waiting, of bounded size; the strict decoder, whose
+  // errors never quote the file.
+  SceneTree doc;
   try {
-    doc = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
+    doc = decode_scene_tree(read_regular_file(path, kMaxSimPathBytes), SceneEncoding::Json);
+  } catch (const FileRefused& e) {
+    throw DeviceError(std::string("sim path ") + e.what());
+  } catch (const SceneError& e) {
     throw DeviceError("sim path '" + path + "': not JSON (" + e.what() + ")");
   }
   if (!doc.is_object() || !doc.contains("poses") || !doc["poses"].is_array() ||

@@ -10,12 +10,17 @@
 //   press        only the downward part
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
 #include "hapticut/blade.h"
 
 namespace hapticut::servo {
+
+// The largest sim path file read (some 160 000 poses): it is read whole, on
+// the thread that loads the scene.
+inline constexpr std::uint64_t kMaxSimPathBytes = 16ULL << 20;
 
 class SimPath {
  public:
@@ -24,7 +29,8 @@ class SimPath {
     Pose pose;
   };
 
-  // Throws DeviceError naming the file and the entry that is wrong.
+  // Throws DeviceError naming the file and the entry that is wrong, never
+  // quoting its content. A regular file of at most kMaxSimPathBytes only.
   static SimPath from_file(const std::string& path);
   // Throws DeviceError for an unknown name.
   static SimPath builtin(const std::string& name, const Vec3& scene_min_mm,

@@ -63,7 +63,8 @@ struct RecordingContents {
   }
 };
 
-// Reads a whole recording; throws DeviceError naming the file and what is
+// Reads a whole recording (tests and tools; the replay device reads a part at a
+// time, recording_reader.h); throws DeviceError naming the file and what is
 // wrong. A truncated file is read (see RecordingContents::truncated).
 RecordingContents read_recording(const std::string& path);
 

@@ -26,6 +26,37 @@ std::string field_refusal(const std::string& text, const char* key) {
   return "";
 }
 
+TEST(ControlMessage, AByteOrderMarkAndAnEscapedNulAreRefused) {
+  EXPECT_NE(refusal("\xEF\xBB\xBF"
+                    R"({"type":"status"})")
+                .find("byte order mark"),
+            std::string::npos);
+  EXPECT_NE(refusal(R"({"type":"load","path":"a\u0000b"})").find("NUL"), std::string::npos);
+  EXPECT_NE(refusal(R"({"type":"status","a\u0000":1})").find("NUL"), std::string::npos);
+  EXPECT_NE(refusal(R"({"type":"set","x":[{"y":"\u0000"}]})").find("NUL"), std::string::npos);
+  EXPECT_EQ(refusal(R"({"type":"status","id":"\u0041"})"), "");
+}
+
+TEST(ControlMessage, AnIntegerBelowItsMinimumIsRefused) {
+  EXPECT_NE(field_refusal(R"({"type":"subscribe","port":0})", "port").find("out of range"),
+            std::string::npos);
+  EXPECT_NE(field_refusal(R"({"type":"subscribe","port":-1})", "port").find("out of range"),
+            std::string::npos);
+  EXPECT_EQ(field_refusal(R"({"type":"subscribe","port":1})", "port"), "");
+}
+
+TEST(ControlMessage, UnknownFieldsAreRefusedByName) {
+  const ControlMessage message =
+      parse_control_message(R"({"type":"subscribe","id":3,"port":5,"address":"10.0.0.1"})");
+  try {
+    refuse_unknown_fields(message.body, {"port", "rate_Hz"});
+    FAIL() << "an unknown field was taken";
+  } catch (const CommandError& e) {
+    EXPECT_STREQ(e.what(), "unknown field 'address' (\"subscribe\" takes port, rate_Hz)");
+  }
+  EXPECT_NO_THROW(refuse_unknown_fields(message.body, {"port", "address"}));
+}
+
 TEST(ControlMessage, NestingIsBoundedAndNeverEchoed) {
   const std::string nested =
       R"({"type":"status","id":)" + std::string(100000, '[') + std::string(100000, ']') + "}";

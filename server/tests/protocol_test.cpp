@@ -36,6 +36,20 @@ TEST(MessageReader, RefusesAHugeLengthBeforeBuffering) {
   EXPECT_EQ(length, 1U << 30);
 }
 
+TEST(MessageReader, ALoweredLimitRefusesWhatTheFullOneTakes) {
+  MessageReader reader;
+  reader.set_limit(8);
+  const std::string bytes = frame_message(R"({"type":"hello"})");
+  reader.feed(bytes.data(), bytes.size());
+  std::string message;
+  std::uint32_t length = 0;
+  EXPECT_TRUE(reader.has_message());
+  EXPECT_EQ(reader.next(message, length), MessageReader::Result::TooLarge);
+  reader.set_limit(kMaxMessageBytes + 1);  // Never above the protocol's own limit.
+  EXPECT_EQ(reader.limit(), kMaxMessageBytes);
+  EXPECT_EQ(reader.next(message, length), MessageReader::Result::Message);
+}
+
 TEST(SpscRing, FullRingRefusesAndEmptiesInOrder) {
   SpscRing ring(8, 2);
   for (unsigned char v = 1; v <= 2; ++v) {

@@ -147,6 +147,45 @@ TEST(Safety, LostDeviceIsAFaultOnlyAfterAFirstSample) {
   EXPECT_TRUE(out.events & kSafetyDeviceLost);
 }
 
+TEST(Safety, ALateTickIsAFaultAndTheForceRampsBackIn) {
+  SafetyChannel channel(settings(0.01), haptic_limits());
+  channel.restart();
+  for (int i = 0; i < 20; ++i) tick(channel, Vec3{1, 0, 0});
+  ASSERT_NEAR(norm(tick(channel, Vec3{1, 0, 0}).force_N), 1.0, 1e-12);
+  // The gap since the last tick is longer than the watchdog time: no step, zero force.
+  const SafetySettings& s = channel.settings();
+  EXPECT_FALSE(channel.admit(DeviceStatus::Fresh, sample_at(0, 5.0, 1000), s.late_tick_s * 2));
+  SafetyOutput out = channel.render(Vec3{1, 0, 0}, Vec3{}, false, 2.0, true, false);
+  EXPECT_EQ(norm(out.force_N), 0.0);
+  EXPECT_EQ(out.ramp, 0.0);
+  EXPECT_TRUE(out.events & kSafetyLateTick);
+  EXPECT_EQ(channel.fault_count(), 1U);
+  // Then it ramps back in from zero, one period at a time.
+  out = tick(channel, Vec3{1, 0, 0});
+  EXPECT_NEAR(out.ramp, 0.1, 1e-12);
+  EXPECT_NEAR(norm(out.force_N), 0.1, 1e-12);
+}
+
+TEST(Safety, ASampleSpanningMoreThanTheWatchdogTimeIsLate) {
+  SafetyChannel channel(settings(), haptic_limits());
+  channel.restart();
+  DeviceSample replayed = sample_at(0, 1.0, 1);
+  replayed.dt_s = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(channel.admit(DeviceStatus::Fresh, replayed, 1e-3));
+  EXPECT_TRUE(channel.render(Vec3{1, 0, 0}, Vec3{}, false, 1e-3, true, false).flags &
+              kSafetyLateTick);
+}
+
+TEST(Safety, AComputeThatOutlastsTheWatchdogWritesZero) {
+  SafetyChannel channel(settings(), haptic_limits());
+  channel.restart();
+  ASSERT_TRUE(channel.admit(DeviceStatus::Fresh, sample_at(0, 1.0, 1), 1e-3));
+  channel.late_in_tick();
+  const SafetyOutput out = channel.render(Vec3{1, 0, 0}, Vec3{}, true, 1e-3, true, false);
+  EXPECT_EQ(norm(out.force_N), 0.0);
+  EXPECT_TRUE(out.flags & kSafetyLateTick);
+}
+
 TEST(Safety, WorkspaceGuard) {
   DeviceLimits limits = haptic_limits();
   limits.workspace_min_mm = {-10, -10, -10};

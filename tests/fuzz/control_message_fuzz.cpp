@@ -60,6 +60,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::abort();
   }
   (void)hapticut::servo::quoted_excerpt(message.type);
+  try {
+    hapticut::servo::refuse_unknown_fields(message.body, {"port", "rate_Hz"});
+  } catch (const CommandError&) {
+  }
   read_fields(message);
   return 0;
 }

@@ -298,10 +298,10 @@ def test_sigterm_ramps_down_and_closes_the_recording(tmp_path):
 def test_token_and_listen_rules():
     result = run_servo(str(SPHERE), "--device", "sim", "--control", "0", "--listen", "0.0.0.0")
     assert result.returncode == 5 and "needs --token" in result.stderr
-    with ServoProcess([*LIVE, "--token", "s3cret"]) as servo:
+    with ServoProcess([*LIVE, "--token", "s3cret-long-enough-0123"]) as servo:
         from hapticut.servo_client import ServoClient
 
         with pytest.raises(ServoError, match="wrong or missing token"):
             ServoClient(port=servo.port).hello()
-        good = ServoClient(port=servo.port, token="s3cret")
+        good = ServoClient(port=servo.port, token="s3cret-long-enough-0123")
         assert good.hello()["ok"]

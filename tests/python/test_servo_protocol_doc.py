@@ -64,3 +64,20 @@ def test_a_message_without_a_request_type_gets_the_error_reply():
             assert reply["error"].startswith(error)
         assert client.status()["state"] == "running"  # the connection goes on
         client.close()
+
+
+def test_the_ranges_table_is_the_parameter_tables():
+    """docs/protocol.md's "Ranges" table is what tools/protocol_ranges.py writes from the
+    engine's parameter table (run it after changing parameter_range.h)."""
+    import importlib.util
+
+    from hapticut import _core
+
+    tool = PROTOCOL.parents[1] / "tools" / "protocol_ranges.py"
+    spec = importlib.util.spec_from_file_location("protocol_ranges", tool)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    written = module.current_section(PROTOCOL.read_text())
+    assert written == module.generated_section(_core.setting_ranges()), (
+        "docs/protocol.md's ranges table is stale: run python3 tools/protocol_ranges.py"
+    )

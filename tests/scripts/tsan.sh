@@ -8,8 +8,10 @@
 #
 # The Python tests: every servo test file that runs the loop, control/stream, recorder
 # and housekeeping threads (and the bridge device's receive thread), about a minute
-# under TSan on 2 cores; only test_servo_layout.py (--print-layout, no thread runs) is
-# left out. Their waits count what the clock-paced threads do in a stretch of time
+# under TSan on 2 cores; left out: test_servo_layout.py (--print-layout, no thread runs),
+# test_servo_memory.py (its bounds are on the resident set, which TSan's shadow memory
+# multiplies) and test_servo_rightful_client.py (floods the control thread alone, whose
+# answers within a second TSan's slowdown would measure instead). Their waits count what the clock-paced threads do in a stretch of time
 # (ticks at 1 kHz, frames at the subscribed rate); under TSan a tick computes in
 # 50-70 us at p99 (8-9 us without), far inside its 1 ms, with no late tick, so the
 # counts are those of the plain runs (40 frames in 0.2 s after the UDP flood, as
@@ -35,7 +37,9 @@ case "${1:-run}" in
       tests/python/test_servo_faults.py tests/python/test_servo_settings.py
       tests/python/test_servo_client_pipelined.py tests/python/test_servo_cli.py
       tests/python/test_servo_devices.py tests/python/test_servo_stiffness_limit.py
-      tests/python/test_servo_hostile_client.py tests/python/test_servo_recording_end.py)
+      tests/python/test_servo_hostile_client.py tests/python/test_servo_recording_end.py
+      tests/python/test_servo_stall.py tests/python/test_servo_device_files.py
+      tests/python/test_servo_strict_protocol.py)
     reports="$PWD/build/tsan/reports"
     rm -rf "$reports"
     mkdir -p "$reports"
