@@ -33,12 +33,6 @@ namespace hapticut {
 
 namespace {
 
-Quaternion multiply(const Quaternion& a, const Quaternion& b) {
-  return {
-      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
-}
-
 // The least rotation taking unit vector `from` onto unit vector `to`.
 Quaternion rotation_between(const Vec3& from, const Vec3& to) {
   const double c = dot(from, to);

@@ -53,12 +53,6 @@ Quaternion rotation_vector_quaternion(const Vec3& rotation_rad) {
   return {std::cos(angle / 2), rotation_rad.x * s, rotation_rad.y * s, rotation_rad.z * s};
 }
 
-Quaternion multiply(const Quaternion& a, const Quaternion& b) {
-  return {
-      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
-}
-
 PoseMapping::PoseMapping(const PoseMappingSettings& settings, const Pose& home)
     : settings_(settings) {
   set_home(home);

@@ -63,6 +63,5 @@ double apply_dead_zone(double value, double dead_zone);
 
 // exp of a rotation vector (rad) as a unit quaternion.
 Quaternion rotation_vector_quaternion(const Vec3& rotation_rad);
-Quaternion multiply(const Quaternion& a, const Quaternion& b);
 
 }  // namespace hapticut::servo

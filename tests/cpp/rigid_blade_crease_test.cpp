@@ -17,11 +17,7 @@ namespace {
 constexpr double kDt = 0.001;
 constexpr double kK = 0.1;  // N/mm, the paper's.
 
-std::vector<double> axis(double from, double to, double step) {
-  std::vector<double> v;
-  for (double x = from; x <= to + 1e-9; x += step) v.push_back(x);
-  return v;
-}
+using testing::axis;
 
 // A 90 degree V-groove of bone running along x: a Kuhn grid of 4 x 2 x 2 mm
 // cells with every vertex lifted by |y|, bone below the lifted z = 0 (the

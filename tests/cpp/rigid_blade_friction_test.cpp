@@ -20,11 +20,7 @@ namespace {
 constexpr double kDt = 0.001;
 constexpr double kK = 0.1;  // N/mm, the paper's.
 
-std::vector<double> axis(double from, double to, double step) {
-  std::vector<double> v;
-  for (double x = from; x <= to + 1e-9; x += step) v.push_back(x);
-  return v;
-}
+using testing::axis;
 
 Material bone(double static_friction, double dynamic_friction) {
   Material m = testing::rigid_material();
@@ -33,17 +29,10 @@ Material bone(double static_friction, double dynamic_friction) {
   return m;
 }
 
-// Bone where in_bone(centroid) (material 2), air elsewhere.
 template <class InBone>
 std::shared_ptr<const Space> space_of(const MeshData& mesh, InBone in_bone, const Material& rigid) {
-  std::vector<std::int32_t> labels(mesh.tets.size());
-  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
-    Vec3 c;
-    for (std::int32_t v : mesh.tets[t]) c += mesh.vertices_mm[v] * 0.25;
-    labels[t] = in_bone(c) ? 2 : 0;
-  }
-  return testing::make_space(mesh, labels,
-                             {testing::free_material(), testing::drag_material(1.0), rigid});
+  return testing::labelled_space(mesh, in_bone,
+                                 {testing::free_material(), testing::drag_material(1.0), rigid});
 }
 
 TEST(RigidBladeFriction, PressedPastARoundBonesCentreItStaysWhereItLanded) {

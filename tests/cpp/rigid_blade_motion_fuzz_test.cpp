@@ -23,36 +23,12 @@ namespace {
 
 constexpr double kDt = 0.001;
 
-std::vector<double> axis(double from, double to, double step, std::vector<double> extra = {}) {
-  std::vector<double> v;
-  for (double x = from; x <= to + 1e-9; x += step) v.push_back(x);
-  for (double e : extra) {
-    v.erase(std::remove_if(v.begin(), v.end(), [e](double x) { return std::abs(x - e) < 0.05; }),
-            v.end());
-    v.push_back(e);
-  }
-  std::sort(v.begin(), v.end());
-  return v;
-}
+using testing::axis;
+using testing::inside_rigid;
 
 std::shared_ptr<const Space> space_of(const MeshData& mesh,
                                       const std::function<bool(const Vec3&)>& in_bone) {
-  std::vector<std::int32_t> labels(mesh.tets.size());
-  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
-    Vec3 c;
-    for (std::int32_t v : mesh.tets[t]) c += mesh.vertices_mm[v] * 0.25;
-    labels[t] = in_bone(c) ? 2 : 0;
-  }
-  return testing::make_space(mesh, labels);
-}
-
-// Inside rigid material deeper than depth_mm.
-bool inside_rigid(const Space& space, const Vec3& x, double depth_mm) {
-  bool inside = false;
-  space.mesh().tet_tree().for_each_containing(x, 0.0, [&](std::int32_t t) {
-    inside = inside || (space.tet_is_rigid(t) && space.mesh().outside_distance(t, x) < -depth_mm);
-  });
-  return inside;
+  return testing::labelled_space(mesh, in_bone);
 }
 
 struct Scenario {
@@ -96,12 +72,6 @@ Quaternion turn_about_z(double angle) {
   return {std::cos(0.5 * angle), 0, 0, std::sin(0.5 * angle)};
 }
 
-Quaternion times(const Quaternion& a, const Quaternion& b) {
-  return {
-      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
-}
-
 TEST(RigidBladeMotionFuzz, TheSweptEdgeNeverEntersBone) {
   std::mt19937 random(11);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
@@ -122,14 +92,14 @@ TEST(RigidBladeMotionFuzz, TheSweptEdgeNeverEntersBone) {
       for (int tick_index = 0; tick_index < 1500; ++tick_index) {
         const std::uint32_t roll = random() % 100;
         if (roll < 4) {  // A one-tick turn of up to 180 degrees about z.
-          rotation = times(turn_about_z(M_PI * unit(random)), rotation).normalized();
+          rotation = multiply(turn_about_z(M_PI * unit(random)), rotation).normalized();
         } else if (roll < 7) {  // A drop.
           position.z -= 3.0 * std::abs(unit(random));
         } else {
           position += Vec3{unit(random), unit(random), unit(random)} * 0.3;
           const Quaternion wobble{1.0, 0.02 * unit(random), 0.02 * unit(random),
                                   0.02 * unit(random)};
-          rotation = times(wobble, rotation).normalized();
+          rotation = multiply(wobble, rotation).normalized();
         }
         position = {std::clamp(position.x, -10.0, 10.0), std::clamp(position.y, -6.0, 6.0),
                     std::clamp(position.z, -8.0, 8.0)};

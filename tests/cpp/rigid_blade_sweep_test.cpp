@@ -20,29 +20,12 @@ namespace {
 constexpr double kDt = 0.001;
 constexpr double kK = 0.1;  // N/mm, the paper's.
 
-// The grid lines from..to at step, with `extra` lines added (kept apart by 0.05 mm at least).
-std::vector<double> axis(double from, double to, double step, std::vector<double> extra = {}) {
-  std::vector<double> v;
-  for (double x = from; x <= to + 1e-9; x += step) v.push_back(x);
-  for (double e : extra) {
-    v.erase(std::remove_if(v.begin(), v.end(), [e](double x) { return std::abs(x - e) < 0.05; }),
-            v.end());
-    v.push_back(e);
-  }
-  std::sort(v.begin(), v.end());
-  return v;
-}
+using testing::axis;
+using testing::inside_rigid;
 
-// Bone where in_bone(centroid), air elsewhere.
 template <class InBone>
 std::shared_ptr<const Space> space_of(const MeshData& mesh, InBone in_bone) {
-  std::vector<std::int32_t> labels(mesh.tets.size());
-  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
-    Vec3 c;
-    for (std::int32_t v : mesh.tets[t]) c += mesh.vertices_mm[v] * 0.25;
-    labels[t] = in_bone(c) ? 2 : 0;
-  }
-  return testing::make_space(mesh, labels);
+  return testing::labelled_space(mesh, in_bone);
 }
 
 // Samples of the ideal edge, 20 per gap between points, inside rigid material.
@@ -53,9 +36,7 @@ int samples_in_bone(const Blade& blade) {
     for (int s = 0; s <= 20; ++s) {
       const Vec3 x =
           blade.ideal_point(i) + (blade.ideal_point(i + 1) - blade.ideal_point(i)) * (s / 20.0);
-      space.mesh().tet_tree().for_each_containing(x, 0.0, [&](std::int32_t t) {
-        if (space.tet_is_rigid(t) && space.mesh().outside_distance(t, x) < -1e-6) ++inside;
-      });
+      inside += inside_rigid(space, x) ? 1 : 0;
     }
   }
   return inside;
@@ -158,11 +139,8 @@ TEST(RigidBladeSweep, AOneTickTurnCannotSweepTheEdgePastABone) {
           const EdgePose pose = interpolate_edge(before, after, m / 64.0, 0.5, 30.0);
           for (int s = 0; s <= 300; ++s) {
             const Vec3 x = pose.point(s / 300.0, 30.0);
-            space->mesh().tet_tree().for_each_containing(x, 0.0, [&](std::int32_t t) {
-              EXPECT_FALSE(space->tet_is_rigid(t) &&
-                           space->mesh().outside_distance(t, x) < -(1e-4 * 30.0 + 1e-6))
-                  << size << " " << turn_deg << " motion " << m << " sample " << s;
-            });
+            EXPECT_FALSE(inside_rigid(*space, x, 1e-4 * 30.0 + 1e-6))
+                << size << " " << turn_deg << " motion " << m << " sample " << s;
           }
         }
       }

@@ -20,11 +20,7 @@ namespace {
 constexpr double kDt = 0.001;
 constexpr double kK = 0.1;  // N/mm, the paper's.
 
-std::vector<double> axis(double from, double to, double step) {
-  std::vector<double> v;
-  for (double x = from; x <= to + 1e-9; x += step) v.push_back(x);
-  return v;
-}
+using testing::axis;
 
 // A 4 mm Kuhn grid from -60 to 60 in x, -16 to 16 in y, -24 to 16 in z, each
 // tet's material chosen from its centroid (0 air, 1 flesh with D = 1 mm, 2 bone).
@@ -47,15 +43,7 @@ bool in_box(const Vec3& c, const Vec3& lo, const Vec3& hi) {
 // The 8 x 8 x 8 mm bone under the middle of the blade, its top at z = 0.
 int middle_bone(const Vec3& c) { return in_box(c, {-4, -4, -8}, {4, 4, 0}) ? 2 : 0; }
 
-// Whether x lies inside rigid material by more than the tolerance.
-bool inside_rigid(const Space& space, const Vec3& x) {
-  const TetMesh& mesh = space.mesh();
-  bool inside = false;
-  mesh.tet_tree().for_each_containing(x, 0.0, [&](std::int32_t t) {
-    inside = inside || (space.tet_is_rigid(t) && mesh.outside_distance(t, x) < -1e-6);
-  });
-  return inside;
-}
+using testing::inside_rigid;
 
 // Samples of the ideal edge at `per_gap` per gap between points (the points
 // included) that lie inside rigid material.
@@ -295,15 +283,7 @@ TEST(RigidBlade, FuzzNeverInsideBone) {
           position = {std::clamp(position.x, -28.0, 28.0), std::clamp(position.y, -10.0, 10.0),
                       std::clamp(position.z, -18.0, 12.0)};
           const Quaternion turn{1.0, 0.02 * unit(random), 0.02 * unit(random), 0.02 * unit(random)};
-          rotation = Quaternion{turn.w * rotation.w - turn.x * rotation.x - turn.y * rotation.y -
-                                    turn.z * rotation.z,
-                                turn.w * rotation.x + turn.x * rotation.w + turn.y * rotation.z -
-                                    turn.z * rotation.y,
-                                turn.w * rotation.y - turn.x * rotation.z + turn.y * rotation.w +
-                                    turn.z * rotation.x,
-                                turn.w * rotation.z + turn.x * rotation.y - turn.y * rotation.x +
-                                    turn.z * rotation.w}
-                         .normalized();
+          rotation = multiply(turn, rotation).normalized();
         }
         if (!rotation.valid()) rotation = {};
         rotation = rotation.normalized();

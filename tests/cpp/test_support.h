@@ -1,6 +1,8 @@
 // Shared helpers of the C++ tests: a Space from reference geometry.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -32,6 +34,43 @@ inline std::shared_ptr<const Space> make_space(const MeshData& data,
 
 inline std::shared_ptr<const Space> make_space(const MeshData& data, std::int32_t material) {
   return make_space(data, std::vector<std::int32_t>(data.tets.size(), material));
+}
+
+// Grid lines from..to at step, with `extra` lines added (lines within 0.05 mm
+// of one of them dropped): a grid with planes where a thin feature's faces lie.
+inline std::vector<double> axis(double from, double to, double step,
+                                const std::vector<double>& extra = {}) {
+  std::vector<double> v;
+  for (double x = from; x <= to + 1e-9; x += step) v.push_back(x);
+  for (double e : extra) {
+    v.erase(std::remove_if(v.begin(), v.end(), [e](double x) { return std::abs(x - e) < 0.05; }),
+            v.end());
+    v.push_back(e);
+  }
+  std::sort(v.begin(), v.end());
+  return v;
+}
+
+// Each tet bone (material 2) where in_bone(its centroid), air (0) elsewhere.
+template <class InBone>
+std::shared_ptr<const Space> labelled_space(const MeshData& mesh, InBone in_bone,
+                                            std::vector<Material> materials = paper_materials()) {
+  std::vector<std::int32_t> labels(mesh.tets.size());
+  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+    Vec3 c;
+    for (std::int32_t v : mesh.tets[t]) c += mesh.vertices_mm[v] * 0.25;
+    labels[t] = in_bone(c) ? 2 : 0;
+  }
+  return make_space(mesh, labels, std::move(materials));
+}
+
+// Whether x lies inside rigid material by more than depth_mm.
+inline bool inside_rigid(const Space& space, const Vec3& x, double depth_mm = 1e-6) {
+  bool inside = false;
+  space.mesh().tet_tree().for_each_containing(x, 0.0, [&](std::int32_t t) {
+    inside = inside || (space.tet_is_rigid(t) && space.mesh().outside_distance(t, x) < -depth_mm);
+  });
+  return inside;
 }
 
 // Bone below z = 0 inside a free 40 mm box (material 2 of paper_materials).

@@ -40,6 +40,9 @@ struct Quaternion {
   bool valid() const;
 };
 
+// The rotation b, then a (the Hamilton product a b).
+Quaternion multiply(const Quaternion& a, const Quaternion& b);
+
 // q, or -q (the same rotation) when that is nearer `last` (a dot product < 0).
 inline Quaternion same_hemisphere(const Quaternion& q, const Quaternion& last) {
   const double d = q.w * last.w + q.x * last.x + q.y * last.y + q.z * last.z;
