@@ -18,7 +18,11 @@ flags=(-std=c++20 -O1 -g -fno-omit-frame-pointer -ffp-contract=off
   -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined -Icore/include -Iserver)
 # Through ccache when it is installed (a fresh clone then compiles nothing it compiled before).
 compiler=(clang++)
-if command -v ccache >/dev/null 2>&1; then compiler=(ccache clang++); fi
+if command -v ccache >/dev/null 2>&1; then
+  compiler=(ccache clang++)
+  # Not the folder: with -g ccache would hash it, and no other clone would hit.
+  export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=1
+fi
 # An object is rebuilt when its source, or any header, is newer than it.
 newest_header=$(ls -t core/include/hapticut/*.h core/src/*.h server/*.h | head -1)
 # Compiles the sources into build/fuzz/obj and links them into build/fuzz/NAME.
