@@ -1,9 +1,10 @@
 """Hapticut for Blender: mark regions and blades, tetrahedralize, preview, export; then run
 the scene live on the servo, simulate a keyframed stroke, bake it (docs/addon.md).
 
-Thin by design (DESIGN.md): every algorithm runs in the ``hapticut`` toolkit, a child
-process, or in its numpy-only modules loaded from the installed toolkit (toolkit_link); this
-package is pure Python (standard library and Blender's numpy).
+Thin by design (docs/decisions.md, "The toolkit runs outside Blender"): every algorithm
+runs in the ``hapticut`` toolkit, a child process, or in its numpy-only modules loaded from
+the installed toolkit (toolkit_link); this package is pure Python (standard library and
+Blender's numpy).
 """
 
 from __future__ import annotations

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # The test command (README.md): setup, lint, the C++ tests (plain and under ASan/UBSan), the
 # fuzzers, the Python tests, the servo's tests under TSan, the add-on under two Blenders.
+# Settings (environment): HAPTICUT_FUZZ_SECONDS (default 60, tests/scripts/fuzz.sh),
+# HAPTICUT_TEST_WORKERS (pytest-xdist workers; default: the number of cores, 0: one process).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # Each phase prints its start time and the seconds since the run began; at the end, or where
@@ -35,8 +37,14 @@ phase "C++ tests under ASan and UBSan (ctest in build/asan)"
 bash tests/scripts/sanitizers.sh run
 phase "Fuzzing the scene reader and the control parser (libFuzzer, bounded time)"
 bash tests/scripts/fuzz.sh
-phase "Python tests (pytest)"
-python3 -m pytest -q -m "not slow" tests/python --ignore=tests/python/addon
+# The Python tests in two runs: those that time no servo in parallel, one pytest-xdist worker
+# per core (HAPTICUT_TEST_WORKERS), the tests of a builder scan that they share on one worker
+# (xdist_group); then the suites that time a real servo's threads (marker "serial") alone.
+phase "Python tests in parallel (pytest -n ${HAPTICUT_TEST_WORKERS:-$(nproc)})"
+python3 -m pytest -q -m "not slow and not serial" -n "${HAPTICUT_TEST_WORKERS:-$(nproc)}" \
+  --dist loadgroup tests/python --ignore=tests/python/addon
+phase "Python tests that time a real servo (pytest, serial)"
+python3 -m pytest -q -m "not slow and serial" tests/python --ignore=tests/python/addon
 phase "Servo under ThreadSanitizer (its threads' tests, build/tsan)"
 bash tests/scripts/tsan.sh run
 # bpy in a pytest process of its own (it is not imported beside the other suites' modules).

@@ -61,6 +61,17 @@ installed_hash() {
   [ -f "$file" ] && sha1sum "$file" | cut -d' ' -f1
 }
 
+# The compiler cache, when ccache is installed (tests/scripts/setup.sh installs it): every
+# build of the test command (build/main through pip, the sanitizer builds, the fuzzers)
+# compiles through it, so a fresh clone on a machine that built the same sources before
+# compiles nothing again. Paths under the checkout are hashed relative to it (CCACHE_BASEDIR),
+# so two clones share their objects; debug info then names the first clone's folder.
+CMAKE_LAUNCHER_DEFINES=()
+if command -v ccache >/dev/null 2>&1; then
+  export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=1
+  CMAKE_LAUNCHER_DEFINES=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+fi
+
 stamp_matches() { [ -f "build/stamps/$1" ] && [ "$(cat "build/stamps/$1")" = "$2" ]; }
 stamp_write() { mkdir -p build/stamps && echo "$2" >"build/stamps/$1"; }
 
@@ -86,8 +97,10 @@ install_toolkit() {
     echo ", the C++ tests") in build/main)"
   # Tuned for this machine (-march=native): the demo, tests, benchmarks and evaluation run
   # where they are built. Wheels for elsewhere are built without it.
+  local launcher=()
+  [ ${#CMAKE_LAUNCHER_DEFINES[@]} -eq 0 ] || launcher=(-C cmake.define.CMAKE_CXX_COMPILER_LAUNCHER=ccache)
   python3 -m pip install -q --disable-pip-version-check --no-build-isolation \
-    -C build-dir="$PWD/build/main" -C cmake.define.HAPTICUT_NATIVE=ON \
+    -C build-dir="$PWD/build/main" -C cmake.define.HAPTICUT_NATIVE=ON "${launcher[@]}" \
     -C cmake.define.HAPTICUT_BUILD_TESTS="$tests_flag" ".[$extras]"
   stamp_write "$name" "$key $(installed_hash hapticut._core)"
   if [ "$tests_flag" = ON ]; then

@@ -14,7 +14,7 @@ namespace {
 MoveResult trail(const Vec3& target, const Vec3& q, double lag_mm, double tolerance_mm) {
   const Vec3 back = q - target;
   const double distance = norm(back);
-  // Repair 5: "< D + eps" so rounding does not creep q by an ulp each call.
+  // Repair 5 (docs/method.md): "< D + eps" so rounding does not creep q by an ulp each call.
   if (distance < lag_mm + tolerance_mm) return {false, q};
   return {true, target + back * (lag_mm / distance)};
 }

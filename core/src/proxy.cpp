@@ -13,7 +13,7 @@ namespace hapticut {
 namespace {
 
 // The nearest plane among some of a tet's faces that q->q1 exits through
-// (repair 1), and where. Without an exit, `touching` is the first of those
+// (docs/method.md, repair 1), and where. Without an exit, `touching` is the first of those
 // faces whose plane q1 lies on (within eps), if asked for: FACE's edge arrival.
 struct Exit {
   int face = -1;
@@ -348,7 +348,7 @@ Proxy::Outcome Proxy::advance(const Vec3& p, const MoveContext& context) {
 }
 
 // TET: (a) nothing widens; (b-1) move; (b-2) stay inside; (b-3) stop on the
-// nearest exit face (eqs. 2-4 with repair 1).
+// nearest exit face (eqs. 2-4 with repair 1, docs/method.md).
 Proxy::Outcome Proxy::step_tet(const Vec3& p, const MoveContext& context) {
   const TetMesh& mesh = space_->mesh();
   const std::int32_t t = place_.tet;
@@ -375,7 +375,8 @@ Proxy::Outcome Proxy::step_face(const Vec3& p, const MoveContext& context) {
   const Material& material = space_->material_of_tet(t);
   if (strictly_beyond(dot(plane.normal, p - q), eps)) {
     const std::int32_t u = mesh.neighbour(t, face);
-    if (u == kNoTet) return go(ProxyState::Outside, kNoTet, 0, q);  // Repair 3: keep q.
+    // Leaving the mesh keeps q (docs/method.md, repair 3).
+    if (u == kNoTet) return go(ProxyState::Outside, kNoTet, 0, q);
     // A rigid neighbour refuses at once (the common case of a slide on bone).
     if (!space_->tet_is_rigid(u) && move(space_->material_of_tet(u), p, q, context).moved) {
       return go(ProxyState::Tet, u, 0, q);
@@ -423,7 +424,7 @@ Proxy::Outcome Proxy::step_face(const Vec3& p, const MoveContext& context) {
 
 // EDGE: (a-1) into a tet of the fan whose wedge holds p (eq. 7); (a-2) out
 // of the mesh only from a boundary edge when p is outside every closed wedge
-// (repair 2); (a-3) onto the fan face the projected target moves furthest
+// (docs/method.md, repair 2); (a-3) onto the fan face the projected target moves furthest
 // along (eq. 8); else (b), slide_along_edge.
 Proxy::Outcome Proxy::step_edge(const Vec3& p, const MoveContext& context) {
   const TetMesh& mesh = space_->mesh();
@@ -512,9 +513,9 @@ Proxy::Outcome Proxy::step_edge(const Vec3& p, const MoveContext& context) {
 }
 
 // VERTEX: (a-1) into a tet whose corner cone holds p (eq. 11); (a-2) out of
-// the mesh only from a boundary vertex, p outside every closed cone (repair
-// 2); (a-3) onto the face (eq. 12) or edge (eq. 13, sign fixed) the projected
-// target moves furthest along; (b) no motion of its own.
+// the mesh only from a boundary vertex, p outside every closed cone
+// (docs/method.md, repair 2); (a-3) onto the face (eq. 12) or edge (eq. 13, sign fixed) the
+// projected target moves furthest along; (b) no motion of its own.
 Proxy::Outcome Proxy::step_vertex(const Vec3& p, const MoveContext& context) {
   const TetMesh& mesh = space_->mesh();
   const std::int32_t vertex = mesh.tet(place_.tet)[place_.local];
@@ -622,7 +623,7 @@ Proxy::Outcome Proxy::enter_beyond(const Vec3& q, const Vec3& end, const Vec3& p
   const double eps = space_->tolerance();
   double best_parameter = 2.0;
   FaceRef best_face;
-  // Repair 4: a path exactly through a boundary edge or vertex meets the
+  // Repair 4 (docs/method.md): a path exactly through a boundary edge or vertex meets the
   // triangles there only on their rims, heading away from their own tets. The
   // nearest such rim hit is kept and resolved below against the whole fan.
   double rim_parameter = 2.0;
@@ -712,7 +713,7 @@ Proxy::Outcome Proxy::enter_beyond(const Vec3& q, const Vec3& end, const Vec3& p
 }
 
 // The segment meets boundary face `face` at c on its rim (one side: an edge;
-// two: a vertex). The closed-cone rule of repair 2, at the rim, so a path
+// two: a vertex). The closed-cone rule of repair 2 (docs/method.md), at the rim, so a path
 // along an inner face plane cannot fall through into rigid material:
 // the proxy lands on the vertex or edge unless p - (that vertex or edge
 // point) points strictly out of every closed cone (eq. 11) or wedge (eq. 7)
@@ -795,7 +796,7 @@ std::string Proxy::check_invariants(double tolerance_factor) const {
       break;
     case ProxyState::Outside:
       // On the boundary is fine (a proxy leaving through a face keeps q there,
-      // repair 3); inside, even exactly on an inner face or vertex, is not.
+      // docs/method.md, repair 3); inside, even exactly on an inner face or vertex, is not.
       if (lies_in_mesh_interior(mesh, q, tol)) {
         return "OUTSIDE: q inside the mesh, farther than the tolerance from its boundary";
       }

@@ -74,7 +74,7 @@ SegmentProbe probe_segment(const Space& space, std::int32_t start_tet, const Vec
       t = u;
       continue;
     }
-    // The face the segment leaves t through first (repair 1: only a plane it
+    // The face the segment leaves t through first (docs/method.md, repair 1: only a plane it
     // strictly exits counts; the hit is at 0 when x already lies on it).
     const Plane* planes = &mesh.face_plane(t, 0);
     int exit_face = -1;

@@ -38,7 +38,8 @@ TEST(Geometry, EntryParameterMirrorsExit) {
   constexpr double eps = 1e-9;
   EXPECT_DOUBLE_EQ(segment_entry_parameter(1.0, -3.0, eps), 0.25);
   EXPECT_EQ(segment_entry_parameter(0.0, -1.0, eps), 0.0);
-  EXPECT_LT(segment_entry_parameter(0.0, 1.0, eps), 0.0);    // Leaving: no re-entry (repair 3).
+  // Leaving: no re-entry (repair 3, docs/method.md).
+  EXPECT_LT(segment_entry_parameter(0.0, 1.0, eps), 0.0);
   EXPECT_LT(segment_entry_parameter(-1.0, -2.0, eps), 0.0);  // Already behind the plane.
 }
 
@@ -102,7 +103,7 @@ TEST(Geometry, PointsStrictlyOutOfAClosedConeNeedsOnePlanePassedByMoreThanEps) {
   EXPECT_FALSE(points_strictly_out_of(std::array<double, 2>{0.0, 0.0}, eps));  // Along the edge.
   EXPECT_FALSE(points_strictly_out_of(std::array<double, 2>{-1.0, -1.0}, eps));
   // Neither strictly into nor strictly out of: in the closed cone's boundary,
-  // where repair 2 keeps the walk on the feature (ALGORITHM.md).
+  // where repair 2 keeps the walk on the feature (docs/method.md).
   const std::array<double, 3> in_a_face_plane{-1.0, 0.0, -0.5};
   EXPECT_FALSE(points_strictly_into(in_a_face_plane, eps));
   EXPECT_FALSE(points_strictly_out_of(in_a_face_plane, eps));

@@ -20,7 +20,7 @@ TEST(Material, DragTrailsByAtMostD) {
   const MoveResult r = move(flesh, {5, 0, 0}, {0, 0, 0}, context());
   ASSERT_TRUE(r.moved);
   EXPECT_NEAR(r.q.x, 4.0, 1e-15);
-  // Repair 5: exactly D behind does not creep.
+  // Repair 5 (docs/method.md): exactly D behind does not creep.
   EXPECT_FALSE(move(flesh, {5, 0, 0}, r.q, context()).moved);
 }
 

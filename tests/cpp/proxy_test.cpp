@@ -239,7 +239,7 @@ TEST(Proxy, RigidCubeStopsAnOutsideProxyOnItsSurface) {
   EXPECT_EQ(proxy.place().state, ProxyState::Face);
   EXPECT_NEAR(proxy.q().x, 0.0, 1e-9);
   EXPECT_NEAR(proxy.force_N().x, -0.3, 1e-9);
-  // Straight through a cube corner, where boundary triangles meet (repair 4).
+  // Straight through a cube corner, where boundary triangles meet (repair 4, docs/method.md).
   Proxy corner(space);
   corner.reset({-1, -1, -1});
   corner.step({5, 5, 5}, kDt);
@@ -248,7 +248,7 @@ TEST(Proxy, RigidCubeStopsAnOutsideProxyOnItsSurface) {
   EXPECT_EQ(corner.check_invariants(), "");
 }
 
-// Repair 4: a path exactly through a boundary vertex meets the triangles there
+// Repair 4 (docs/method.md): a path exactly through a boundary vertex meets the triangles there
 // only on their rims. Aimed into a tet that has no boundary face at that
 // vertex, it used to miss them all and pass into the mesh as OUTSIDE.
 TEST(Proxy, EntersExactlyThroughABoundaryVertexIntoAnInnerTet) {

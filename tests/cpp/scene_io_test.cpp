@@ -368,7 +368,7 @@ TEST(SceneIo, FileErrorsNameTheFile) {
 }
 
 // 200k tets through a MessagePack file: correctness here; the time is printed,
-// not asserted (STYLE.md: benchmarks print, tests do not time).
+// not asserted (benchmarks print, tests do not time).
 TEST(SceneIo, TwoHundredThousandTetsThroughMessagePack) {
   std::vector<double> planes(34);
   for (std::size_t i = 0; i < planes.size(); ++i) planes[i] = static_cast<double>(i);

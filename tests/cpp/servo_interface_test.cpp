@@ -329,7 +329,7 @@ TEST(InputChecks, SetPlaceRefusesIndicesOutOfRange) {
 }
 
 TEST(AbsurdSample, AFarDeviceSampleIsRejectedAndTheProxyKeepsItsPlace) {
-  // Defect 7 on sphere80: reset at (0,0,40), a glitch to (0,0,1e18), then the
+  // An absurd sample on sphere80: reset at (0,0,40), a glitch to (0,0,1e18), then the
   // origin. The glitch is a device fault: zero force, counted, state kept;
   // the next sample is felt (the rigid sphere pushes back, 4.7 N).
   const Scene scene = load_scene(std::string(HAPTICUT_EXAMPLES_DIR) + "/sphere80.hapticut.msgpack");

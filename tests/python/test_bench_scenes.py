@@ -35,7 +35,7 @@ def test_a_scenes_directory_is_used_and_an_empty_one_is_reported(tmp_path):
 
 
 def test_every_example_scene_runs_a_50_point_stroke_without_a_capped_point():
-    """Defect 5: the bunny needed 70 transitions in one tick and was capped; the work budget
+    """The bunny once needed 70 transitions in one tick and was capped; the work budget
     lets the paper's independent points finish. Counts, not times: times belong to the
     benchmark's table."""
     paths, _ = blade.example_scenes()

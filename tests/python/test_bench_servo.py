@@ -7,8 +7,13 @@ from __future__ import annotations
 import re
 
 import numpy as np
+import pytest
 from hapticut.bench import servo
 from servo_test_support import EXAMPLES
+
+# Times a real servo's clock-paced threads: runs alone, never beside other tests
+# (tests/run_all.sh runs the serial tests after the parallel ones).
+pytestmark = pytest.mark.serial
 
 
 def _cells(text: str, scene: str) -> list[list[str]]:

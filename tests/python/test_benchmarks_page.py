@@ -57,6 +57,8 @@ def _check_structure(text: str) -> None:
     assert "${" not in text, "a placeholder was left unfilled"
     assert "cores shared with other work" in text
     assert page.COMMAND in text
+    assert not page.MACHINE_PATH.search(text), "the page names the generating machine's paths"
+    assert "site-packages" not in text
     for bench in page.BENCHMARKS:
         body = page.section(text, bench.heading)
         table = _table(body)

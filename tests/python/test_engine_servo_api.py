@@ -101,7 +101,7 @@ def test_zero_quaternion_is_an_error_in_reset_and_a_rejected_tick_in_step():
 
 
 def test_a_far_device_sample_is_a_rejected_input():
-    """Defect 7 on sphere80: the glitch is refused and the sphere is felt after it."""
+    """A glitch to 1e18 mm on sphere80 is refused and the sphere is felt after it."""
     _, space = engine.load_space(EXAMPLES / "sphere80.hapticut.msgpack")
     proxies = _core.ProxySet(space, 1)
     proxies.reset(np.array([[0.0, 0, 40]]))

@@ -75,7 +75,7 @@ def test_force_shading_follows_the_source_field_across_split_faces():
 
 
 def test_shading_is_never_worse_than_the_plain_proxy_on_the_scanned_bunny():
-    # Issue 8: the mouse example (the bunny scan simplified, meshed by fTetWild)
+    # The mouse example (the bunny scan simplified, meshed by fTetWild)
     # has bumps finer than its facets and a sharp crease where its holes were
     # closed. Shading must not err more than the plain proxy, mean and p95,
     # with normals from its own rigid surface or from the scan.

@@ -8,7 +8,12 @@ import re
 import subprocess
 import sys
 
+import pytest
 from servo_test_support import SPHERE, run_servo, stats_of
+
+# Times a real servo's clock-paced threads: runs alone, never beside other tests
+# (tests/run_all.sh runs the serial tests after the parallel ones).
+pytestmark = pytest.mark.serial
 
 SERVO_SOURCE_OPTIONS = SPHERE.parents[1] / "server" / "options.cpp"
 

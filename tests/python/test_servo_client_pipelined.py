@@ -7,6 +7,10 @@ from pathlib import Path
 import pytest
 from hapticut.servo_client import ServoClient, ServoError, ServoProcess
 
+# Times a real servo's clock-paced threads: runs alone, never beside other tests
+# (tests/run_all.sh runs the serial tests after the parallel ones).
+pytestmark = pytest.mark.serial
+
 FINGER = Path(__file__).resolve().parents[2] / "examples" / "finger.hapticut.msgpack"
 
 

@@ -8,9 +8,14 @@ import socket
 import time
 
 import numpy as np
+import pytest
 from hapticut import servo_layout as layout
 from hapticut.servo_client import parse_stream_frame
 from servo_test_support import SPHERE, ServoProcess, connect
+
+# Times a real servo's clock-paced threads: runs alone, never beside other tests
+# (tests/run_all.sh runs the serial tests after the parallel ones).
+pytestmark = pytest.mark.serial
 
 FORGED_SESSION = 1 << 31
 FORGED_SEQUENCE = 1 << 62

@@ -27,6 +27,10 @@ from servo_test_support import (
     run_servo,
 )
 
+# Times a real servo's clock-paced threads: runs alone, never beside other tests
+# (tests/run_all.sh runs the serial tests after the parallel ones).
+pytestmark = pytest.mark.serial
+
 BRIDGE = EXAMPLES / "bridge_example.py"
 # The test profiles (example-force-device.json: a stiffness limit of its own).
 TEST_PROFILE_DIR = Path(__file__).resolve().parents[2] / "server" / "devices" / "tests" / "data"

@@ -25,6 +25,10 @@ from servo_test_support import (
     run_servo,
 )
 
+# Times a real servo's clock-paced threads: runs alone, never beside other tests
+# (tests/run_all.sh runs the serial tests after the parallel ones).
+pytestmark = pytest.mark.serial
+
 LIVE = [str(SPHERE), "--device", "sim:press-slide,speed=20", "--engage"]
 
 

@@ -18,6 +18,10 @@ import pytest
 from hapticut.servo_client import PROTOCOL_VERSION, ServoClient, ServoError
 from servo_test_support import SPHERE, ServoProcess, connect
 
+# Times a real servo's clock-paced threads: runs alone, never beside other tests
+# (tests/run_all.sh runs the serial tests after the parallel ones).
+pytestmark = pytest.mark.serial
+
 LIVE = [str(SPHERE), "--device", "sim:press-slide,speed=20", "--engage"]
 
 

@@ -7,7 +7,12 @@ import re
 import struct
 from pathlib import Path
 
+import pytest
 from servo_test_support import SPHERE, ServoProcess, connect
+
+# Times a real servo's clock-paced threads: runs alone, never beside other tests
+# (tests/run_all.sh runs the serial tests after the parallel ones).
+pytestmark = pytest.mark.serial
 
 PROTOCOL = Path(__file__).resolve().parents[2] / "docs" / "protocol.md"
 

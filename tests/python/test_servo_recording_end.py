@@ -23,6 +23,10 @@ from servo_test_support import (
     run_servo,
 )
 
+# Times a real servo's clock-paced threads: runs alone, never beside other tests
+# (tests/run_all.sh runs the serial tests after the parallel ones).
+pytestmark = pytest.mark.serial
+
 TRAILER = layout.RECORDING_TRAILER.itemsize
 
 

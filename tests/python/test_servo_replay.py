@@ -6,6 +6,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+import pytest
 from servo_test_support import (
     SPHERE,
     ServoProcess,
@@ -16,6 +17,10 @@ from servo_test_support import (
     scene_with_coupling,
     two_blade_scene,
 )
+
+# Times a real servo's clock-paced threads: runs alone, never beside other tests
+# (tests/run_all.sh runs the serial tests after the parallel ones).
+pytestmark = pytest.mark.serial
 
 REPLAYED_BLOCK_FIELDS = (
     "pose",

@@ -22,6 +22,10 @@ from servo_test_support import (
 )
 from test_servo_faults import assert_faulted_at, first_fault
 
+# Times a real servo's clock-paced threads: runs alone, never beside other tests
+# (tests/run_all.sh runs the serial tests after the parallel ones).
+pytestmark = pytest.mark.serial
+
 RIGID_SCENE = SPHERE  # A rigid body of flat facets: force shading bends its normals.
 
 

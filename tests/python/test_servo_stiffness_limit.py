@@ -25,6 +25,10 @@ from servo_test_support import (
 )
 from test_servo_devices import bridge_summary, free_udp_port, start_bridge
 
+# Times a real servo's clock-paced threads: runs alone, never beside other tests
+# (tests/run_all.sh runs the serial tests after the parallel ones).
+pytestmark = pytest.mark.serial
+
 SCENE_K = 0.1  # The sphere example's coupling stiffness (N/mm).
 LIMIT = 0.05
 

@@ -20,6 +20,10 @@ from servo_test_support import (
     wait_stopped,
 )
 
+# Times a real servo's clock-paced threads: runs alone, never beside other tests
+# (tests/run_all.sh runs the serial tests after the parallel ones).
+pytestmark = pytest.mark.serial
+
 
 @pytest.mark.parametrize("scene", EXAMPLE_SCENES, ids=lambda p: p.name.split(".")[0])
 def test_stream_and_recording_equal_offline_engine(scene, tmp_path):

@@ -3,8 +3,9 @@
 # and runs each for a bounded time; they must find nothing:
 #   scene_reader_fuzz     the C++ scene reader, seeded with the example scenes and test data;
 #   control_message_fuzz  the servo's control message parser, seeded with tests/fuzz/control/.
-#   HAPTICUT_FUZZ_SECONDS (default 60): how long to fuzz the scene reader; the control
-#   parser gets half of it.
+#   HAPTICUT_FUZZ_SECONDS (default 60, the test command's and CI's): how long to fuzz the
+#   scene reader; the control parser gets half of it (HAPTICUT_FUZZ_SECONDS=10 for a quick
+#   local run; tests/run_long_fuzz.sh is the long walk of the engine's invariants).
 # Findings are written to build/fuzz/findings/; each one becomes a regression test
 # (tests/cpp/scene_reader_limits_test.cpp, tests/python/test_servo_hostile_client.py).
 set -euo pipefail
@@ -15,6 +16,13 @@ out=build/fuzz
 mkdir -p "$out/corpus" "$out/control-corpus" "$out/findings" "$out/obj"
 flags=(-std=c++20 -O1 -g -fno-omit-frame-pointer -ffp-contract=off
   -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined -Icore/include -Iserver)
+# Through ccache when it is installed (a fresh clone then compiles nothing it compiled before).
+compiler=(clang++)
+if command -v ccache >/dev/null 2>&1; then
+  compiler=(ccache clang++)
+  # Not the folder: with -g ccache would hash it, and no other clone would hit.
+  export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=1
+fi
 # An object is rebuilt when its source, or any header, is newer than it.
 newest_header=$(ls -t core/include/hapticut/*.h core/src/*.h server/*.h | head -1)
 # Compiles the sources into build/fuzz/obj and links them into build/fuzz/NAME.
@@ -27,7 +35,7 @@ build_harness() {
     objects+=("$object")
     if [ ! -f "$object" ] || [ "$source" -nt "$object" ] || [ "$newest_header" -nt "$object" ]; then
       echo "fuzz: clang++ $source"
-      clang++ "${flags[@]}" -c "$source" -o "$object"
+      "${compiler[@]}" "${flags[@]}" -c "$source" -o "$object"
     fi
   done
   clang++ "${flags[@]}" "${objects[@]}" -o "$out/$name"

@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # Formatters and linters on what the repository holds: clang-format and clang-tidy on the C++,
 # ruff on the Python. clang-tidy runs one file per process, as many at a time as there are
-# cores, and remembers a file that passed (build/lint/: keyed by the file, the headers it can
-# include, the checks and clang-tidy's version), so a second run checks only what changed.
+# cores, and remembers a file that passed, keyed by the file, the headers it can include, the
+# compile commands (the checkout's own path left out), the checks and clang-tidy's version:
+# a second run, or a fresh clone on the same machine, checks only what changed. The passes
+# are kept in HAPTICUT_LINT_CACHE (default: ~/.cache/hapticut/clang-tidy-passed, outside the
+# checkout, like a compiler cache; an empty folder there checks every file).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 
@@ -12,14 +15,17 @@ clang-format --dry-run --Werror "${cpp_files[@]}"
 
 mapfile -t tidy_files < <(git ls-files 'core/src/*.cpp' 'core/src/**/*.cpp' 'server/*.cpp' \
   'server/**/*.cpp' 'tools/evaluation/src/*.cpp')
-passed=build/lint/clang-tidy-passed
+passed=${HAPTICUT_LINT_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/hapticut/clang-tidy-passed}
 mkdir -p "$passed"
+# The compile commands' flags, whatever folder the checkout is in.
+commands_key=$(sed "s|$PWD||g" build/main/compile_commands.json | sha1sum | cut -d' ' -f1)
 # The headers a file can include: the engine's own, plus the servo's for the servo and the
 # evaluation's for the evaluation (the engine includes neither).
 headers_key() {
   {
     clang-tidy --version
     cat .clang-tidy
+    echo "$commands_key"
     git ls-files -z 'core/*.h' "$@" | xargs -0 sha1sum
   } | sha1sum | cut -d' ' -f1
 }

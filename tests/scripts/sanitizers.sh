@@ -9,10 +9,12 @@
 # 10^7-step variant is left to the plain build).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
+source tools/install_lib.sh  # CMAKE_LAUNCHER_DEFINES: ccache, when installed
 
 case "${1:-run}" in
   build)
     cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+      "${CMAKE_LAUNCHER_DEFINES[@]}" \
       -DHAPTICUT_BUILD_TESTS=ON -DHAPTICUT_BUILD_PYTHON=OFF \
       -DCMAKE_CXX_FLAGS="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all" \
       -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" >/dev/null

@@ -10,9 +10,11 @@ cd "$(dirname "$0")/../.."
 source tools/install_lib.sh
 
 # The product's packages, then the tests' (GoogleTest, the linters, clang with its runtime
-# libraries for the fuzzers and ThreadSanitizer).
+# libraries for the fuzzers and ThreadSanitizer, ccache for every build below).
 install_apt "${PRODUCT_APT_PACKAGES[@]}" libgtest-dev clang-format clang-tidy clang \
-  libclang-rt-14-dev
+  libclang-rt-14-dev ccache
+# Sourced again now that ccache is there: the builds below compile through it.
+source tools/install_lib.sh
 install_toolkit tests
 
 # The evaluation (tools/evaluation, not in the product's wheel): its package and its module
@@ -23,8 +25,10 @@ if stamp_matches evaluation "$key $(installed_hash hapticut_evaluation._baseline
   install_say "the evaluation is installed from these sources (build/evaluation)"
 else
   install_say "pip install ./tools/evaluation (hapticut_evaluation._baselines, linked to build/main)"
+  launcher=()
+  [ ${#CMAKE_LAUNCHER_DEFINES[@]} -eq 0 ] || launcher=(-C cmake.define.CMAKE_CXX_COMPILER_LAUNCHER=ccache)
   python3 -m pip install -q --disable-pip-version-check --no-build-isolation \
-    -C build-dir="$PWD/build/evaluation" -C cmake.define.HAPTICUT_NATIVE=ON \
+    -C build-dir="$PWD/build/evaluation" -C cmake.define.HAPTICUT_NATIVE=ON "${launcher[@]}" \
     -C cmake.define.HAPTICUT_ENGINE_BUILD_DIR="$PWD/build/main" ./tools/evaluation
   stamp_write evaluation "$key $(installed_hash hapticut_evaluation._baselines)"
 fi

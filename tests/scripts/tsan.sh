@@ -22,11 +22,13 @@
 # reports "memory: locked" without locking anything; neither changes what is checked.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
+source tools/install_lib.sh  # CMAKE_LAUNCHER_DEFINES: ccache, when installed
 
 case "${1:-run}" in
   build)
     # clang: its TSan runtime comes with libclang-rt-14-dev (setup.sh installs it).
     cmake -S . -B build/tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+      "${CMAKE_LAUNCHER_DEFINES[@]}" \
       -DCMAKE_CXX_COMPILER=clang++ -DHAPTICUT_BUILD_TESTS=ON -DHAPTICUT_BUILD_PYTHON=OFF \
       -DCMAKE_CXX_FLAGS="-fsanitize=thread -fno-omit-frame-pointer" \
       -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=thread" >/dev/null

@@ -29,6 +29,10 @@ TEMPLATE = Path(__file__).with_name("page.md")
 COMMAND = "python tools/benchmarks/page.py --out docs/benchmarks.md"
 # Shown in a quick run's commands instead of its temporary directory.
 SCENES_PLACEHOLDER = "DIR"
+ROOT = Path(__file__).resolve().parents[2]
+# An absolute path of the machine that ran the page: the page must carry none
+# (tests/python/test_generated_pages.py checks every generated page).
+MACHINE_PATH = re.compile(r"(?<![\w.~])/(?:root|home|tmp|usr|opt|var|work|srv|mnt)/\S*")
 
 
 @dataclass(frozen=True)
@@ -109,6 +113,16 @@ def unexplained(names: list[str], text: str) -> list[str]:
     return [name for name in names if f"`{name}`" not in text]
 
 
+def without_machine_paths(line: str) -> str:
+    """A printed line with the running machine's paths made neutral: the installed package's
+    folder (site-packages/...) as its import path, the repository as `.`."""
+    line = re.sub(r"/\S*/(?:site|dist)-packages/", "", line)
+    line = line.replace(str(ROOT) + "/", "").replace(str(ROOT), ".")
+    if MACHINE_PATH.search(line):
+        raise ValueError(f"a machine path in a line for the page: {line}")
+    return line
+
+
 def notes_block(notes: list[str]) -> str:
     if not notes:
         return ""
@@ -180,7 +194,7 @@ def write_page(out: Path, quick: bool) -> str:
             values[f"{bench.key}_command"] = f"hapticut bench {shown}"
             values[f"{bench.key}_table"] = table
             values[f"{bench.key}_notes"] = notes_block(
-                [n.replace(scenes, SCENES_PLACEHOLDER) for n in notes]
+                [without_machine_paths(n.replace(scenes, SCENES_PLACEHOLDER)) for n in notes]
             )
     values.update(
         command=COMMAND,

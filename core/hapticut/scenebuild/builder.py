@@ -168,7 +168,7 @@ class BuildSettings:
     """
 
     enclosure: str = "box"  # "box" (tight), "cube" (the paper's) or "tetrahedron" (4 faces).
-    margin_mm: float | None = None  # Gap between the regions and the enclosure (default 25%).
+    margin_mm: float | None = None  # Regions to enclosure (default: 5% of the extent).
     accuracy_mm: float | None = None
     edge_near_mm: float | None = None
     edge_far_mm: float | None = None

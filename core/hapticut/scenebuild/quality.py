@@ -1,7 +1,7 @@
 """Quality and valence of a tet mesh, in numpy, for any scene (``hapticut info``, build reports).
 
 Valence is the paper's cost driver: an EDGE or VERTEX transition loops over the tets around
-the edge or vertex (ALGORITHM.md, Table 2: 12 tets around an edge, 20 at a vertex).
+the edge or vertex (docs/method.md, Table 2: 12 tets around an edge, 20 at a vertex).
 """
 
 from __future__ import annotations

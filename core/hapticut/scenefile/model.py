@@ -3,7 +3,7 @@
 Units: lengths in mm, forces in N, time in s (the C++ twin is core/include/hapticut/scene.h).
 """
 
-# Field names carry their units (STYLE.md: `_N`, `_Hz`), which N815 reads as mixedCase.
+# Field names carry their units (`_N`, `_Hz`), which N815 reads as mixedCase.
 # ruff: noqa: N815
 
 from __future__ import annotations

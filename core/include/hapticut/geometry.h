@@ -33,7 +33,7 @@ inline Vec3 project_to_line(const Vec3& p, const Vec3& origin, const Vec3& direc
   return origin + direction * dot(p - origin, direction);
 }
 
-// Repair 1 of eqs. (3)-(4): where along q->q' (parameter in [0, 1]) the
+// Repair 1 of eqs. (3)-(4) (docs/method.md): where along q->q' (parameter in [0, 1]) the
 // segment leaves the half-space behind a plane, given the signed distances
 // d0 of q and d1 of q'. Only a segment that really exits counts: d1 > eps and
 // d1 > d0. A q already a rounding error outside gives 0. Returns a negative
@@ -43,7 +43,7 @@ inline double segment_exit_parameter(double d0, double d1, double eps) {
   return d0 >= 0.0 ? 0.0 : d0 / (d0 - d1);
 }
 
-// Repair 3, the mirror of repair 1 for OUTSIDE: where q->p enters through a
+// Repair 3 (docs/method.md), the mirror of repair 1 for OUTSIDE: where q->p enters through a
 // boundary plane from its front side (q in front within eps, p behind by more
 // than eps). Negative when it does not enter. (d1 < -eps <= d0 makes d1 < d0.)
 inline double segment_entry_parameter(double d0, double d1, double eps) {
@@ -71,7 +71,7 @@ constexpr bool points_strictly_into(const std::array<double, count>& along, doub
   return true;
 }
 
-// Repair 2: d points strictly out of the closed wedge or cone: past one of
+// Repair 2 (docs/method.md): d points strictly out of the closed wedge or cone: past one of
 // its planes by more than eps. Only then may a walk leave the mesh there.
 template <std::size_t count>
 constexpr bool points_strictly_out_of(const std::array<double, count>& along, double eps) {
@@ -82,7 +82,7 @@ constexpr bool points_strictly_out_of(const std::array<double, count>& along, do
 }
 
 // Whether two points (or a displacement d) are within eps of each other: "no
-// motion" for a step (repair 5: a change of q under the tolerance is no change).
+// motion" for a step (docs/method.md, repair 5: a change of q under the tolerance is no change).
 inline bool within_tolerance(const Vec3& d, double eps) { return squared_norm(d) <= eps * eps; }
 
 // One plane's half of the tests above: a signed distance or along value
@@ -111,7 +111,7 @@ inline bool beyond_edge_end(const Vec3& x, const Vec3& o1, const Vec3& direction
 }
 
 // Where a point lies against one side plane of a triangle (eq. 14 with
-// repair 4): inside, on the rim (within eps), or outside the triangle.
+// repair 4, docs/method.md): inside, on the rim (within eps), or outside the triangle.
 enum class RimSide : std::uint8_t { Inside, OnRim, Outside };
 constexpr RimSide side_of_rim(double side_distance, double eps) {
   if (side_distance > eps) return RimSide::Outside;

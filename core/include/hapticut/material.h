@@ -1,7 +1,7 @@
 // The materials (their models and parameters) and their move function, eq. (1): given the target p'
 // and the current proxy q, decide whether and where the proxy moves. Pure functions: the same
 // inputs give the same output, and q' always lies on the segment [q, p'] so
-// FACE and EDGE motion stays on its constraint (ALGORITHM.md).
+// FACE and EDGE motion stays on its constraint (docs/method.md).
 #pragma once
 
 #include <cstdint>
@@ -12,7 +12,7 @@
 
 namespace hapticut {
 
-// The move function a material applies (ALGORITHM.md, "The material's move
+// The move function a material applies (docs/method.md, "The material's move
 // function"). Names match the scene file's "model" strings.
 enum class MaterialModel : std::uint8_t { Free, Drag, Rigid, Viscous, Membrane };
 
@@ -35,7 +35,7 @@ struct MoveContext {
   // k, for the membrane's push k|p'-q|.
   double stiffness_N_per_mm = setting_range::kStiffness.default_value;
   double target_speed_mm_per_s = 0.0;  // Speed of the device point this tick (viscous).
-  double tolerance_mm = 1e-9;          // Repair 5: "not moved" means |p'-q| < D + eps.
+  double tolerance_mm = 1e-9;          // docs/method.md, repair 5: not moved if |p'-q| < D + eps.
 };
 
 struct MoveResult {

@@ -1,5 +1,5 @@
 // Proxy: the ideal point q of one device point p, moving through the Space
-// under the rules of Table 1 (ALGORITHM.md) with the paper's typos fixed and
+// under the rules of Table 1 (docs/method.md) with the paper's typos fixed and
 // the listed repairs applied. Deterministic, bounded work per tick, no
 // allocation, never NaN, never inside rigid material.
 #pragma once
@@ -76,7 +76,7 @@ class alignas(64) Proxy {
   explicit Proxy(std::shared_ptr<const Space> space);
   explicit Proxy(const Space& space) : Proxy(owner_of(space)) {}
 
-  // Places the proxy for device point p (ALGORITHM.md repair 6; docs/decisions.md).
+  // Places the proxy for device point p (docs/method.md, repair 6; docs/decisions.md).
   // May allocate (the search out of rigid material). Throws std::invalid_argument
   // when p is not finite or outside the Space's workspace.
   StartKind reset(const Vec3& p);

@@ -14,7 +14,7 @@ enum class ProxyState : std::uint8_t { Tet = 0, Face = 1, Edge = 2, Vertex = 3, 
 inline constexpr int kProxyStateCount = 5;
 const char* proxy_state_name(ProxyState state);
 
-// Where the proxy is: its state, the tet that owns the state (ALGORITHM.md,
+// Where the proxy is: its state, the tet that owns the state (docs/method.md,
 // "Every constrained state is owned by a tet") and which of that tet's faces
 // (0-3), edges (0-5) or vertices (0-3) constrains it.
 struct ProxyPlace {

@@ -63,7 +63,7 @@ struct Scene {
   double servo_rate_Hz = setting_range::kServoRate.default_value;
   // 0: derived from the mesh's size (see docs/decisions.md).
   double tolerance_mm = setting_range::kTolerance.default_value;
-  // Cap on one proxy's transitions per tick (ALGORITHM.md): an engine budget,
+  // Cap on one proxy's transitions per tick (docs/method.md): an engine budget,
   // not a safety limit. The file keeps it in its "safety" object.
   int max_transitions_per_tick = default_count(setting_range::kMaxTransitions);
   std::vector<Material> materials;

@@ -1,6 +1,6 @@
 // The rigid blade's collision test: does the straight segment a -> b, started
 // in a known tet, enter rigid material, and where first? It walks the tets the
-// segment crosses (the proxy's exit rule, ALGORITHM.md repair 1), and outside
+// segment crosses (the proxy's exit rule, docs/method.md repair 1), and outside
 // the mesh looks for the boundary face it enters through (the boundary tree).
 // Never allocates; bounded work (kMaxSteps tets, then it reports a stop).
 #pragma once

@@ -27,7 +27,7 @@ from hapticut_evaluation import (
 COMMAND = "python -m hapticut_evaluation --out docs/evaluation"
 TEMPLATE = Path(__file__).with_name("page.md")
 
-# Issue 4's targets.
+# The evaluation's targets (the page's "Targets, as measured").
 SHADING_TARGET_DEG = 0.3
 SHADING_RATE_RATIO = 1.5
 SPEED_TARGET = 10.0
@@ -187,7 +187,7 @@ def targets(b, accuracy_rows: list[dict], stability_rows: list[dict]) -> list[st
 
 
 def never_worse_target(b, shading_rows: list[dict], example_rows: list[dict]) -> list[str]:
-    """The issue-8 target, as measured: shading never worse than the plain proxy."""
+    """The target for force shading, as measured: shading never worse than the plain proxy."""
     if not shading_rows:
         return []
     scenes = [(r["example"], r["never_worse"]) for r in shading_rows]
