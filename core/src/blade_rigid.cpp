@@ -417,7 +417,7 @@ BladeTick Blade::step_rigid(const Pose& pose, double dt_s, const RuntimeSettings
     double nearest = std::numeric_limits<double>::infinity();
     for (const EdgeContact& c : contacts) {
       const double d = c.plane.signed_distance(ideal_edge_.point(c.fraction, length_mm_));
-      if (d < nearest) {
+      if (d < nearest || (d == nearest && c.fraction < motion_pivot_)) {
         nearest = d;
         motion_pivot_ = c.fraction;
       }

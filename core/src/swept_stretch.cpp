@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
+#include <utility>
 
 namespace hapticut {
 
@@ -20,7 +22,12 @@ RigidSurfaceEdges::RigidSurfaceEdges(const Space& space) : space_(&space) {
     }
     if (!rigid || !other) continue;
     const auto& v = mesh.edge_vertices(e);
-    segments_.push_back({mesh.vertex(v[0]), mesh.vertex(v[1])});
+    // Ends in coordinate order, not index order: the same edge of a scene
+    // stored in another order gives the same numbers.
+    Vec3 a = mesh.vertex(v[0]);
+    Vec3 b = mesh.vertex(v[1]);
+    if (std::tie(b.x, b.y, b.z) < std::tie(a.x, a.y, a.z)) std::swap(a, b);
+    segments_.push_back({a, b});
     mesh_edges_.push_back(e);
     Aabb box;
     box.grow(mesh.vertex(v[0]));
@@ -52,6 +59,14 @@ int RigidSurfaceEdges::material_side(std::int32_t k, const Vec3& normal, double 
 }
 
 namespace {
+
+// A fixed order of planes (normal, then offset), for ties.
+bool plane_before(const Plane& a, const Plane& b) {
+  if (a.normal.x != b.normal.x) return a.normal.x < b.normal.x;
+  if (a.normal.y != b.normal.y) return a.normal.y < b.normal.y;
+  if (a.normal.z != b.normal.z) return a.normal.z < b.normal.z;
+  return a.offset < b.offset;
+}
 
 // Where segment p -> q crosses triangle v0 v1 v2 (Moller and Trumbore): the
 // barycentric weights of v1 and v2. False when it does not, or lies in the
@@ -106,7 +121,12 @@ SweptHit sweep_stretch(const RigidSurfaceEdges& edges, const Vec3& a0, const Vec
     } else {
       return;
     }
-    if (best.hit && motion >= best.motion) return;
+    // The earliest crossing; of crossings at one motion, the one nearest the
+    // stretch's start. Ties (edges meeting at a vertex) are settled after the
+    // plane is known, not by the tree's order, which follows the tets'.
+    if (best.hit && (motion > best.motion || (motion == best.motion && along > best.along))) {
+      return;
+    }
     // The stretch's sample there, at the start and as it moves.
     const Vec3 start = a0 + (b0 - a0) * along;
     const Vec3 moved = (a1 + (b1 - a1) * along) - start;
@@ -129,6 +149,10 @@ SweptHit sweep_stretch(const RigidSurfaceEdges& edges, const Vec3& a0, const Vec
     const Plane plane{normal, dot(normal, seg[0])};
     // Only a stretch that goes into the material's side is stopped.
     if (plane.signed_distance(start + moved) > -tolerance_mm) return;
+    if (best.hit && motion == best.motion && along == best.along &&
+        !plane_before(plane, best.contact)) {
+      return;
+    }
     best.hit = true;
     best.motion = motion;
     best.along = along;

@@ -79,10 +79,11 @@ def follow(until, timeout_s: float = 60.0, sleep_s: float = 0.005) -> float:
     return time.perf_counter() - began
 
 
-def probe_materials(scene_path: str, points) -> list[str]:
-    """The model of the tet at each point (mm), by the toolkit in a child Python: "" outside."""
+def probe_materials(scene_path: str, points, cut: bool = False) -> list[str]:
+    """The model of the tet at each point (mm), by the toolkit in a child Python: "" outside.
+    cut: a point on a face between a cuttable tet and another counts as cuttable (tet_probe)."""
     done = subprocess.run(
-        [sys.executable, str(HERE / "tet_probe.py"), scene_path],
+        [sys.executable, str(HERE / "tet_probe.py"), scene_path, *(["--cut"] if cut else [])],
         input=json.dumps([list(map(float, p)) for p in points]),
         capture_output=True,
         text=True,

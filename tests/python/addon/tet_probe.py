@@ -1,21 +1,34 @@
 """The material model of the tet holding each point, by the engine (hapticut._core) in a child
 Python, never inside bpy's process: the reference the live tests check the cut surface with.
-stdin: JSON [[x, y, z], ...] in mm; stdout: JSON ["drag", "rigid", "free", "" (outside), ...]."""
+stdin: JSON [[x, y, z], ...] in mm; stdout: JSON ["drag", "rigid", "free", "" (outside), ...].
+With --cut, a point on a face between a cuttable tet and another (it lies in both within the
+tolerance; the engine may name either) gets the cuttable one, as the cut surface's own
+locator names it."""
 
 import json
 import sys
 
 import numpy as np
+from hapticut import cut_surface
 from hapticut.engine import load_space
 
+CUTTABLE = ("drag", "viscous", "membrane")
 
-def main(path: str) -> None:
+
+def main(path: str, cut: bool) -> None:
     scene, space = load_space(path)
     points = np.array(json.load(sys.stdin), np.float64).reshape(-1, 3)
     tets = space.locate(points)
     models = [m.model for m in scene.materials]
-    print(json.dumps([models[scene.tet_materials[t]] if t >= 0 else "" for t in tets]))
+    found = [models[scene.tet_materials[t]] if t >= 0 else "" for t in tets]
+    if cut:
+        tied = [i for i, m in enumerate(found) if m not in CUTTABLE]
+        own = cut_surface.TetLocator(scene.vertices, scene.tets).locate(points[tied])
+        for i, t in zip(tied, own, strict=True):
+            if t >= 0 and models[scene.tet_materials[t]] in CUTTABLE:
+                found[i] = models[scene.tet_materials[t]]
+    print(json.dumps(found))
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    main(sys.argv[1], "--cut" in sys.argv[2:])
