@@ -249,10 +249,18 @@ def test_the_cut_is_a_slit_on_either_side_of_the_blade(baked):
     sheets = np.array([v.co for v in mesh.vertices])
     front, back = sheets[: len(sheets) // 2], sheets[len(sheets) // 2 :]
     gaps = np.linalg.norm(front - back, axis=1) * blender_scene_mm(baked)
-    assert np.median(gaps) == pytest.approx(2 * slit_mm, rel=1e-3)
+    # A face of no area (rows of the swept surface where the blade stood still, held by the
+    # bone's friction) has no normal to part along: the slit leaves it, and it shows nothing.
+    corners = front.reshape(-1, 3, 3)
+    areas = np.linalg.norm(
+        np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
+    )
+    assert (areas > 0).sum() > 50
+    with_area = np.repeat(areas > 0, 3)
+    assert np.median(gaps[with_area]) == pytest.approx(2 * slit_mm, rel=1e-3)
     normals = np.array([p.normal for p in mesh.polygons])
     half = len(normals) // 2
-    facing = np.einsum("ij,ij->i", normals[:half], normals[half:])
+    facing = np.einsum("ij,ij->i", normals[:half], normals[half:])[areas > 0]
     print(f"\ncut slit {slit_mm:.3f} mm on {half} faces")
     assert facing.max() < 0  # Back to back.
 
