@@ -5,26 +5,12 @@
 
 namespace hapticut {
 
-namespace {
-
-// A fixed order of planes (normal, then offset): of several within rounding of
-// one another the set keeps the least, whatever order the walks met them in,
-// so a scene stored in another tet order is solved the same.
-bool before(const Plane& a, const Plane& b) {
-  if (a.normal.x != b.normal.x) return a.normal.x < b.normal.x;
-  if (a.normal.y != b.normal.y) return a.normal.y < b.normal.y;
-  if (a.normal.z != b.normal.z) return a.normal.z < b.normal.z;
-  return a.offset < b.offset;
-}
-
-}  // namespace
-
 bool EdgeContactSet::add(double fraction, const Plane& plane, double same_offset_mm) {
   for (int j = 0; j < plane_count_; ++j) {
     HeldPlane& held = planes_[j];
     if (squared_norm(held.plane.normal - plane.normal) <= kSameNormal * kSameNormal &&
         std::abs(held.plane.offset - plane.offset) <= same_offset_mm) {
-      if (before(plane, held.plane)) held.plane = plane;
+      if (plane_before(plane, held.plane)) held.plane = plane;
       if (fraction < held.least_fraction) {
         held.least_fraction = fraction;
         ++changes_;

@@ -60,14 +60,6 @@ int RigidSurfaceEdges::material_side(std::int32_t k, const Vec3& normal, double 
 
 namespace {
 
-// A fixed order of planes (normal, then offset), for ties.
-bool plane_before(const Plane& a, const Plane& b) {
-  if (a.normal.x != b.normal.x) return a.normal.x < b.normal.x;
-  if (a.normal.y != b.normal.y) return a.normal.y < b.normal.y;
-  if (a.normal.z != b.normal.z) return a.normal.z < b.normal.z;
-  return a.offset < b.offset;
-}
-
 // Where segment p -> q crosses triangle v0 v1 v2 (Moller and Trumbore): the
 // barycentric weights of v1 and v2. False when it does not, or lies in the
 // triangle's plane (a patch that does not move sweeps no area).

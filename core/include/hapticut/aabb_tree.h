@@ -87,13 +87,17 @@ class AabbTree {
   };
   std::int32_t build(const std::vector<Aabb>& boxes, std::vector<Vec3>& centres, int begin, int end,
                      int depth);
+  // Calls visit(item) for every item in a leaf whose box, and every box above
+  // it, touches(box) accepts.
+  template <class Touches, class Visit>
+  void for_each_where(Touches&& touches, Visit&& visit) const;
 
   std::vector<Node> nodes_;
   std::vector<std::int32_t> items_;
 };
 
-template <class Visit>
-void AabbTree::for_each_containing(const Vec3& p, double pad, Visit&& visit) const {
+template <class Touches, class Visit>
+void AabbTree::for_each_where(Touches&& touches, Visit&& visit) const {
   if (nodes_.empty()) return;
   // Not zeroed: only entries below top are read, and a walk need not pay to clear it.
   std::array<std::int32_t, kMaxDepth + 1> stack;  // NOLINT(cppcoreguidelines-pro-type-member-init)
@@ -101,7 +105,7 @@ void AabbTree::for_each_containing(const Vec3& p, double pad, Visit&& visit) con
   stack[top++] = 0;
   while (top > 0) {
     const Node& node = nodes_[stack[--top]];
-    if (!node.box.contains(p, pad)) continue;
+    if (!touches(node.box)) continue;
     if (node.count > 0) {
       for (std::int32_t k = 0; k < node.count; ++k) visit(items_[node.first + k]);
     } else {
@@ -109,46 +113,23 @@ void AabbTree::for_each_containing(const Vec3& p, double pad, Visit&& visit) con
       stack[top++] = node.right;
     }
   }
+}
+
+template <class Visit>
+void AabbTree::for_each_containing(const Vec3& p, double pad, Visit&& visit) const {
+  for_each_where([&](const Aabb& box) { return box.contains(p, pad); }, visit);
 }
 
 template <class Visit>
 void AabbTree::for_each_on_segment(const Vec3& a, const Vec3& b, double pad, Visit&& visit) const {
-  if (nodes_.empty()) return;
   const Vec3 dir = b - a;
   const Vec3 inv_dir{1.0 / dir.x, 1.0 / dir.y, 1.0 / dir.z};
-  // Not zeroed: only entries below top are read, and a walk need not pay to clear it.
-  std::array<std::int32_t, kMaxDepth + 1> stack;  // NOLINT(cppcoreguidelines-pro-type-member-init)
-  int top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const Node& node = nodes_[stack[--top]];
-    if (!node.box.hits_segment(a, inv_dir, dir, pad)) continue;
-    if (node.count > 0) {
-      for (std::int32_t k = 0; k < node.count; ++k) visit(items_[node.first + k]);
-    } else {
-      stack[top++] = node.first;
-      stack[top++] = node.right;
-    }
-  }
+  for_each_where([&](const Aabb& box) { return box.hits_segment(a, inv_dir, dir, pad); }, visit);
 }
 
 template <class Visit>
 void AabbTree::for_each_overlapping(const Aabb& box, Visit&& visit) const {
-  if (nodes_.empty()) return;
-  // Not zeroed: only entries below top are read, and a walk need not pay to clear it.
-  std::array<std::int32_t, kMaxDepth + 1> stack;  // NOLINT(cppcoreguidelines-pro-type-member-init)
-  int top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const Node& node = nodes_[stack[--top]];
-    if (!node.box.overlaps(box)) continue;
-    if (node.count > 0) {
-      for (std::int32_t k = 0; k < node.count; ++k) visit(items_[node.first + k]);
-    } else {
-      stack[top++] = node.first;
-      stack[top++] = node.right;
-    }
-  }
+  for_each_where([&](const Aabb& node_box) { return node_box.overlaps(box); }, visit);
 }
 
 }  // namespace hapticut

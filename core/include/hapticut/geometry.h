@@ -23,6 +23,16 @@ struct Plane {
   double signed_distance(const Vec3& x) const { return dot(normal, x) - offset; }
 };
 
+// A fixed order of planes (normal, then offset): where several planes within
+// rounding of one another could serve, the least is taken, so the answer does
+// not depend on the order they were met in (a scene stored in another tet order).
+inline bool plane_before(const Plane& a, const Plane& b) {
+  if (a.normal.x != b.normal.x) return a.normal.x < b.normal.x;
+  if (a.normal.y != b.normal.y) return a.normal.y < b.normal.y;
+  if (a.normal.z != b.normal.z) return a.normal.z < b.normal.z;
+  return a.offset < b.offset;
+}
+
 // Eq. (6): p projected onto the (unbounded) plane.
 inline Vec3 project_to_plane(const Vec3& p, const Plane& plane) {
   return p - plane.normal * plane.signed_distance(p);
