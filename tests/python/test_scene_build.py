@@ -212,41 +212,7 @@ def _labels_empty_for(monkeypatch, meshings: int) -> None:
     monkeypatch.setattr(builder, "_label", emptied)
 
 
-@pytest.fixture(scope="session")
-def ball_meshing():
-    """fTetWild's meshing of the 10 mm ball at accuracy 1 mm (its first, envelope 0.4 mm),
-    made once per test run for the tests of the builder's meshing again: what they check is
-    the builder's loop (which envelope it asks for, what it reports, when it gives up), not
-    what fTetWild makes of a tighter envelope, so each of their meshings is this one."""
-    made = []
-    real = builder.tetwild.tetrahedralize
-
-    def recorded(*args, **kwargs):
-        made.append(real(*args, **kwargs))
-        return made[-1]
-
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(builder.tetwild, "tetrahedralize", recorded)
-        build([Region("ball", *icosphere(10.0, 2), BONE)], settings=BuildSettings(accuracy_mm=1.0))
-    return made[0]
-
-
-def _meshing_reused(monkeypatch, meshing) -> list[float]:
-    """Every meshing of the build returns `meshing`; the envelopes asked for, in order."""
-    envelopes: list[float] = []
-
-    def reused(vertices, faces, params, sizing, poll=None):
-        envelopes.append(params.envelope_mm)
-        return meshing[0].copy(), meshing[1].copy()
-
-    monkeypatch.setattr(builder.tetwild, "tetrahedralize", reused)
-    return envelopes
-
-
-# Both on the worker that built ball_meshing (pytest-xdist: one build per test run).
-@pytest.mark.xdist_group("ball_meshing")
-def test_a_meshing_that_leaves_a_region_without_tets_is_made_again(monkeypatch, ball_meshing):
-    envelopes = _meshing_reused(monkeypatch, ball_meshing)
+def test_a_meshing_that_leaves_a_region_without_tets_is_made_again(monkeypatch):
     _labels_empty_for(monkeypatch, 1)
     seen: list[str] = []
     scene = build(
@@ -260,16 +226,12 @@ def test_a_meshing_that_leaves_a_region_without_tets_is_made_again(monkeypatch, 
     assert attempts[1]["envelope_mm"] == pytest.approx(0.2)
     assert report["tets_per_region"]["ball"] > 0
     assert any("no tet inside ball (meshing 2 of 3)" in m for m in seen)
-    assert envelopes == pytest.approx([0.4, 0.2])
 
 
-@pytest.mark.xdist_group("ball_meshing")
-def test_a_region_left_without_tets_by_every_meshing_is_an_error(monkeypatch, ball_meshing):
-    envelopes = _meshing_reused(monkeypatch, ball_meshing)
+def test_a_region_left_without_tets_by_every_meshing_is_an_error(monkeypatch):
     _labels_empty_for(monkeypatch, builder.MESHING_ATTEMPTS)
     with pytest.raises(BuildError, match=r"'ball': no tet lies inside this region after 3 mesh"):
         build([Region("ball", *icosphere(10.0, 2), BONE)], settings=BuildSettings(accuracy_mm=1.0))
-    assert envelopes == pytest.approx([0.4, 0.2, 0.1])
 
 
 def test_regions_sharing_a_material_share_its_entry():
