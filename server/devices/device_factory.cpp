@@ -10,6 +10,7 @@
 #include "devices/viewport_device.h"
 #ifdef HAPTICUT_WITH_DEVICES
 #include "devices/bridge_device.h"
+#include "devices/dhd_device.h"
 #include "devices/hid_device.h"
 #endif
 
@@ -51,6 +52,11 @@ std::unique_ptr<Device> make_bridge(const DeviceSpec& spec, const DeviceContext&
   }
   return as_device_error(spec, [&] { return make_bridge_device(spec.options); });
 }
+
+std::unique_ptr<Device> make_forcedimension(const DeviceSpec& spec,
+                                            const DeviceContext& /*context*/) {
+  return as_device_error(spec, [&] { return make_dhd_device(spec.value, spec.options); });
+}
 #endif
 
 }  // namespace
@@ -64,6 +70,7 @@ const std::vector<DeviceKind>& device_kinds() {
 #ifdef HAPTICUT_WITH_DEVICES
       {"hid", kHidDeviceUsage, make_hid},
       {"bridge", kBridgeDeviceUsage, make_bridge},
+      {"forcedimension", kDhdDeviceUsage, make_forcedimension},
 #endif
   };
   return kinds;

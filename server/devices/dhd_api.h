@@ -1,0 +1,73 @@
+// The few calls and constants of Force Dimension's haptic SDK (DHD, libdhd)
+// that the forcedimension device kind uses, declared here from the SDK's
+// public documentation so that the servo builds without the SDK: its headers
+// (dhdc.h) are not ours to ship, and the library is loaded at run time
+// (dhd_library.h).
+//
+// Source: "DHD - Haptic SDK Documentation", Force Dimension, shipped as the
+// SDK's doc/ pages (https://forcedimension.com/downloads/sdk/, e.g.
+// sdk-3.17.1-linux-x86_64-gcc.tar.gz), sections "Device Types", "Axis
+// Convention", "Error Management" and the function reference; the same
+// reference adapted function by function, with the constants' values, in
+// forcedimension_core's "DHD Reference"
+// (https://forcedimension-core-python-docs.readthedocs.io/en/latest/forcedimension_core.dhd-doc.html).
+//
+// Every device call takes the device ID as its last argument (a char; -1:
+// the default device); positions are in m, forces in N, the frame is the
+// SDK's (x towards the user, y to the right, z up). A call that fails
+// returns -1 (a negative value) and sets the calling thread's last error;
+// DHD_TIMEGUARD and DHD_MOTOR_SATURATED are successes.
+#pragma once
+
+namespace hapticut::servo::dhd {
+
+// Return values that are not errors.
+inline constexpr int kTimeGuard = 1;       // DHD_TIMEGUARD: the call was skipped, data still valid.
+inline constexpr int kMotorSaturated = 2;  // DHD_MOTOR_SATURATED: force scaled down by the device.
+inline constexpr unsigned char kOn = 1;    // DHD_ON
+inline constexpr unsigned char kOff = 0;   // DHD_OFF
+
+// dhdGetSystemType's device types (DHD_DEVICE_*).
+inline constexpr int kDeviceNone = 0;
+inline constexpr int kDeviceDelta3 = 63;
+inline constexpr int kDeviceOmega3 = 33;
+inline constexpr int kDeviceOmega6Right = 34;
+inline constexpr int kDeviceOmega6Left = 36;
+inline constexpr int kDeviceOmega7Right = 35;
+inline constexpr int kDeviceOmega7Left = 37;
+inline constexpr int kDeviceController = 81;
+inline constexpr int kDeviceControllerHr = 82;
+inline constexpr int kDeviceCustom = 91;
+inline constexpr int kDeviceSigma3 = 206;
+inline constexpr int kDeviceSigma7Right = 104;
+inline constexpr int kDeviceSigma7Left = 105;
+inline constexpr int kDeviceLambda3 = 203;
+inline constexpr int kDeviceLambda7Right = 108;
+inline constexpr int kDeviceLambda7Left = 109;
+inline constexpr int kDeviceFalcon = 60;
+
+// dhdErrorGetLast's codes this kind names in its messages (DHD_ERROR_*).
+inline constexpr int kErrorNone = 0;
+inline constexpr int kErrorCom = 2;
+inline constexpr int kErrorNoDriverFound = 4;
+inline constexpr int kErrorNoDeviceFound = 5;
+inline constexpr int kErrorTimeout = 7;
+inline constexpr int kErrorDeviceNotReady = 12;
+inline constexpr int kErrorDeviceInUse = 20;
+
+// The signatures, as pointers to the library's C functions.
+using GetDeviceCount = int (*)();                           // dhdGetDeviceCount: devices, -1 error
+using OpenId = int (*)(char index);                         // dhdOpenID: the device ID, -1 error
+using GetSystemType = int (*)(char id);                     // dhdGetSystemType: DHD_DEVICE_*
+using EnableForce = int (*)(unsigned char value, char id);  // dhdEnableForce(DHD_ON / DHD_OFF)
+using GetPosition = int (*)(double* x_m, double* y_m, double* z_m, char id);  // dhdGetPosition
+using GetOrientationFrame = int (*)(double matrix[3][3], char id);         // dhdGetOrientationFrame
+using GetButtonMask = unsigned int (*)(char id);                           // dhdGetButtonMask
+using SetForce = int (*)(double fx_N, double fy_N, double fz_N, char id);  // dhdSetForce
+using GetMaxForce = double (*)(char id);    // dhdGetMaxForce: the set limit (N); < 0: none set
+using ErrorGetLast = int (*)();             // dhdErrorGetLast: this thread's last DHD_ERROR_*
+using ErrorGetLastStr = const char* (*)();  // dhdErrorGetLastStr: the same as text
+using Stop = int (*)(char id);              // dhdStop: forces off, brakes on
+using Close = int (*)(char id);             // dhdClose
+
+}  // namespace hapticut::servo::dhd

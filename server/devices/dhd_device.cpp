@@ -1,0 +1,354 @@
+#include "devices/dhd_device.h"
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <sstream>
+#include <stdexcept>
+
+namespace hapticut::servo {
+namespace {
+
+// What an error of dhdOpenID or dhdGetDeviceCount asks the operator to do.
+std::string open_hint(int code) {
+  switch (code) {
+    case dhd::kErrorDeviceInUse:
+      return "; another program holds the device: close it (or the other servo)";
+    case dhd::kErrorNoDriverFound:
+    case dhd::kErrorNoDeviceFound:
+      return "; check the USB cable and power, and the udev rule of docs/devices.md";
+    default:
+      return "; docs/devices.md, \"Force Dimension devices\", lists what each error means";
+  }
+}
+
+bool finite(const Vec3& v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+}  // namespace
+
+DhdDevice::DhdDevice(std::shared_ptr<DhdLibrary> library, DhdDeviceOptions options)
+    : library_(std::move(library)), options_(options), mapping_(options.mapping) {}
+
+DhdDevice::~DhdDevice() { stop(); }
+
+void DhdDevice::set_error(std::string error) {
+  const std::lock_guard<std::mutex> lock(error_mutex_);
+  last_error_ = std::move(error);
+}
+
+std::string DhdDevice::last_error() const {
+  const std::lock_guard<std::mutex> lock(error_mutex_);
+  return last_error_;
+}
+
+void DhdDevice::open() {
+  const DhdLibrary& dhd = *library_;
+  const int count = dhd.get_device_count();
+  if (count < 0) {
+    const int code = dhd.error_get_last();
+    throw std::runtime_error("forcedimension: " + dhd.last_error("dhdGetDeviceCount") +
+                             open_hint(code));
+  }
+  if (count == 0) {
+    throw std::runtime_error(
+        "forcedimension: no Force Dimension device found (dhdGetDeviceCount() = 0, library " +
+        dhd.path +
+        "): check the USB cable and power, and the udev rule of docs/devices.md; "
+        "`hapticut-servo --list-devices` shows what the library sees");
+  }
+  if (options_.index >= count) {
+    throw std::runtime_error("forcedimension: no device " + std::to_string(options_.index) +
+                             ": the library sees " + std::to_string(count) + " (IDs 0 to " +
+                             std::to_string(count - 1) + ")");
+  }
+  const int id = dhd.open_id(static_cast<char>(options_.index));
+  if (id < 0) {
+    const int code = dhd.error_get_last();
+    throw std::runtime_error("forcedimension: device " + std::to_string(options_.index) + ": " +
+                             dhd.last_error("dhdOpenID") + open_hint(code));
+  }
+  id_ = static_cast<char>(id);
+  open_ = true;
+  const int type = dhd.get_system_type(id_);
+  if (type < 0) {
+    const std::string error = dhd.last_error("dhdGetSystemType");
+    stop();
+    throw std::runtime_error("forcedimension: device " + std::to_string(options_.index) + ": " +
+                             error);
+  }
+  model_ = dhd_model(type);
+  if (model_.system_type == 0) model_.system_type = type;
+  DeviceLimits device = dhd_model_limits(model_);
+  if (options_.max_force_N > 0.0) device.max_force_N = options_.max_force_N;
+  if (options_.max_stiffness_N_per_mm > 0.0) {
+    device.max_stiffness_N_per_mm = options_.max_stiffness_N_per_mm;
+  }
+  // A limit set in the device itself (its own tools, or another program) is kept: never above it.
+  const double device_limit_N = dhd.get_max_force(id_);
+  if (device_limit_N > 0.0 && device_limit_N < device.max_force_N) {
+    device.max_force_N = device_limit_N;
+  }
+  limits_ = mapping_.scene_limits(device);
+  connection_.store(kConnected, std::memory_order_release);
+}
+
+void DhdDevice::start() {
+  if (!open_ || force_enabled_) return;
+  const DhdLibrary& dhd = *library_;
+  // Zero first: the device renders nothing until the servo's ramp writes.
+  if (dhd.set_force(0.0, 0.0, 0.0, id_) < 0 || dhd.enable_force(dhd::kOn, id_) < 0) {
+    const std::string error = dhd.last_error("dhdEnableForce");
+    stop();
+    throw std::runtime_error("forcedimension: device " + std::to_string(options_.index) + ": " +
+                             error);
+  }
+  force_enabled_ = true;
+}
+
+void DhdDevice::stop() {
+  if (!open_) return;
+  const DhdLibrary& dhd = *library_;
+  dhd.set_force(0.0, 0.0, 0.0, id_);
+  dhd.stop(id_);
+  dhd.close(id_);
+  open_ = false;
+  force_enabled_ = false;
+  connection_.store(kLost, std::memory_order_release);
+}
+
+DeviceStatus DhdDevice::fault(const char* call) {
+  const DhdLibrary& dhd = *library_;
+  // The tick that sees the failure zeroes the force itself: the servo writes
+  // nothing to a lost device.
+  dhd.set_force(0.0, 0.0, 0.0, id_);
+  fault_call_ = call;
+  fault_code_ = dhd.error_get_last();
+  const char* text = dhd.error_get_last_str();
+  std::snprintf(fault_text_, sizeof fault_text_, "%s", text != nullptr ? text : "");
+  counters_.faults.fetch_add(1, std::memory_order_relaxed);
+  connection_.store(kLost, std::memory_order_release);
+  return DeviceStatus::Lost;
+}
+
+DeviceStatus DhdDevice::read(double now_s, DeviceSample& sample) {
+  if (!connected()) {
+    sample = last_sample_;
+    return DeviceStatus::Lost;
+  }
+  const DhdLibrary& dhd = *library_;
+  Vec3 position_m;
+  if (dhd.get_position(&position_m.x, &position_m.y, &position_m.z, id_) < 0) {
+    sample = last_sample_;
+    return fault("dhdGetPosition");
+  }
+  Matrix3 rotation{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+  if (model_.has_wrist) {
+    double frame[3][3];
+    if (dhd.get_orientation_frame(frame, id_) < 0) {
+      sample = last_sample_;
+      return fault("dhdGetOrientationFrame");
+    }
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) rotation[i][j] = frame[i][j];
+    }
+  }
+  const unsigned int buttons = dhd.get_button_mask(id_);
+  last_sample_.pose.position_mm = mapping_.position_mm(position_m);
+  last_sample_.pose.rotation = mapping_.rotation(rotation);
+  last_sample_.buttons = buttons & 0xffffU;  // Bits 16 and up are the servo's (device.h).
+  last_sample_.time_s = now_s;
+  ++last_sample_.sequence;
+  counters_.samples.fetch_add(1, std::memory_order_relaxed);
+  sample = last_sample_;
+  return DeviceStatus::Fresh;
+}
+
+void DhdDevice::write(const Vec3& force_N, const Vec3& /*torque_N_mm*/) {
+  if (!connected()) return;
+  // The safety layer clamps and checks; a non-finite force never reaches the arm regardless.
+  const Vec3 device = finite(force_N) ? mapping_.device_force_N(force_N) : Vec3{};
+  const int result = library_->set_force(device.x, device.y, device.z, id_);
+  if (result < 0) {
+    fault("dhdSetForce");
+    return;
+  }
+  counters_.forces_written.fetch_add(1, std::memory_order_relaxed);
+  if (result == dhd::kMotorSaturated) {
+    counters_.motor_saturated.fetch_add(1, std::memory_order_relaxed);
+  }
+}
+
+void DhdDevice::maintain() {
+  if (connected() || !open_) return;
+  counters_.reconnect_attempts.fetch_add(1, std::memory_order_relaxed);
+  const DhdLibrary& dhd = *library_;
+  std::string error = std::string("forcedimension: ") + fault_call_ +
+                      " failed: " + (fault_text_[0] != '\0' ? fault_text_ : "no description") +
+                      " (DHD error " + std::to_string(fault_code_) + ")";
+  // The device is reopened by its index: its SDK ID may change with a replug.
+  dhd.close(id_);
+  const int count = dhd.get_device_count();
+  const int id = count > options_.index ? dhd.open_id(static_cast<char>(options_.index)) : -1;
+  if (id < 0) {
+    set_error(error + "; reopening: " +
+              (count > options_.index
+                   ? dhd.last_error("dhdOpenID")
+                   : "no device " + std::to_string(options_.index) +
+                         " (dhdGetDeviceCount() = " + std::to_string(count) + ")"));
+    return;
+  }
+  id_ = static_cast<char>(id);
+  const int type = dhd.get_system_type(id_);
+  if (type != model_.system_type) {
+    set_error(error + "; reopening: device " + std::to_string(options_.index) + " is now of type " +
+              std::to_string(type) + ", not " + model_.name + ": restart the servo");
+    return;
+  }
+  // Limits first (as at the start), then the force, at zero.
+  const double device_limit_N = dhd.get_max_force(id_);
+  if ((device_limit_N > 0.0 && device_limit_N < limits_.max_force_N) ||
+      dhd.set_force(0.0, 0.0, 0.0, id_) < 0 || dhd.enable_force(dhd::kOn, id_) < 0) {
+    set_error(error + "; reopening: " +
+              (device_limit_N > 0.0 && device_limit_N < limits_.max_force_N
+                   ? "the device's own force limit is now below the servo's: restart the servo"
+                   : dhd.last_error("dhdEnableForce")));
+    return;
+  }
+  set_error("");
+  counters_.reconnects.fetch_add(1, std::memory_order_relaxed);
+  connection_.store(kConnected, std::memory_order_release);
+}
+
+std::vector<std::pair<std::string, std::uint64_t>> DhdDevice::status_counters() const {
+  const auto load = [](const std::atomic<std::uint64_t>& count) {
+    return count.load(std::memory_order_relaxed);
+  };
+  return {{"samples", load(counters_.samples)},
+          {"forces_written", load(counters_.forces_written)},
+          {"motor_saturated", load(counters_.motor_saturated)},
+          {"faults", load(counters_.faults)},
+          {"reconnects", load(counters_.reconnects)},
+          {"reconnect_attempts", load(counters_.reconnect_attempts)}};
+}
+
+DhdListing list_dhd_devices() {
+  DhdListing listing;
+  std::string error;
+  const std::shared_ptr<DhdLibrary> library = load_dhd_library(error);
+  if (!library) {
+    listing.library = error;
+    return listing;
+  }
+  listing.library_found = true;
+  listing.library = library->path;
+  const int count = library->get_device_count();
+  if (count < 0) {
+    listing.error = library->last_error("dhdGetDeviceCount");
+    return listing;
+  }
+  for (int index = 0; index < count; ++index) {
+    DhdDeviceOptions options;
+    options.index = index;
+    DhdDevice device(library, options);
+    DhdDeviceRow row;
+    row.index = index;
+    row.binding = "forcedimension:" + std::to_string(index);
+    try {
+      device.open();
+      row.system_type = device.model().system_type;
+      row.model = device.model().name;
+      row.limits = device.limits();
+    } catch (const std::exception& e) {
+      row.error = e.what();
+    }
+    listing.devices.push_back(std::move(row));
+  }
+  return listing;
+}
+
+std::string format_dhd_listing(const DhdListing& listing) {
+  std::ostringstream out;
+  if (!listing.library_found) {
+    out << "Force Dimension (DHD): library not loaded: " << listing.library << "\n";
+    return out.str();
+  }
+  out << "Force Dimension (DHD): library " << listing.library << "\n";
+  if (!listing.error.empty()) out << "  " << listing.error << "\n";
+  if (listing.error.empty() && listing.devices.empty())
+    out << "  no Force Dimension devices found\n";
+  for (const DhdDeviceRow& row : listing.devices) {
+    if (!row.error.empty()) {
+      out << "  " << row.binding << "  " << row.error << "\n";
+      continue;
+    }
+    char line[256];
+    std::snprintf(line, sizeof line,
+                  "  %-18s %-24s type %d, max force %g N, max stiffness %g N/mm\n",
+                  row.binding.c_str(), row.model.c_str(), row.system_type, row.limits.max_force_N,
+                  row.limits.max_stiffness_N_per_mm);
+    out << line;
+  }
+  return out.str();
+}
+
+DhdDeviceOptions dhd_device_options(const std::string& bare_id, const DeviceOptions& options) {
+  check_device_options(options, "forcedimension",
+                       {"id", "scale", "offset", "max_force", "max_stiffness"});
+  DhdDeviceOptions out;
+  std::string id = bare_id;
+  const auto given = options.find("id");
+  if (given != options.end()) {
+    if (!bare_id.empty()) {
+      throw std::invalid_argument("forcedimension: the ID is given twice ('" + bare_id +
+                                  "' and id=" + given->second + ")");
+    }
+    id = given->second;
+  }
+  if (!id.empty()) {
+    char* end = nullptr;
+    const long value = std::strtol(id.c_str(), &end, 10);
+    if (end == id.c_str() || *end != '\0' || value < 0 || value > 15) {
+      throw std::invalid_argument("forcedimension: ID '" + id +
+                                  "' must be a device index from 0 to 15");
+    }
+    out.index = static_cast<int>(value);
+  }
+  out.mapping.scale = device_option_number(options, "scale", 1.0, "forcedimension");
+  if (!(out.mapping.scale > 0.0) || out.mapping.scale > 100.0) {
+    throw std::invalid_argument("forcedimension: option 'scale' must be in (0, 100]");
+  }
+  const auto offset = options.find("offset");
+  if (offset != options.end()) {
+    double xyz[3] = {0, 0, 0};
+    char extra = 0;
+    if (std::sscanf(offset->second.c_str(), "%lf:%lf:%lf%c", &xyz[0], &xyz[1], &xyz[2], &extra) !=
+            3 ||
+        !std::isfinite(xyz[0]) || !std::isfinite(xyz[1]) || !std::isfinite(xyz[2])) {
+      throw std::invalid_argument("forcedimension: option 'offset=" + offset->second +
+                                  "' must be X:Y:Z in mm");
+    }
+    out.mapping.offset_mm = {xyz[0], xyz[1], xyz[2]};
+  }
+  out.max_force_N = device_option_number(options, "max_force", 0.0, "forcedimension");
+  out.max_stiffness_N_per_mm =
+      device_option_number(options, "max_stiffness", 0.0, "forcedimension");
+  if (out.max_force_N < 0.0 || out.max_stiffness_N_per_mm < 0.0 ||
+      !std::isfinite(out.max_force_N) || !std::isfinite(out.max_stiffness_N_per_mm)) {
+    throw std::invalid_argument("forcedimension: max_force and max_stiffness must be positive");
+  }
+  return out;
+}
+
+std::unique_ptr<Device> make_dhd_device(const std::string& bare_id, const DeviceOptions& options) {
+  const DhdDeviceOptions device_options = dhd_device_options(bare_id, options);
+  std::string error;
+  std::shared_ptr<DhdLibrary> library = load_dhd_library(error);
+  if (!library) throw std::runtime_error(error);
+  auto device = std::make_unique<DhdDevice>(std::move(library), device_options);
+  device->open();
+  return device;
+}
+
+}  // namespace hapticut::servo

@@ -1,0 +1,145 @@
+// DhdDevice: a Force Dimension arm (omega, delta, sigma, lambda, and the
+// Novint Falcon through the same SDK) driven through the DHD library loaded
+// at run time (dhd_library.h).
+//
+// Threads. DHD is made to be called from the application's haptic loop (its
+// calls are short USB transfers, at several kHz), so this backend has no I/O
+// thread: read() calls dhdGetPosition, dhdGetOrientationFrame (models with a
+// wrist) and dhdGetButtonMask, write() calls dhdSetForce, both on the tick;
+// neither allocates, locks or logs. The factory opens the device and reads
+// its type and force limit (limits() holds them before start()); start()
+// only then enables the force, at zero.
+//
+// Faults. Any failed call on the tick is a fault: the same call site sets a
+// zero force (best effort) and marks the device Lost, so read() says Lost in
+// the same tick and the servo's safety layer renders nothing and ramps back
+// in later. The tick keeps the SDK's error code and text in a fixed buffer;
+// maintain() (housekeeping thread, about 2 Hz) reports it, closes the device
+// and reopens it by its index; only one side calls the library at a time
+// (the tick while Connected, maintain() while Lost).
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "devices/arm_pose_mapping.h"
+#include "devices/device.h"
+#include "devices/device_options.h"
+#include "devices/dhd_library.h"
+#include "devices/dhd_models.h"
+
+namespace hapticut::servo {
+
+// The SDK's frame (x towards the user, y right, z up) to the scene's (x right,
+// y away, z up): scene = (y, -x, z).
+inline constexpr Matrix3 kDhdToSceneAxes{{{0, 1, 0}, {-1, 0, 0}, {0, 0, 1}}};
+
+struct DhdDeviceOptions {
+  int index = 0;  // dhdOpenID's enumeration index (the ID in forcedimension:ID).
+  ArmPoseMappingSettings mapping{kDhdToSceneAxes, 1.0, {}};
+  double max_force_N = 0.0;             // > 0: instead of the model's default.
+  double max_stiffness_N_per_mm = 0.0;  // > 0: instead of the model's default.
+};
+
+struct DhdDeviceCounters {
+  std::atomic<std::uint64_t> samples{0};
+  std::atomic<std::uint64_t> forces_written{0};
+  std::atomic<std::uint64_t> motor_saturated{0};  // dhdSetForce scaled the force down.
+  std::atomic<std::uint64_t> faults{0};
+  std::atomic<std::uint64_t> reconnects{0};
+  std::atomic<std::uint64_t> reconnect_attempts{0};
+};
+
+class DhdDevice final : public Device {
+ public:
+  DhdDevice(std::shared_ptr<DhdLibrary> library, DhdDeviceOptions options);
+  ~DhdDevice() override;
+
+  const char* kind() const override { return "forcedimension"; }
+  // The scene's view of the model's limits (mapped workspace; stiffness / scale).
+  DeviceLimits limits() const override { return limits_; }
+
+  // Opens the device at the options' index and reads its type and force
+  // limit. The factory calls it; throws std::runtime_error saying what to do.
+  void open();
+  // Enables the force (the device pushes nothing until the servo writes).
+  void start() override;
+  // Zero force, dhdStop (forces off, brakes on), dhdClose.
+  void stop() override;
+  DeviceStatus read(double now_s, DeviceSample& sample) override;
+  void write(const Vec3& force_N, const Vec3& torque_N_mm) override;
+  void maintain() override;
+  // samples, forces_written, motor_saturated, faults, reconnects, reconnect_attempts.
+  std::vector<std::pair<std::string, std::uint64_t>> status_counters() const override;
+  std::string last_error() const override;
+
+  bool connected() const { return connection_.load(std::memory_order_acquire) == kConnected; }
+  const DhdModel& model() const { return model_; }
+  const DhdDeviceCounters& counters() const { return counters_; }
+
+ private:
+  enum : std::uint32_t { kConnected = 0, kLost = 1 };
+
+  // Tick side: a failed call; zero force, keep the error, Lost.
+  DeviceStatus fault(const char* call);
+  void set_error(std::string error);
+
+  std::shared_ptr<DhdLibrary> library_;
+  DhdDeviceOptions options_;
+  ArmPoseMapping mapping_;
+  DhdModel model_;
+  DeviceLimits limits_;
+  char id_ = -1;  // The SDK's device ID while open.
+  bool open_ = false;
+  bool force_enabled_ = false;
+
+  std::atomic<std::uint32_t> connection_{kLost};
+  // The tick's last failure, written before connection_ turns Lost and read
+  // by maintain() after: a fixed buffer, no allocation on the tick.
+  const char* fault_call_ = "";
+  int fault_code_ = 0;
+  char fault_text_[160] = {};
+
+  DeviceSample last_sample_;
+  DhdDeviceCounters counters_;
+  mutable std::mutex error_mutex_;  // Not real-time: open, maintain() and status lines.
+  std::string last_error_;
+};
+
+// One device the library sees, for --list-devices.
+struct DhdDeviceRow {
+  int index = 0;
+  int system_type = -1;  // -1: could not be opened (error says why).
+  std::string model;
+  std::string binding;  // "forcedimension:INDEX"
+  DeviceLimits limits;  // With the default mapping, as a binding without options gets.
+  std::string error;
+};
+struct DhdListing {
+  bool library_found = false;
+  std::string library;  // Its path, or why it was not loaded.
+  std::string error;    // dhdGetDeviceCount's failure, if any.
+  std::vector<DhdDeviceRow> devices;
+};
+// Loads the library (dhd_library.h) and opens each device in turn to read
+// its type and limits, closing it again (a device another program holds is
+// listed with the SDK's error). Never throws.
+DhdListing list_dhd_devices();
+// Lines for --list-devices: where the library is (or why not), then one line per device.
+std::string format_dhd_listing(const DhdListing& listing);
+
+// `--device NAME=forcedimension[:ID][,options]` (kDhdDeviceUsage).
+inline constexpr const char* kDhdDeviceUsage =
+    "  forcedimension[:ID][,scale=S][,offset=X:Y:Z][,max_force=N][,max_stiffness=N_PER_MM]\n"
+    "      a Force Dimension arm or Novint Falcon through the DHD library, loaded at run time\n"
+    "      ($HAPTICUT_DHD_LIB, else libdhd.so; docs/devices.md)\n";
+// Parses the options, loads the library and opens the device. Throws
+// std::invalid_argument (bad option) or std::runtime_error (library, device).
+std::unique_ptr<Device> make_dhd_device(const std::string& bare_id, const DeviceOptions& options);
+DhdDeviceOptions dhd_device_options(const std::string& bare_id, const DeviceOptions& options);
+
+}  // namespace hapticut::servo

@@ -1,0 +1,302 @@
+// The forcedimension kind against the DHD stand-in (dhd_standin.h), loaded as
+// the real library would be: through $HAPTICUT_DHD_LIB and dlopen.
+#include "devices/dhd_device.h"
+
+#include <dlfcn.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "devices/arm_pose_mapping.h"
+#include "dhd_standin.h"
+
+namespace hapticut::servo {
+namespace {
+
+using Configure = void (*)(const char*);
+using Calls = int (*)(DhdStandinCall*, int);
+
+class DhdDeviceTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    setenv(kDhdLibraryVariable, HAPTICUT_DHD_STANDIN, 1);
+    // The same file the device loads: dlopen gives both the same instance.
+    handle_ = dlopen(HAPTICUT_DHD_STANDIN, RTLD_NOW | RTLD_LOCAL);
+    ASSERT_NE(handle_, nullptr) << dlerror();
+    configure_ = reinterpret_cast<Configure>(dlsym(handle_, "hapticut_dhd_standin_configure"));
+    calls_ = reinterpret_cast<Calls>(dlsym(handle_, "hapticut_dhd_standin_calls"));
+    ASSERT_NE(configure_, nullptr);
+    ASSERT_NE(calls_, nullptr);
+    configure_("");
+  }
+  void TearDown() override {
+    unsetenv(kDhdLibraryVariable);
+    if (handle_ != nullptr) dlclose(handle_);
+  }
+
+  std::vector<DhdStandinCall> calls() const {
+    std::vector<DhdStandinCall> out(static_cast<std::size_t>(calls_(nullptr, 0)));
+    calls_(out.data(), static_cast<int>(out.size()));
+    return out;
+  }
+  // Index of the first call named `name` at or after `from`; -1 when none.
+  long first(const std::string& name, long from = 0) const {
+    const std::vector<DhdStandinCall> all = calls();
+    for (long i = from; i < static_cast<long>(all.size()); ++i) {
+      if (name == all[static_cast<std::size_t>(i)].name) return i;
+    }
+    return -1;
+  }
+  std::unique_ptr<Device> make(const std::string& script, const DeviceOptions& options = {},
+                               const std::string& id = "") {
+    configure_(script.c_str());
+    return make_dhd_device(id, options);
+  }
+
+  void* handle_ = nullptr;
+  Configure configure_ = nullptr;
+  Calls calls_ = nullptr;
+};
+
+bool is_zero_force(const DhdStandinCall& call) {
+  return call.a == 0.0 && call.b == 0.0 && call.c == 0.0;
+}
+
+TEST(DhdLibrary, AMissingFileNamesTheVariableAndTheLoadersReason) {
+  setenv(kDhdLibraryVariable, "/nonexistent/libdhd.so.3", 1);
+  std::string error;
+  EXPECT_EQ(load_dhd_library(error), nullptr);
+  unsetenv(kDhdLibraryVariable);
+  EXPECT_NE(error.find("HAPTICUT_DHD_LIB=/nonexistent/libdhd.so.3"), std::string::npos) << error;
+  EXPECT_NE(error.find("No such file"), std::string::npos) << error;  // dlerror()'s words.
+  EXPECT_NE(error.find("install"), std::string::npos) << error;
+}
+
+TEST(DhdLibrary, ALibraryWithoutDhdsSymbolsIsRefusedNamingThem) {
+  setenv(kDhdLibraryVariable, "libm.so.6", 1);
+  std::string error;
+  EXPECT_EQ(load_dhd_library(error), nullptr);
+  unsetenv(kDhdLibraryVariable);
+  EXPECT_NE(error.find("lacks dhdGetDeviceCount"), std::string::npos) << error;
+  EXPECT_NE(error.find("dhdClose"), std::string::npos) << error;
+}
+
+TEST_F(DhdDeviceTest, NoDeviceConnectedIsAClearError) {
+  try {
+    make("devices=0");
+    FAIL() << "opened a device that is not there";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("no Force Dimension device found"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(first("dhdOpenID"), -1);
+  EXPECT_THROW(make("devices=1", {}, "1"), std::runtime_error);  // Only ID 0 exists.
+}
+
+TEST_F(DhdDeviceTest, ADeviceAnotherProgramHoldsSaysSo) {
+  try {
+    make("open_error=20");
+    FAIL() << "opened a device in use";
+  } catch (const std::runtime_error& e) {
+    const std::string text = e.what();
+    EXPECT_NE(text.find("dhdOpenID failed: device in use (stand-in) (DHD error 20)"),
+              std::string::npos)
+        << text;
+    EXPECT_NE(text.find("another program holds the device"), std::string::npos) << text;
+  }
+}
+
+TEST_F(DhdDeviceTest, BadOptionsAreRefusedBeforeTheLibraryIsTouched) {
+  EXPECT_THROW(make("", {{"scale", "0"}}), std::invalid_argument);
+  EXPECT_THROW(make("", {{"offset", "1:2"}}), std::invalid_argument);
+  EXPECT_THROW(make("", {{"colour", "red"}}), std::invalid_argument);
+  EXPECT_THROW(make("", {}, "x"), std::invalid_argument);
+  EXPECT_TRUE(calls().empty());
+}
+
+TEST_F(DhdDeviceTest, ForceIsEnabledOnlyAfterTheLimitsAreReadAndAtZero) {
+  std::unique_ptr<Device> device = make("");
+  EXPECT_EQ(first("dhdEnableForce"), -1) << "force enabled before start()";
+  device->start();
+  const long limit = first("dhdGetMaxForce");
+  const long type = first("dhdGetSystemType");
+  const long enable = first("dhdEnableForce");
+  ASSERT_GE(limit, 0);
+  ASSERT_GE(type, 0);
+  ASSERT_GT(enable, limit);
+  ASSERT_GT(enable, type);
+  EXPECT_EQ(calls()[static_cast<std::size_t>(enable)].a, 1.0);  // DHD_ON
+  for (const DhdStandinCall& call : calls()) {
+    if (std::string(call.name) == "dhdSetForce") EXPECT_TRUE(is_zero_force(call));
+  }
+}
+
+TEST_F(DhdDeviceTest, LimitsAreTheModelsLoweredByTheDevicesOwnAndMappedToTheScene) {
+  const DeviceLimits falcon = make("type=60")->limits();
+  EXPECT_TRUE(falcon.has_force_output);
+  EXPECT_EQ(falcon.max_force_N, dhd_model(60).max_force_N);
+  EXPECT_EQ(falcon.max_torque_N_mm, 0.0);
+  EXPECT_EQ(make("type=60,max_force=1.5")->limits().max_force_N, 1.5);
+  // A binding's own limit, never above the device's.
+  EXPECT_EQ(make("type=60,max_force=1.5", {{"max_force", "3"}})->limits().max_force_N, 1.5);
+  EXPECT_EQ(make("type=60", {{"max_force", "3"}})->limits().max_force_N, 3.0);
+  // Scaled: a scene spring k is k * scale on the hand; the box moves with the offset.
+  const DeviceLimits scaled = make("type=60", {{"scale", "2"}, {"offset", "10:0:-5"}})->limits();
+  EXPECT_DOUBLE_EQ(scaled.max_stiffness_N_per_mm, falcon.max_stiffness_N_per_mm / 2.0);
+  const double half = dhd_model(60).workspace_half_mm;
+  EXPECT_DOUBLE_EQ(scaled.workspace_min_mm.x, 10.0 - 2.0 * half);
+  EXPECT_DOUBLE_EQ(scaled.workspace_max_mm.z, -5.0 + 2.0 * half);
+}
+
+TEST_F(DhdDeviceTest, PoseIsMappedFromMetresInTheSdkAxesAndForceGoesBack) {
+  std::unique_ptr<Device> device =
+      make("from=0.01:0.02:0.03,to=0.01:0.02:0.03,buttons=3", {{"offset", "1:2:3"}});
+  device->start();
+  DeviceSample sample;
+  ASSERT_EQ(device->read(5.0, sample), DeviceStatus::Fresh);
+  // Scene = (y, -x, z) of the SDK's frame, in mm, plus the offset.
+  EXPECT_NEAR(sample.pose.position_mm.x, 1.0 + 20.0, 1e-9);
+  EXPECT_NEAR(sample.pose.position_mm.y, 2.0 - 10.0, 1e-9);
+  EXPECT_NEAR(sample.pose.position_mm.z, 3.0 + 30.0, 1e-9);
+  EXPECT_EQ(sample.buttons, 3U);
+  EXPECT_EQ(sample.time_s, 5.0);
+  EXPECT_EQ(first("dhdGetOrientationFrame"), -1) << "an omega.3 has no wrist";
+  device->write({1.0, 2.0, 3.0}, {0, 0, 0});
+  const std::vector<DhdStandinCall> all = calls();
+  const DhdStandinCall& force = all.back();
+  ASSERT_STREQ(force.name, "dhdSetForce");
+  EXPECT_EQ(force.a, -2.0);  // SDK x towards the user: minus the scene's y.
+  EXPECT_EQ(force.b, 1.0);
+  EXPECT_EQ(force.c, 3.0);
+}
+
+TEST_F(DhdDeviceTest, AWristedModelReadsItsOrientationFrame) {
+  std::unique_ptr<Device> device = make("type=35");  // omega.7, right hand
+  device->start();
+  DeviceSample sample;
+  ASSERT_EQ(device->read(0.0, sample), DeviceStatus::Fresh);
+  EXPECT_GT(first("dhdGetOrientationFrame"), first("dhdGetPosition"));
+  EXPECT_NEAR(sample.pose.rotation.w, 1.0, 1e-12);
+}
+
+TEST_F(DhdDeviceTest, AnErrorMidSessionZeroesTheForceInTheSameTickThenReconnects) {
+  std::unique_ptr<Device> device = make("fail_position_at=3");
+  device->start();
+  DeviceSample sample;
+  for (int tick = 0; tick < 2; ++tick) {
+    ASSERT_EQ(device->read(tick * 0.001, sample), DeviceStatus::Fresh);
+    device->write({0.5, 0.0, 0.0}, {0, 0, 0});
+  }
+  const long before = static_cast<long>(calls().size());
+  EXPECT_EQ(device->read(0.002, sample), DeviceStatus::Lost);
+  // The failing read, then a zero force in the same call: nothing pushes after the fault.
+  const std::vector<DhdStandinCall> fault = calls();
+  ASSERT_EQ(static_cast<long>(fault.size()), before + 2);
+  EXPECT_STREQ(fault[static_cast<std::size_t>(before)].name, "dhdGetPosition");
+  EXPECT_EQ(fault[static_cast<std::size_t>(before)].result, -1);
+  EXPECT_STREQ(fault[static_cast<std::size_t>(before) + 1].name, "dhdSetForce");
+  EXPECT_TRUE(is_zero_force(fault[static_cast<std::size_t>(before) + 1]));
+  // While lost the tick does not touch the library.
+  device->write({0.5, 0.0, 0.0}, {0, 0, 0});
+  EXPECT_EQ(device->read(0.003, sample), DeviceStatus::Lost);
+  EXPECT_EQ(static_cast<long>(calls().size()), before + 2);
+
+  device->maintain();
+  EXPECT_EQ(device->last_error(), "");
+  const long close = first("dhdClose", before);
+  const long reopen = first("dhdOpenID", before);
+  const long limit = first("dhdGetMaxForce", before);
+  const long enable = first("dhdEnableForce", before);
+  ASSERT_GE(close, 0);
+  EXPECT_GT(reopen, close);
+  EXPECT_GT(limit, reopen);
+  EXPECT_GT(enable, limit);
+  EXPECT_EQ(device->read(0.004, sample), DeviceStatus::Fresh);
+  const auto counters = device->status_counters();
+  EXPECT_EQ(counters[3], (std::pair<std::string, std::uint64_t>{"faults", 1}));
+  EXPECT_EQ(counters[4], (std::pair<std::string, std::uint64_t>{"reconnects", 1}));
+}
+
+TEST_F(DhdDeviceTest, AReconnectionThatFailsKeepsTheFaultAndTheReason) {
+  std::unique_ptr<Device> device = make("fail_position_at=1");
+  device->start();
+  DeviceSample sample;
+  EXPECT_EQ(device->read(0.0, sample), DeviceStatus::Lost);
+  configure_("devices=0");  // Unplugged.
+  device->maintain();
+  const std::string error = device->last_error();
+  EXPECT_NE(error.find("dhdGetPosition failed: communication error (stand-in) (DHD error 2)"),
+            std::string::npos)
+      << error;
+  EXPECT_NE(error.find("dhdGetDeviceCount() = 0"), std::string::npos) << error;
+  EXPECT_EQ(device->read(0.001, sample), DeviceStatus::Lost);
+  EXPECT_EQ(first("dhdEnableForce"), -1);
+}
+
+TEST_F(DhdDeviceTest, AFailedForceWriteIsAFaultZeroedAtOnce) {
+  // Call 1 is start()'s zero; call 3 is the second tick's force.
+  std::unique_ptr<Device> device = make("fail_force_at=3");
+  device->start();
+  DeviceSample sample;
+  ASSERT_EQ(device->read(0.0, sample), DeviceStatus::Fresh);
+  device->write({0.2, 0.0, 0.0}, {0, 0, 0});
+  ASSERT_EQ(device->read(0.001, sample), DeviceStatus::Fresh);
+  device->write({0.3, 0.0, 0.0}, {0, 0, 0});
+  const std::vector<DhdStandinCall> all = calls();
+  ASSERT_GE(all.size(), 2U);
+  EXPECT_EQ(all[all.size() - 2].result, -1);
+  EXPECT_STREQ(all.back().name, "dhdSetForce");
+  EXPECT_TRUE(is_zero_force(all.back()));
+  EXPECT_EQ(device->read(0.002, sample), DeviceStatus::Lost);
+}
+
+TEST_F(DhdDeviceTest, StopLeavesTheArmWithoutForceAndClosed) {
+  std::unique_ptr<Device> device = make("");
+  device->start();
+  device->stop();
+  const std::vector<DhdStandinCall> all = calls();
+  ASSERT_GE(all.size(), 3U);
+  EXPECT_STREQ(all[all.size() - 3].name, "dhdSetForce");
+  EXPECT_TRUE(is_zero_force(all[all.size() - 3]));
+  EXPECT_STREQ(all[all.size() - 2].name, "dhdStop");
+  EXPECT_STREQ(all.back().name, "dhdClose");
+}
+
+TEST_F(DhdDeviceTest, TheListingNamesTheLibraryAndEachDeviceWithItsLimits) {
+  configure_("devices=2,type=60");
+  const DhdListing listing = list_dhd_devices();
+  EXPECT_TRUE(listing.library_found);
+  EXPECT_NE(listing.library.find("hapticut-dhd-standin"), std::string::npos);
+  ASSERT_EQ(listing.devices.size(), 2U);
+  EXPECT_EQ(listing.devices[1].binding, "forcedimension:1");
+  EXPECT_EQ(listing.devices[1].model, "Novint Falcon");
+  EXPECT_EQ(listing.devices[1].limits.max_force_N, dhd_model(60).max_force_N);
+  const std::string text = format_dhd_listing(listing);
+  EXPECT_NE(text.find("forcedimension:0"), std::string::npos) << text;
+  // Each device was closed again: a servo may open it next.
+  EXPECT_GT(first("dhdClose", first("dhdOpenID", first("dhdOpenID") + 1)), 0);
+}
+
+TEST(ArmPoseMapping, MatrixQuaternionAndBack) {
+  // 90 degrees about z, and 180 degrees about x (the branch without the trace).
+  const Matrix3 about_z{{{0, -1, 0}, {1, 0, 0}, {0, 0, 1}}};
+  const Quaternion q = matrix_quaternion(about_z);
+  EXPECT_NEAR(q.w, std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(q.z, std::sqrt(0.5), 1e-12);
+  const Vec3 turned = q.rotate({1, 0, 0});
+  EXPECT_NEAR(turned.y, 1.0, 1e-12);
+  const Quaternion flip = matrix_quaternion({{{1, 0, 0}, {0, -1, 0}, {0, 0, -1}}});
+  EXPECT_NEAR(std::abs(flip.x), 1.0, 1e-12);
+  // The SDK's axes: a rotation about the SDK's z stays one about the scene's z.
+  const ArmPoseMapping mapping({kDhdToSceneAxes, 1.0, {}});
+  const Quaternion mapped = mapping.rotation(about_z);
+  EXPECT_NEAR(mapped.w, std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(mapped.z, std::sqrt(0.5), 1e-12);
+}
+
+}  // namespace
+}  // namespace hapticut::servo

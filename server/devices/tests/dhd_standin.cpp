@@ -1,0 +1,244 @@
+// The DHD stand-in (dhd_standin.h). Test code: a lock guards its state, as
+// the tick and the housekeeping thread both call it.
+#include "dhd_standin.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace {
+
+constexpr int kErrorCom = 2;  // DHD_ERROR_COM
+constexpr std::size_t kMaxCalls = 1 << 20;
+
+struct Script {
+  int devices = 1;
+  int type = 33;
+  double max_force = -1.0;
+  unsigned int buttons = 0;
+  double from[3] = {0, 0, 0};
+  double to[3] = {0, 0, 0};
+  long reads = 1;
+  int open_error = 0;
+  long fail_position_at = 0;
+  long fail_count = 1;
+  long fail_force_at = 0;
+};
+
+struct State {
+  std::mutex mutex;
+  bool configured = false;
+  Script script;
+  std::vector<DhdStandinCall> calls;
+  long position_calls = 0;
+  long force_calls = 0;
+  bool open = false;
+};
+
+State& state() {
+  static State* s = new State();  // Never destroyed: calls may come during exit.
+  return *s;
+}
+
+thread_local int last_error = 0;
+thread_local char last_error_text[96] = "no error";
+
+void set_error(int code, const char* text) {
+  last_error = code;
+  std::snprintf(last_error_text, sizeof last_error_text, "%s", text);
+}
+
+bool parse_xyz(const std::string& text, double out[3]) {
+  return std::sscanf(text.c_str(), "%lf:%lf:%lf", &out[0], &out[1], &out[2]) == 3;
+}
+
+void apply(Script& script, const std::string& text) {
+  std::size_t start = 0;
+  while (start < text.size()) {
+    std::size_t end = text.find(',', start);
+    if (end == std::string::npos) end = text.size();
+    const std::string pair = text.substr(start, end - start);
+    start = end + 1;
+    const std::size_t eq = pair.find('=');
+    if (eq == std::string::npos) continue;
+    const std::string key = pair.substr(0, eq);
+    const std::string value = pair.substr(eq + 1);
+    const double number = std::atof(value.c_str());
+    if (key == "devices") script.devices = static_cast<int>(number);
+    if (key == "type") script.type = static_cast<int>(number);
+    if (key == "max_force") script.max_force = number;
+    if (key == "buttons") script.buttons = static_cast<unsigned int>(number);
+    if (key == "from") parse_xyz(value, script.from);
+    if (key == "to") parse_xyz(value, script.to);
+    if (key == "reads") script.reads = std::max(1L, static_cast<long>(number));
+    if (key == "open_error") script.open_error = static_cast<int>(number);
+    if (key == "fail_position_at") script.fail_position_at = static_cast<long>(number);
+    if (key == "fail_count") script.fail_count = static_cast<long>(number);
+    if (key == "fail_force_at") script.fail_force_at = static_cast<long>(number);
+  }
+}
+
+// Locks the state, applying $HAPTICUT_DHD_STANDIN at the first call.
+std::unique_lock<std::mutex> lock_state() {
+  State& s = state();
+  std::unique_lock<std::mutex> lock(s.mutex);
+  if (!s.configured) {
+    s.configured = true;
+    s.calls.reserve(kMaxCalls);
+    const char* text = std::getenv("HAPTICUT_DHD_STANDIN");
+    if (text != nullptr) apply(s.script, text);
+  }
+  return lock;
+}
+
+int record(const char* name, double a, double b, double c, int result) {
+  State& s = state();
+  if (s.calls.size() < kMaxCalls) {
+    DhdStandinCall call{};
+    std::snprintf(call.name, sizeof call.name, "%s", name);
+    call.a = a;
+    call.b = b;
+    call.c = c;
+    call.result = result;
+    s.calls.push_back(call);
+  }
+  return result;
+}
+
+void write_log() {
+  const char* path = std::getenv("HAPTICUT_DHD_STANDIN_LOG");
+  if (path == nullptr) return;
+  std::FILE* file = std::fopen(path, "w");
+  if (file == nullptr) return;
+  for (const DhdStandinCall& call : state().calls) {
+    std::fprintf(file, "%s %.17g %.17g %.17g %d\n", call.name, call.a, call.b, call.c, call.result);
+  }
+  std::fclose(file);
+}
+
+}  // namespace
+
+extern "C" {
+
+__attribute__((visibility("default"))) void hapticut_dhd_standin_configure(const char* script) {
+  auto lock = lock_state();
+  State& s = state();
+  s.script = Script{};
+  apply(s.script, script != nullptr ? script : "");
+  s.calls.clear();
+  s.position_calls = 0;
+  s.force_calls = 0;
+  s.open = false;
+}
+
+__attribute__((visibility("default"))) int hapticut_dhd_standin_calls(DhdStandinCall* out,
+                                                                      int capacity) {
+  auto lock = lock_state();
+  const std::vector<DhdStandinCall>& calls = state().calls;
+  const int count = static_cast<int>(calls.size());
+  for (int i = 0; i < std::min(count, capacity); ++i) out[i] = calls[static_cast<std::size_t>(i)];
+  return count;
+}
+
+__attribute__((visibility("default"))) int dhdGetDeviceCount() {
+  auto lock = lock_state();
+  return record("dhdGetDeviceCount", 0, 0, 0, state().script.devices);
+}
+
+__attribute__((visibility("default"))) int dhdOpenID(char index) {
+  auto lock = lock_state();
+  State& s = state();
+  if (index < 0 || index >= s.script.devices) {
+    set_error(5, "no device found (stand-in)");
+    return record("dhdOpenID", index, 0, 0, -1);
+  }
+  if (s.script.open_error != 0) {
+    set_error(s.script.open_error, "device in use (stand-in)");
+    return record("dhdOpenID", index, 0, 0, -1);
+  }
+  s.open = true;
+  return record("dhdOpenID", index, 0, 0, index);
+}
+
+__attribute__((visibility("default"))) int dhdGetSystemType(char id) {
+  auto lock = lock_state();
+  return record("dhdGetSystemType", id, 0, 0, state().script.type);
+}
+
+__attribute__((visibility("default"))) double dhdGetMaxForce(char id) {
+  auto lock = lock_state();
+  record("dhdGetMaxForce", id, state().script.max_force, 0, 0);
+  return state().script.max_force;
+}
+
+__attribute__((visibility("default"))) int dhdEnableForce(unsigned char value, char id) {
+  auto lock = lock_state();
+  return record("dhdEnableForce", value, id, 0, 0);
+}
+
+__attribute__((visibility("default"))) int dhdGetPosition(double* x, double* y, double* z,
+                                                          char /*id*/) {
+  auto lock = lock_state();
+  State& s = state();
+  const long call = ++s.position_calls;
+  const Script& p = s.script;
+  if (p.fail_position_at > 0 && call >= p.fail_position_at &&
+      call < p.fail_position_at + p.fail_count) {
+    set_error(kErrorCom, "communication error (stand-in)");
+    return record("dhdGetPosition", 0, 0, 0, -1);
+  }
+  const double t = std::min(1.0, static_cast<double>(call - 1) / static_cast<double>(p.reads));
+  *x = p.from[0] + t * (p.to[0] - p.from[0]);
+  *y = p.from[1] + t * (p.to[1] - p.from[1]);
+  *z = p.from[2] + t * (p.to[2] - p.from[2]);
+  return record("dhdGetPosition", *x, *y, *z, 0);
+}
+
+__attribute__((visibility("default"))) int dhdGetOrientationFrame(double matrix[3][3],
+                                                                  char /*id*/) {
+  auto lock = lock_state();
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) matrix[i][j] = i == j ? 1.0 : 0.0;
+  }
+  return record("dhdGetOrientationFrame", 0, 0, 0, 0);
+}
+
+__attribute__((visibility("default"))) unsigned int dhdGetButtonMask(char /*id*/) {
+  auto lock = lock_state();
+  record("dhdGetButtonMask", state().script.buttons, 0, 0, 0);
+  return state().script.buttons;
+}
+
+__attribute__((visibility("default"))) int dhdSetForce(double fx, double fy, double fz,
+                                                       char /*id*/) {
+  auto lock = lock_state();
+  State& s = state();
+  const long call = ++s.force_calls;
+  if (s.script.fail_force_at > 0 && call == s.script.fail_force_at) {
+    set_error(kErrorCom, "communication error (stand-in)");
+    return record("dhdSetForce", fx, fy, fz, -1);
+  }
+  return record("dhdSetForce", fx, fy, fz, 0);
+}
+
+__attribute__((visibility("default"))) int dhdErrorGetLast() { return last_error; }
+
+__attribute__((visibility("default"))) const char* dhdErrorGetLastStr() { return last_error_text; }
+
+__attribute__((visibility("default"))) int dhdStop(char id) {
+  auto lock = lock_state();
+  return record("dhdStop", id, 0, 0, 0);
+}
+
+__attribute__((visibility("default"))) int dhdClose(char id) {
+  auto lock = lock_state();
+  state().open = false;
+  record("dhdClose", id, 0, 0, 0);
+  write_log();
+  return 0;
+}
+}

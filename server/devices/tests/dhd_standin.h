@@ -1,0 +1,34 @@
+// The stand-in for Force Dimension's DHD library (dhd_standin.cpp): a shared
+// library exporting the same C symbols as libdhd (server/devices/dhd_api.h),
+// built by the tests, loaded by the servo through $HAPTICUT_DHD_LIB. Its
+// behaviour is a script, from $HAPTICUT_DHD_STANDIN at the first call or
+// from hapticut_dhd_standin_configure: comma-separated key=value pairs,
+//   devices=1          what dhdGetDeviceCount returns (0: none connected)
+//   type=33            dhdGetSystemType (DHD_DEVICE_OMEGA3; 35 an omega.7, with a wrist)
+//   max_force=-1       dhdGetMaxForce (N; negative: no limit set in the device)
+//   buttons=0          dhdGetButtonMask
+//   from=X:Y:Z, to=X:Y:Z, reads=N   the position (m, the SDK's frame) goes from
+//                      `from` to `to` over the first N dhdGetPosition calls, then holds
+//   open_error=CODE    dhdOpenID fails with this DHD error (20: device in use)
+//   fail_position_at=N dhdGetPosition call N (from 1) fails with a COM error ...
+//   fail_count=1       ... and as many calls after it
+//   fail_force_at=N    dhdSetForce call N (from 1) fails with a COM error
+// and records every call, which $HAPTICUT_DHD_STANDIN_LOG (if set) receives
+// at each dhdClose, one line per call: "name a b c result".
+#pragma once
+
+extern "C" {
+
+struct DhdStandinCall {
+  char name[32];
+  double a;  // The call's arguments: a force (N), the enable flag, the index or ID.
+  double b;
+  double c;
+  int result;
+};
+
+// Resets the record and the counters and applies `script`.
+void hapticut_dhd_standin_configure(const char* script);
+// Copies up to `capacity` calls into `out`; returns how many were recorded.
+int hapticut_dhd_standin_calls(DhdStandinCall* out, int capacity);
+}
