@@ -16,6 +16,8 @@
 #include "rt/clock.h"
 #ifdef HAPTICUT_WITH_DEVICES
 #include "devices/bridge_device.h"
+#include "devices/device_limits_json.h"
+#include "devices/dhd_device.h"
 #include "devices/hid_device.h"
 #endif
 #include "devices/sim_device.h"
@@ -82,6 +84,34 @@ std::vector<DeviceKindInfo> other_device_kinds() {
 }
 #endif
 
+// The listing's "forcedimension" object: whether the DHD library loaded (its
+// path, or why not), and the devices it sees with their bindings and limits.
+std::string with_dhd_listing(const std::string& listing_json, const DhdListing& dhd,
+                             double rate_Hz) {
+  nlohmann::json listing = nlohmann::json::parse(listing_json);
+  nlohmann::json devices = nlohmann::json::array();
+  for (const DhdDeviceRow& row : dhd.devices) {
+    nlohmann::json device = {{"id", row.index}, {"binding", row.binding}};
+    if (row.error.empty()) {
+      device["system_type"] = row.system_type;
+      device["model"] = row.model;
+      device["limits"] = device_limits_json(row.limits, rate_Hz);
+      device["error"] = nullptr;
+    } else {
+      device["error"] = row.error;
+    }
+    devices.push_back(device);
+  }
+  listing["forcedimension"] = {
+      {"library_found", dhd.library_found},
+      {"library", dhd.library_found ? nlohmann::json(dhd.library) : nlohmann::json(nullptr)},
+      {"error", dhd.library_found
+                    ? (dhd.error.empty() ? nlohmann::json(nullptr) : nlohmann::json(dhd.error))
+                    : nlohmann::json(dhd.library)},
+      {"devices", devices}};
+  return listing.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+}
+
 // --list-devices: the HID devices hidapi finds, and the profile each matches
 // (--json: with the shipped profiles and the other kinds, and their limits,
 // the stiffness limit at --rate among them).
@@ -90,9 +120,12 @@ int list_devices(const Options& options) {
   try {
     // The stiffness limits at --rate, else at a scene's default rate.
     const double rate_Hz = options.rate_Hz > 0.0 ? options.rate_Hz : Scene{}.servo_rate_Hz;
+    const DhdListing dhd = list_dhd_devices();
     const std::string text =
-        options.json ? list_devices_json(options.profiles_dir, other_device_kinds(), rate_Hz)
-                     : list_hid_devices_text(options.profiles_dir);
+        options.json ? with_dhd_listing(
+                           list_devices_json(options.profiles_dir, other_device_kinds(), rate_Hz),
+                           dhd, rate_Hz)
+                     : list_hid_devices_text(options.profiles_dir) + "\n" + format_dhd_listing(dhd);
     std::printf("%s", text.c_str());
     return kExitOk;
   } catch (const std::exception& e) {

@@ -1,10 +1,13 @@
 // Device: what the servo loop reads a tool pose from and writes a force to.
 // One small interface for every backend (sim, replay, viewport, HID, UDP
-// bridge), one file each in server/devices/. The loop calls read() and
+// bridge, Force Dimension), one file each in server/devices/. The loop calls read() and
 // write() once per tick on the real-time thread; they must not block,
 // allocate, lock or log. A backend that talks to hardware or a socket does
 // its I/O on its own thread at its own rate and hands the newest sample over
 // through a LatestValue (rt/latest_value.h); read() then only copies it.
+// The exception is a vendor library made to be called from the haptic loop
+// itself, with short non-blocking transfers (Force Dimension's DHD,
+// dhd_device.h): read() and write() call it directly.
 #pragma once
 
 #include <algorithm>
@@ -78,7 +81,8 @@ class Device {
   Device(const Device&) = delete;
   Device& operator=(const Device&) = delete;
 
-  // The backend's name for messages ("sim", "replay", "viewport", "hid", "bridge").
+  // The backend's name for messages ("sim", "replay", "viewport", "hid", "bridge",
+  // "forcedimension").
   virtual const char* kind() const = 0;
   virtual DeviceLimits limits() const = 0;
 

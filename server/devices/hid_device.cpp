@@ -11,6 +11,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "devices/device_limits_json.h"
+
 namespace hapticut::servo {
 namespace {
 
@@ -346,18 +348,6 @@ std::string list_hid_devices_text(const std::string& profile_directory) {
 
 namespace {
 
-nlohmann::json limits_json(const DeviceLimits& limits, double rate_Hz) {
-  const auto xyz = [](const Vec3& v) { return nlohmann::json::array({v.x, v.y, v.z}); };
-  return {{"has_force_output", limits.has_force_output},
-          {"max_force_N", limits.max_force_N},
-          {"max_torque_N_mm", limits.max_torque_N_mm},
-          {"max_stiffness_N_per_mm", limits.max_stiffness_N_per_mm},
-          {"max_stiffness_stated_rate_Hz", kStiffnessLimitRate_Hz},
-          {"max_stiffness_N_per_mm_at_rate", stiffness_limit(limits, rate_Hz)},
-          {"workspace_min_mm", xyz(limits.workspace_min_mm)},
-          {"workspace_max_mm", xyz(limits.workspace_max_mm)}};
-}
-
 nlohmann::json name_or_null(const std::string& text, const std::string& prefix = "") {
   return text.empty() ? nlohmann::json(nullptr) : nlohmann::json(prefix + text);
 }
@@ -391,13 +381,13 @@ std::string format_device_list_json(const std::vector<HidDeviceRow>& rows,
     shipped.push_back({{"name", profile.name},
                        {"model", profile.model},
                        {"binding", "hid:" + profile.name},
-                       {"limits", limits_json(profile.limits, rate_Hz)}});
+                       {"limits", device_limits_json(profile.limits, rate_Hz)}});
   }
   nlohmann::json others = nlohmann::json::array();
   for (const DeviceKindInfo& kind : kinds) {
     others.push_back({{"kind", kind.kind},
                       {"binding", kind.binding},
-                      {"limits", limits_json(kind.limits, rate_Hz)}});
+                      {"limits", device_limits_json(kind.limits, rate_Hz)}});
   }
   const nlohmann::json out = {{"version", 1},
                               {"hidapi", hidapi_version_string()},

@@ -12,8 +12,8 @@
 
 namespace {
 
-constexpr int kErrorCom = 2;  // DHD_ERROR_COM
-constexpr std::size_t kMaxCalls = 1 << 20;
+constexpr int kErrorCom = 2;                // DHD_ERROR_COM
+constexpr std::size_t kMaxCalls = 1 << 18;  // About a minute of ticks.
 
 struct Script {
   int devices = 1;
