@@ -2,11 +2,12 @@
 child process, at most ``LIST_TIMEOUT_S``), and the limits of the device a binding names.
 
 The listing (docs/devices.md) holds the HID devices hidapi finds with the profile each
-matches, the shipped profiles and the other kinds (sim, viewport, bridge), each with its
-limits, the stiffness limit among them at the loop rate the listing was asked for
-(``--rate``: the servo's own rule, so the add-on has none). It is read on *Refresh devices*
-(and when a check needs limits at a rate the kept one was not read at) and kept; the
-panel's items are made from the kept listing only, so drawing never runs a process.
+matches, the shipped profiles, the other kinds (sim, viewport, bridge) and the Force
+Dimension arms its library sees, each with its limits, the stiffness limit among them at
+the loop rate the listing was asked for (``--rate``: the servo's own rule, so the add-on has
+none). It is read on *Refresh devices* (and when a check needs limits at a rate the kept
+one was not read at) and kept; the panel's items are made from the kept listing only, so
+drawing never runs a process.
 No bpy here.
 """
 
@@ -30,7 +31,7 @@ class DeviceListError(RuntimeError):
 class Choice:
     """One item of the panel's Device menu."""
 
-    identifier: str  # VIEWPORT, SIM, BRIDGE, HID:<profile>, BLADES, CUSTOM
+    identifier: str  # VIEWPORT, SIM, BRIDGE, HID:<profile>, FORCEDIMENSION:<id>, BLADES, CUSTOM
     label: str
     description: str
     limits: dict = field(default_factory=dict)  # The listing's limits; {} unknown.
@@ -130,9 +131,17 @@ def limits_text(limits: dict) -> str:
     return ", ".join(parts)
 
 
+def forcedimension_devices(listing: dict) -> list[dict]:
+    """The Force Dimension arms the listing's library opened (a servo older than the kind,
+    or a library not found, lists none)."""
+    found = listing.get("forcedimension") or {}
+    return [d for d in found.get("devices", []) if not d.get("error")]
+
+
 def choices(listing: dict | None) -> list[Choice]:
     """The Device menu: viewport, sim, bridge, the HID devices found (with their profile),
-    the shipped profiles not found (for a device plugged in later), blade devices, custom."""
+    the shipped profiles not found (for a device plugged in later), the Force Dimension arms
+    found, blade devices, custom."""
     if listing is None:
         return [VIEWPORT, SIM, BRIDGE, BLADES, CUSTOM]
     kinds = {k["kind"]: k.get("limits", {}) for k in listing["kinds"]}
@@ -159,7 +168,17 @@ def choices(listing: dict | None) -> list[Choice]:
             label = f"{profile.get('model', name)} ({name}, not connected)"
             text = f"Shipped profile, for a device plugged in later: hid:{name}"
         hid.append(Choice(f"HID:{name}", label, f"{text} ({limits_text(limits)})", limits))
-    return [*fixed, *hid, BLADES, CUSTOM]
+    arms = [
+        Choice(
+            f"FORCEDIMENSION:{d['id']}",
+            f"{d.get('model', 'Force Dimension device')} ({d['binding']})",
+            f"Force Dimension arm through its SDK: {d['binding']} "
+            f"({limits_text(d.get('limits', {}))})",
+            d.get("limits", {}),
+        )
+        for d in forcedimension_devices(listing)
+    ]
+    return [*fixed, *hid, *arms, BLADES, CUSTOM]
 
 
 def binding(identifier: str, bridge_port: int = BRIDGE_DEFAULT_PORT, custom: str = "") -> str:
@@ -172,6 +191,8 @@ def binding(identifier: str, bridge_port: int = BRIDGE_DEFAULT_PORT, custom: str
         return f"bridge:port={int(bridge_port)}"
     if identifier.startswith("HID:"):
         return f"hid:{identifier[4:]}"
+    if identifier.startswith("FORCEDIMENSION:"):
+        return f"forcedimension:{identifier[len('FORCEDIMENSION:') :]}"
     if identifier == "CUSTOM":
         return custom
     return ""
@@ -210,14 +231,20 @@ LIMIT_OPTIONS = {
         ("max_torque", "max_torque_N_mm"),
         ("max_stiffness", "max_stiffness_N_per_mm"),
     ),
+    "forcedimension": (
+        ("max_force", "max_force_N"),
+        ("max_stiffness", "max_stiffness_N_per_mm"),
+    ),
 }
 
 
 def limits_for(listing: dict, device_text: str) -> dict:
     """The limits of the device a ``--device`` text binds, with its limit options applied
     (sim's max_force_N, max_torque_N_mm, max_stiffness_N_per_mm, the bridge's max_force,
-    max_torque, max_stiffness); {} when the listing does not know them (a profile file,
-    replay, an unknown kind). A stiffness limit given in the text has no limit at the
+    max_torque, max_stiffness, a Force Dimension arm's max_force, max_stiffness); {} when
+    the listing does not know them (a profile file, replay, an unknown kind, an arm not
+    listed). An arm's scale= divides its stiffness limit (the servo's rule, docs/devices.md),
+    known here only as stated. A stiffness limit given in the text has no limit at the
     listing's rate here (only the servo knows it): the servo's ``set`` refuses a stiffness
     above it (docs/protocol.md)."""
     kind, _, args = device_text.strip().partition(":")
@@ -230,13 +257,25 @@ def limits_for(listing: dict, device_text: str) -> dict:
             name = first["profile"] if first else ""
             profile = next((p for p in listing["profiles"] if p["name"] == name), None)
         return dict(profile.get("limits", {})) if profile else {}
-    limits = dict(next((k.get("limits", {}) for k in listing["kinds"] if k["kind"] == kind), {}))
+    if kind == "forcedimension":
+        index = options.get("id", bare) or "0"
+        arm = next((d for d in forcedimension_devices(listing) if str(d["id"]) == index), None)
+        limits = dict(arm.get("limits", {})) if arm else {}
+    else:
+        limits = dict(
+            next((k.get("limits", {}) for k in listing["kinds"] if k["kind"] == kind), {})
+        )
     keys = LIMIT_OPTIONS.get(kind, ()) if limits else ()
     for key, name in keys:
         if key in options:
             limits[name] = _number(options, key, limits.get(name, 0.0))
             if name == "max_stiffness_N_per_mm":
                 limits.pop(STIFFNESS_AT_RATE, None)
+    if kind == "forcedimension" and limits and "scale" in options:
+        scale = _number(options, "scale", 1.0)
+        if scale > 0:
+            limits["max_stiffness_N_per_mm"] = limits.get("max_stiffness_N_per_mm", 0.0) / scale
+            limits.pop(STIFFNESS_AT_RATE, None)
     return limits
 
 

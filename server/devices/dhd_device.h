@@ -132,9 +132,9 @@ DhdListing list_dhd_devices();
 // Lines for --list-devices: where the library is (or why not), then one line per device.
 std::string format_dhd_listing(const DhdListing& listing);
 
-// `--device NAME=forcedimension[:ID][,options]` (kDhdDeviceUsage).
+// `--device NAME=forcedimension[:[ID][,options]]` (kDhdDeviceUsage).
 inline constexpr const char* kDhdDeviceUsage =
-    "  forcedimension[:ID][,scale=S][,offset=X:Y:Z][,max_force=N][,max_stiffness=N_PER_MM]\n"
+    "  forcedimension:[ID][,scale=S][,offset=X:Y:Z][,max_force=N][,max_stiffness=N_PER_MM]\n"
     "      a Force Dimension arm or Novint Falcon through the DHD library, loaded at run time\n"
     "      ($HAPTICUT_DHD_LIB, else libdhd.so; docs/devices.md)\n";
 // Parses the options, loads the library and opens the device. Throws

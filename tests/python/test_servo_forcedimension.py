@@ -7,16 +7,15 @@ errors of a missing library, no device and a device in use, and `--list-devices`
 from __future__ import annotations
 
 import json
-import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pytest
+from dhd_standin_support import STANDIN_NAME, standin_library
 from hapticut.servo_layout import flag_bit
 from servo_test_support import (
-    ROOT,
     SPHERE,
     ServoProcess,
     connect,
@@ -29,28 +28,11 @@ from servo_test_support import (
 # Times a real servo's clock-paced threads: runs alone, never beside other tests.
 pytestmark = pytest.mark.serial
 
-STANDIN_NAME = "libhapticut-dhd-standin.so"
 EXIT_DEVICE = 4  # docs/servo.md
 MAX_FORCE_N = 0.5
 # Down from 10 mm above the sphere's centre to 10 mm below it over 1000 reads (the SDK's
 # frame, m), then held there, pushing.
 DESCENT = "from=0:0:0.010,to=0:0:-0.010,reads=1000"
-
-
-def standin_library() -> Path:
-    """The stand-in beside the servo under test (a build tree's), else in build/main."""
-    candidates = []
-    servo = os.environ.get("HAPTICUT_SERVO")
-    if servo:
-        candidates.append(Path(servo).resolve().parent / "devices" / STANDIN_NAME)
-    candidates.append(ROOT / "build" / "main" / "server" / "devices" / STANDIN_NAME)
-    for candidate in candidates:
-        if candidate.is_file():
-            return candidate
-    raise AssertionError(
-        f"the DHD stand-in was not built (looked at {', '.join(map(str, candidates))}); "
-        "tests/scripts/setup.sh builds it with the C++ tests"
-    )
 
 
 @dataclass(frozen=True)

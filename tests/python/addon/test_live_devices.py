@@ -99,6 +99,35 @@ def test_the_real_listing_fills_the_menu_and_each_item_makes_its_binding(scene):
     assert live_properties.choice(settings).limits == profile["limits"]
 
 
+def test_a_force_dimension_arm_the_servo_sees_is_offered_and_bound(scene, monkeypatch):
+    """An arm Force Dimension's library sees (the DHD stand-in in its place) is an item of the
+    menu with its model and limits, and makes its forcedimension binding; a binding's own
+    limit options and scale change the limits the panel checks against."""
+    from addon.live import device_list, live_link, live_properties
+    from tests.python.dhd_standin_support import standin_library
+
+    monkeypatch.setenv("HAPTICUT_DHD_LIB", str(standin_library()))
+    monkeypatch.setenv("HAPTICUT_DHD_STANDIN", "devices=1,type=60")  # A Novint Falcon.
+    settings = scene.hapticut_live
+    assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
+    assert settings.device_error == ""
+    listing = device_list.cached()
+    arm = listing["forcedimension"]["devices"][0]
+    identifiers = [item[0] for item in live_properties.device_items(settings)]
+    assert identifiers[-3:] == ["FORCEDIMENSION:0", "BLADES", "CUSTOM"]
+    settings.device_mode = "FORCEDIMENSION:0"
+    chosen = live_properties.choice(settings)
+    assert chosen.label == "Novint Falcon (forcedimension:0)"
+    assert chosen.limits == arm["limits"] and arm["limits"]["has_force_output"] is True
+    assert live_link.devices(scene) == ["Knife=forcedimension:0"]
+    assert device_list.limits_for(listing, "forcedimension:0,max_force=1")["max_force_N"] == 1
+    assert device_list.limits_for(listing, "forcedimension:3") == {}  # Not listed.
+    scaled = device_list.limits_for(listing, "forcedimension:scale=2")
+    assert scaled["max_stiffness_N_per_mm"] == arm["limits"]["max_stiffness_N_per_mm"] / 2
+    assert device_list.STIFFNESS_AT_RATE not in scaled
+
+
 def test_a_choice_saved_before_its_listing_stays_offered(scene):
     from addon.live import live_link, live_properties
 
