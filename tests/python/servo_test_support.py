@@ -29,6 +29,18 @@ EXAMPLE_SCENES = sorted(EXAMPLES.glob("*.hapticut.msgpack"))
 SPHERE = EXAMPLES / "sphere320.hapticut.msgpack"
 
 
+# What a replay reproduces bit for bit of each record's blade block (with the proxies q, p
+# and state); the force written is not among them: a replay device renders none.
+REPLAYED_BLOCK_FIELDS = (
+    "pose",
+    "ideal_pose",
+    "engine_force_N",
+    "engine_torque_N_mm",
+    "step_kind",
+    "step_dt_s",
+)
+
+
 def run_servo(*args: str, timeout_s: float = 120.0) -> subprocess.CompletedProcess:
     """The servo to its end (no control channel): exit code, stdout, stderr."""
     return subprocess.run(

@@ -1,8 +1,9 @@
 """The forcedimension device kind through the real servo binary, with the DHD stand-in
 (server/devices/tests/dhd_standin.h, built with the C++ tests) loaded in place of Force
-Dimension's library through $HAPTICUT_DHD_LIB: a session clamped and recorded, an error
-mid-session (force zero in that tick, the device reopened, the force ramped back), the
-errors of a missing library, no device and a device in use, and `--list-devices`."""
+Dimension's library through $HAPTICUT_DHD_LIB: a session clamped, recorded and replayed,
+an error mid-session (force zero in that tick, the device reopened, the force ramped
+back), the errors of a missing library, no device and a device in use, and
+`--list-devices`."""
 
 from __future__ import annotations
 
@@ -16,8 +17,10 @@ import pytest
 from dhd_standin_support import STANDIN_NAME, standin_library
 from hapticut.servo_layout import flag_bit
 from servo_test_support import (
+    REPLAYED_BLOCK_FIELDS,
     SPHERE,
     ServoProcess,
+    bake,
     connect,
     independent_scene,
     offline_check,
@@ -100,7 +103,8 @@ def counters(status: dict) -> dict:
 def test_a_session_is_clamped_recorded_and_written_to_the_arm(standin, tmp_path):
     """The arm's position drives the blade, the force it gets is the recorded one in its own
     axes and within the clamp, force is enabled only after the limits are read and at zero,
-    and the recorded proxies equal an offline engine run of the recorded poses."""
+    the recorded proxies equal an offline engine run of the recorded poses, and a replay of
+    the recording gives them again bit for bit."""
     standin.script(f"type=33,{DESCENT}")
     scene = independent_scene(tmp_path / "sphere.hapticut.json")
     record = tmp_path / "dhd.rec"
@@ -134,6 +138,17 @@ def test_a_session_is_clamped_recorded_and_written_to_the_arm(standin, tmp_path)
     assert engine.max() > MAX_FORCE_N, "the engine never asked for more than the clamp"
     assert np.any(block["safety_flags"] & flag_bit("force_clamped"))
     assert offline_check(scene, recording, "scalpel") > 500
+
+    # The session replayed without the arm: the same proxies and engine forces, bit for bit.
+    replayed = tmp_path / "replayed.rec"
+    bake(scene, replayed, f"scalpel=replay:{record}")
+    again = read_recording(replayed).blade("scalpel")
+    n = len(recording)
+    original = recording.blade("scalpel")
+    for name in ("q", "p", "state"):
+        assert np.array_equal(original[name], again[name][:n]), name
+    for name in REPLAYED_BLOCK_FIELDS:
+        assert np.array_equal(original["block"][name], again["block"][name][:n]), name
 
 
 def test_an_error_mid_session_zeroes_the_force_in_that_tick_and_ramps_back(standin, tmp_path):

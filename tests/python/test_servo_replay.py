@@ -8,6 +8,7 @@ import time
 import numpy as np
 import pytest
 from servo_test_support import (
+    REPLAYED_BLOCK_FIELDS,
     SPHERE,
     ServoProcess,
     bake,
@@ -21,15 +22,6 @@ from servo_test_support import (
 # Times a real servo's clock-paced threads: runs alone, never beside other tests
 # (tests/run_all.sh runs the serial tests after the parallel ones).
 pytestmark = pytest.mark.serial
-
-REPLAYED_BLOCK_FIELDS = (
-    "pose",
-    "ideal_pose",
-    "engine_force_N",
-    "engine_torque_N_mm",
-    "step_kind",
-    "step_dt_s",
-)
 
 
 def replay_and_compare(scene, tmp_path) -> tuple:
