@@ -7,7 +7,9 @@
 # (tests/run_all.sh calls it).
 #
 # The Python tests: every servo test file that runs the loop, control/stream, recorder
-# and housekeeping threads (and the bridge device's receive thread), about a minute
+# and housekeeping threads (and the bridge device's receive thread, and the Force Dimension
+# device's library calls from the tick and from reconnection, through the DHD stand-in built
+# here too, which test_servo_forcedimension.py finds beside the servo), about a minute
 # under TSan on 2 cores; left out: test_servo_layout.py (--print-layout, no thread runs),
 # test_servo_memory.py (its bounds are on the resident set, which TSan's shadow memory
 # multiplies) and test_servo_rightful_client.py (floods the control thread alone, whose
@@ -32,7 +34,8 @@ case "${1:-run}" in
       -DCMAKE_CXX_COMPILER=clang++ -DHAPTICUT_BUILD_TESTS=ON -DHAPTICUT_BUILD_PYTHON=OFF \
       -DCMAKE_CXX_FLAGS="-fsanitize=thread -fno-omit-frame-pointer" \
       -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=thread" >/dev/null
-    cmake --build build/tsan -j 2 --target hapticut-servo hapticut_servo_tests
+    cmake --build build/tsan -j 2 --target hapticut-servo hapticut_servo_tests \
+      hapticut_dhd_standin
     ;;
   run)
     tests=(tests/python/test_servo_stream.py tests/python/test_servo_replay.py
@@ -41,7 +44,7 @@ case "${1:-run}" in
       tests/python/test_servo_devices.py tests/python/test_servo_stiffness_limit.py
       tests/python/test_servo_hostile_client.py tests/python/test_servo_recording_end.py
       tests/python/test_servo_stall.py tests/python/test_servo_device_files.py
-      tests/python/test_servo_strict_protocol.py)
+      tests/python/test_servo_strict_protocol.py tests/python/test_servo_forcedimension.py)
     reports="$PWD/build/tsan/reports"
     rm -rf "$reports"
     mkdir -p "$reports"
