@@ -2,8 +2,8 @@
 (server/devices/tests/dhd_standin.h, built with the C++ tests) loaded in place of Force
 Dimension's library through $HAPTICUT_DHD_LIB: a session clamped, recorded and replayed,
 an error mid-session (force zero in that tick, the device reopened, the force ramped
-back), the errors of a missing library, no device and a device in use, and
-`--list-devices`."""
+back), a client's `load` binding an arm, the errors of a missing library, no device and a
+device in use, and `--list-devices`."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from dhd_standin_support import STANDIN_NAME, standin_library
+from hapticut.servo_client import ServoError
 from hapticut.servo_layout import flag_bit
 from servo_test_support import (
     REPLAYED_BLOCK_FIELDS,
@@ -189,6 +190,24 @@ def test_an_error_mid_session_zeroes_the_force_in_that_tick_and_ramps_back(stand
     assert back > k and np.all(force[k:back] == 0.0)
     assert block["ramp"][back] < 0.2
     assert force[back:].max() > 0.05
+
+
+def test_a_clients_load_binds_an_arm_and_names_one_that_is_not_there(standin):
+    standin.script(f"type=33,{DESCENT}")
+    with ServoProcess(["--device", "sim"]) as servo:
+        client = connect(servo)
+        with pytest.raises(ServoError, match="no device 3: the library sees 1"):
+            client.load(SPHERE, devices=["forcedimension:3"])
+        loaded = client.load(SPHERE, devices=["forcedimension:0,max_force=0.5"])
+        assert loaded["blades"][0]["kind"] == "forcedimension"
+        client.start()
+        deadline = time.monotonic() + 20.0
+        while counters(client.status()).get("samples", 0) < 100 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        status = client.status()
+        client.close()
+        assert servo.stop() == 0
+    assert counters(status)["samples"] >= 100 and counters(status)["faults"] == 0
 
 
 @pytest.mark.parametrize(
