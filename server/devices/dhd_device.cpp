@@ -98,8 +98,9 @@ void DhdDevice::start() {
   if (!open_ || force_enabled_) return;
   const DhdLibrary& dhd = *library_;
   // Zero first: the device renders nothing until the servo's ramp writes.
-  if (dhd.set_force(0.0, 0.0, 0.0, id_) < 0 || dhd.enable_force(dhd::kOn, id_) < 0) {
-    const std::string error = dhd.last_error("dhdEnableForce");
+  const bool zeroed = dhd.set_force(0.0, 0.0, 0.0, id_) >= 0;
+  if (!zeroed || dhd.enable_force(dhd::kOn, id_) < 0) {
+    const std::string error = dhd.last_error(zeroed ? "dhdEnableForce" : "dhdSetForce");
     stop();
     throw std::runtime_error("forcedimension: device " + std::to_string(options_.index) + ": " +
                              error);
@@ -184,9 +185,10 @@ void DhdDevice::maintain() {
   if (connected() || !open_) return;
   counters_.reconnect_attempts.fetch_add(1, std::memory_order_relaxed);
   const DhdLibrary& dhd = *library_;
-  std::string error = std::string("forcedimension: ") + fault_call_ +
-                      " failed: " + (fault_text_[0] != '\0' ? fault_text_ : "no description") +
-                      " (DHD error " + std::to_string(fault_code_) + ")";
+  const std::string error =
+      std::string("forcedimension: ") + fault_call_ +
+      " failed: " + (fault_text_[0] != '\0' ? fault_text_ : "no description") + " (DHD error " +
+      std::to_string(fault_code_) + ")";
   // The device is reopened by its index: its SDK ID may change with a replug.
   dhd.close(id_);
   const int count = dhd.get_device_count();
@@ -208,12 +210,18 @@ void DhdDevice::maintain() {
   }
   // Limits first (as at the start), then the force, at zero.
   const double device_limit_N = dhd.get_max_force(id_);
-  if ((device_limit_N > 0.0 && device_limit_N < limits_.max_force_N) ||
-      dhd.set_force(0.0, 0.0, 0.0, id_) < 0 || dhd.enable_force(dhd::kOn, id_) < 0) {
-    set_error(error + "; reopening: " +
-              (device_limit_N > 0.0 && device_limit_N < limits_.max_force_N
-                   ? "the device's own force limit is now below the servo's: restart the servo"
-                   : dhd.last_error("dhdEnableForce")));
+  if (device_limit_N > 0.0 && device_limit_N < limits_.max_force_N) {
+    set_error(error +
+              "; reopening: the device's own force limit is now below the servo's: restart "
+              "the servo");
+    return;
+  }
+  if (dhd.set_force(0.0, 0.0, 0.0, id_) < 0) {
+    set_error(error + "; reopening: " + dhd.last_error("dhdSetForce"));
+    return;
+  }
+  if (dhd.enable_force(dhd::kOn, id_) < 0) {
+    set_error(error + "; reopening: " + dhd.last_error("dhdEnableForce"));
     return;
   }
   set_error("");
