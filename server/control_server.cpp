@@ -158,9 +158,9 @@ void ControlServer::serve() {
     for (Client& c : clients_) {
       // Not read while its unsent replies are over the budget: it is not reading them.
       // A held refusal is neither read after nor written until its time. Nor while
-      // the memory for its next message cannot be reserved.
-      // A client waiting for its load is not read (its next messages wait for
-      // that reply), but a hang-up is seen: its load is then cancelled.
+      // the memory for its next message cannot be reserved. Nor while it waits
+      // for its load's reply (its next messages come after it); its hang-up is
+      // still seen (POLLRDHUP), and cancels the load.
       const bool held = round_s < c.hold_replies_until_s;
       const bool readable = !held && !c.loading && c.out.size() <= kClientBacklogBudget &&
                             (c.reader.has_message() || read_allowance(c) > 0);

@@ -97,8 +97,11 @@ class LoadWorker {
     if (error) std::rethrow_exception(error);
     return std::move(*result);
   }
-  // The job stops at its next LoadStop::check.
-  void cancel() { state_->stop_requested.store(true); }
+  // The job stops at its next LoadStop::check (nothing when none runs: the
+  // next job starts with a request of its own).
+  void cancel() {
+    if (busy()) state_->stop_requested.store(true);
+  }
   // Cancels the job and waits at most wait_s for it to end. True: no job is
   // left (none ran, or it ended and its result was dropped); false: the job
   // is still inside a stage, and its thread is left to end alone.

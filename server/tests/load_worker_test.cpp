@@ -90,6 +90,17 @@ TEST(LoadWorker, ACancelledJobEndsAtItsNextStage) {
   EXPECT_THROW(worker.take(), LoadCancelled);
 }
 
+TEST(LoadWorker, ACancelWithNoJobLeavesTheNextJobAlone) {
+  LoadWorker<int> worker;
+  worker.cancel();
+  worker.start([](const LoadStop& stop) {
+    stop.check();
+    return 7;
+  });
+  ASSERT_TRUE(woken(worker.wake_fd()));
+  EXPECT_EQ(worker.take(), 7);
+}
+
 TEST(LoadWorker, StopJoinsAJobThatReachesItsNextStage) {
   LoadWorker<int> worker;
   worker.start([](const LoadStop& stop) {
