@@ -127,6 +127,7 @@ void ControlServer::stop() {
   quit_.store(true);
   if (stream_thread_.joinable()) stream_thread_.join();
   if (thread_.joinable()) thread_.join();
+  if (!load_worker_.stop(kLoadStopWait_s)) load_left_running_ = true;
 }
 
 void ControlServer::run() {
@@ -150,30 +151,46 @@ void ControlServer::serve() {
     // while: a flood then costs the kernel's drops, not this thread's time.
     const bool stray_paused = monotonic_now_s() < stray_pause_until_s_;
     fds.push_back({udp_fd_, static_cast<short>(stray_paused ? 0 : POLLIN), 0});
+    fds.push_back({load_worker_.wake_fd(), POLLIN, 0});
+    constexpr std::size_t kFirstClient = 3;
     bool pending = false;  // Whole messages left over from the last round.
     const double round_s = monotonic_now_s();
     for (Client& c : clients_) {
       // Not read while its unsent replies are over the budget: it is not reading them.
       // A held refusal is neither read after nor written until its time. Nor while
-      // the memory for its next message cannot be reserved.
+      // the memory for its next message cannot be reserved. Nor while it waits
+      // for its load's reply (its next messages come after it); its hang-up is
+      // still seen (POLLRDHUP), and cancels the load.
       const bool held = round_s < c.hold_replies_until_s;
-      const bool readable = !held && c.out.size() <= kClientBacklogBudget &&
+      const bool readable = !held && !c.loading && c.out.size() <= kClientBacklogBudget &&
                             (c.reader.has_message() || read_allowance(c) > 0);
       pending = pending || (readable && c.reader.has_message());
       const bool writable = !held && !c.out.empty();
-      fds.push_back(
-          {c.fd, static_cast<short>((readable ? POLLIN : 0) | (writable ? POLLOUT : 0)), 0});
+      fds.push_back({c.fd,
+                     static_cast<short>((readable ? POLLIN : 0) | (writable ? POLLOUT : 0) |
+                                        (c.loading ? POLLRDHUP : 0)),
+                     0});
     }
     const timespec timeout = to_timespec(pending ? 0.0 : 0.05);
     const int ready = ppoll(fds.data(), fds.size(), &timeout, nullptr);
     if (ready < 0 && errno != EINTR) break;
     if (ready > 0 && (fds[0].revents & POLLIN)) accept_clients();
     if (ready > 0 && (fds[1].revents & POLLIN)) drain_stray_datagrams();
+    // Before the clients: the loading client's next messages are handled in this round.
+    if (load_worker_.busy() && load_worker_.finished()) finish_load();
     const double now_s = monotonic_now_s();
-    const std::size_t polled = fds.size() - 2;
+    const std::size_t polled = fds.size() - kFirstClient;
     for (std::size_t i = 0; i < polled && i < clients_.size(); ++i) {
       Client& c = clients_[i];
-      const short events = ready > 0 ? fds[i + 2].revents : 0;
+      const short events = ready > 0 ? fds[i + kFirstClient].revents : 0;
+      if (c.fd >= 0 && c.loading) {
+        if (events & (POLLRDHUP | POLLHUP | POLLERR)) {
+          close(c.fd);  // Gone before its load's reply: the load is cancelled below.
+          c.fd = -1;
+          continue;
+        }
+        c.last_message_s = now_s;  // Waiting for its reply, not idle.
+      }
       if (c.fd >= 0 && now_s < c.hold_replies_until_s) continue;
       if (c.fd >= 0 && (events & (POLLIN | POLLHUP | POLLERR))) read_client(c);
       if (c.fd >= 0 && c.out.size() <= kClientBacklogBudget) handle_pending(c);
@@ -193,6 +210,7 @@ void ControlServer::serve() {
                                   [this](Client& c) {
                                     if (c.fd >= 0 && !(c.closing && c.out.empty())) return false;
                                     if (c.fd >= 0) close_after_reply(c.fd);
+                                    if (c.loading) load_worker_.cancel();  // Nobody waits.
                                     if (c.has_slot) set_subscription(c, 0, 0.0);
                                     release_reservation(c);
                                     return true;
@@ -359,7 +377,8 @@ void ControlServer::read_client(Client& client) {
 void ControlServer::handle_pending(Client& client) {
   std::string message;
   std::uint32_t length = 0;
-  for (int handled = 0; handled < kMessagesPerRound && !client.closing; ++handled) {
+  for (int handled = 0; handled < kMessagesPerRound && !client.closing && !client.loading;
+       ++handled) {
     const MessageReader::Result r = client.reader.next(message, length);
     if (r == MessageReader::Result::NeedMore) return;
     if (r == MessageReader::Result::TooLarge) {
@@ -408,10 +427,9 @@ void ControlServer::write_client(Client& client) {
 
 void ControlServer::handle(Client& client, const std::string& text) {
   ++counters_.messages;
-  nlohmann::json reply;
   ControlJson id;
   std::string type = "error";
-  try {
+  nlohmann::json reply = answer([&] {
     ControlMessage message;
     try {
       message = parse_control_message(text);
@@ -421,7 +439,24 @@ void ControlServer::handle(Client& client, const std::string& text) {
     }
     id = message.id;
     type = message.type;
-    reply = dispatch(client, message);
+    return dispatch(client, message);
+  });
+  if (reply.is_discarded()) {  // A load, answered when the worker is done (finish_load).
+    client.load_id = id;
+    return;
+  }
+  send_reply(client, std::move(reply), type, id);
+}
+
+// The reply to what `produce` returns, or the error it throws, as the client
+// is told it; counted when it is an error. A discarded value (no reply yet)
+// is returned as it is.
+template <typename Produce>
+nlohmann::json ControlServer::answer(Produce&& produce) {
+  nlohmann::json reply;
+  try {
+    reply = produce();
+    if (reply.is_discarded()) return reply;
     reply["ok"] = true;
   } catch (const CommandError& e) {
     reply = {{"ok", false}, {"error", e.what()}};
@@ -434,10 +469,63 @@ void ControlServer::handle(Client& client, const std::string& text) {
     reply = {{"ok", false}, {"error", std::string("internal error: ") + e.what()}};
   }
   if (!reply.value("ok", false)) ++counters_.errors;
+  return reply;
+}
+
+void ControlServer::send_reply(Client& client, nlohmann::json reply, const std::string& type,
+                               const ControlJson& id) {
   reply["type"] = type;
   if (!id.is_null()) reply["id"] = nlohmann::json::parse(id.dump());
   // Replace, not throw, on invalid UTF-8 (an error message may quote the bad bytes).
   client.out += frame_message(reply.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+}
+
+nlohmann::json ControlServer::start_load(Client& client, ControlJson& message) {
+  LoadRequest request = load_request(message, servo_.config_from_options());
+  servo_.begin_load();  // Refused while running or while another load is on its way.
+  try {
+    load_worker_.start([request = std::move(request),
+                        buffer_s = options_.record_buffer_s](const LoadStop& stop) mutable {
+      return prepare_requested_load(std::move(request), buffer_s, stop);
+    });
+  } catch (...) {
+    servo_.end_load();
+    throw;
+  }
+  client.loading = true;
+  return nlohmann::json(nlohmann::json::value_t::discarded);
+}
+
+void ControlServer::finish_load() {
+  Client* waiting = nullptr;
+  for (Client& c : clients_) {
+    if (c.loading) waiting = &c;
+  }
+  if (waiting == nullptr || waiting->fd < 0) {
+    // Its client has gone: the scene it asked for is not installed (it was
+    // never told it was), and the old one stays, as after a failed load.
+    try {
+      (void)load_worker_.take();
+    } catch (const std::exception&) {
+    }
+    servo_.end_load();
+    if (waiting != nullptr) waiting->loading = false;
+    return;
+  }
+  nlohmann::json reply = answer([&] {
+    PreparedLoad prepared;
+    try {
+      prepared = load_worker_.take();
+    } catch (...) {
+      servo_.end_load();
+      throw;
+    }
+    servo_.install(std::move(prepared));
+    return servo_.loaded_reply();
+  });
+  waiting->loading = false;
+  send_reply(*waiting, std::move(reply), "load", waiting->load_id);
+  waiting->load_id = ControlJson();
 }
 
 nlohmann::json ControlServer::hello(Client& client, const ControlJson& message) {
@@ -486,8 +574,8 @@ nlohmann::json ControlServer::hello(Client& client, const ControlJson& message) 
           {"stream_source_port", stream_port_}};
 }
 
-nlohmann::json ControlServer::dispatch(Client& client, const ControlMessage& request) {
-  using Handler = nlohmann::json (*)(ControlServer&, Client&, const ControlJson&);
+nlohmann::json ControlServer::dispatch(Client& client, ControlMessage& request) {
+  using Handler = nlohmann::json (*)(ControlServer&, Client&, ControlJson&);
   struct Command {
     std::string_view type;
     Handler handle;
@@ -497,58 +585,58 @@ nlohmann::json ControlServer::dispatch(Client& client, const ControlMessage& req
   // Each refuses the fields it does not take, by name; `set` names its own.
   static const std::array<Command, 12> kCommands{{
       {"hello",
-       [](ControlServer& s, Client& c, const ControlJson& m) {
+       [](ControlServer& s, Client& c, ControlJson& m) {
          refuse_unknown_fields(m, {"version", "token"});
          return s.hello(c, m);
        }},
       {"subscribe",
-       [](ControlServer& s, Client& c, const ControlJson& m) {
+       [](ControlServer& s, Client& c, ControlJson& m) {
          refuse_unknown_fields(m, {"port", "rate_Hz"});
          return s.subscribe(c, m);
        }},
       {"unsubscribe",
-       [](ControlServer& s, Client& c, const ControlJson& m) {
+       [](ControlServer& s, Client& c, ControlJson& m) {
          refuse_unknown_fields(m, {});
          return s.unsubscribe(c);
        }},
       {"status",
-       [](ControlServer& s, Client&, const ControlJson& m) {
+       [](ControlServer& s, Client&, ControlJson& m) {
          refuse_unknown_fields(m, {});
          return s.status();
        }},
-      {"set", [](ControlServer& s, Client& c, const ControlJson& m) { return s.set(c, m); }},
+      {"set", [](ControlServer& s, Client& c, ControlJson& m) { return s.set(c, m); }},
       {"load",
-       [](ControlServer& s, Client&, const ControlJson& m) {
+       [](ControlServer& s, Client& c, ControlJson& m) {
          refuse_unknown_fields(m, {"path", "scene", "devices", "rate_Hz", "as_fast_as_possible"});
-         return s.servo_.load_command(m);
+         return s.start_load(c, m);
        }},
       {"start",
-       [](ControlServer& s, Client&, const ControlJson& m) {
+       [](ControlServer& s, Client&, ControlJson& m) {
          refuse_unknown_fields(m, {});
          return s.servo_.start_command();
        }},
       {"stop",
-       [](ControlServer& s, Client&, const ControlJson& m) {
+       [](ControlServer& s, Client&, ControlJson& m) {
          refuse_unknown_fields(m, {});
          return s.servo_.stop_command();
        }},
       {"engage",
-       [](ControlServer& s, Client&, const ControlJson& m) {
+       [](ControlServer& s, Client&, ControlJson& m) {
          refuse_unknown_fields(m, {"engaged"});
          return s.servo_.engage_command(m);
        }},
       {"record",
-       [](ControlServer& s, Client&, const ControlJson& m) {
+       [](ControlServer& s, Client&, ControlJson& m) {
          refuse_unknown_fields(m, {"action", "path"});
          return s.servo_.record_command(m);
        }},
       {"pose",
-       [](ControlServer& s, Client&, const ControlJson& m) {
+       [](ControlServer& s, Client&, ControlJson& m) {
          refuse_unknown_fields(m, {"blade", "pose", "buttons"});
          return s.servo_.pose_command(m);
        }},
       {"shutdown",
-       [](ControlServer& s, Client&, const ControlJson& m) {
+       [](ControlServer& s, Client&, ControlJson& m) {
          refuse_unknown_fields(m, {});
          s.servo_.request_shutdown();
          return nlohmann::json::object();

@@ -6,8 +6,10 @@
 // with an error and counted, never fatal. Each client has a budget per round
 // (bytes read, messages handled) and for unsent replies: a client that floods
 // or stops reading is held back, then cut off and counted, and the others are
-// served between its messages. The loop hands frames over through a
-// lock-free triple buffer and never waits for either thread.
+// served between its messages. A `load` is read and built on a worker
+// (load_worker.h), one at a time: its client's later messages wait for its
+// reply, everyone else is answered meanwhile. The loop hands frames over
+// through a lock-free triple buffer and never waits for either thread.
 #pragma once
 
 #include <netinet/in.h>
@@ -25,6 +27,7 @@
 
 #include "client_admission.h"
 #include "control_message.h"
+#include "load_worker.h"
 #include "protocol.h"
 #include "rt/histogram.h"
 #include "servo.h"
@@ -63,7 +66,11 @@ class ControlServer {
   int port() const { return port_; }
   int stream_port() const { return stream_port_; }
   void start();
+  // Ends both threads, and a load on its way after at most kLoadStopWait_s.
   void stop();
+  // stop() left a load inside a stage to end on its own: exit the process
+  // without destructors (std::_Exit), which that thread may still be using.
+  bool load_left_running() const { return load_left_running_; }
 
  private:
   struct Client {
@@ -81,6 +88,8 @@ class ControlServer {
     double last_message_s = 0.0;
     double hold_replies_until_s = 0.0;  // A wrong token's refusal waits until then.
     std::size_t reservation = 0;        // Of large_message_bytes_, for its next message.
+    bool loading = false;               // Its `load` is on the worker; its next messages wait.
+    ControlJson load_id;                // That load's id, for its reply.
   };
   // A subscription, shared by the two threads under subscribers_mutex_.
   struct Subscriber {
@@ -108,7 +117,13 @@ class ControlServer {
   std::size_t free_slot() const;
   void write_client(Client& client);
   void handle(Client& client, const std::string& text);
-  nlohmann::json dispatch(Client& client, const ControlMessage& request);
+  template <typename Produce>
+  nlohmann::json answer(Produce&& produce);
+  void send_reply(Client& client, nlohmann::json reply, const std::string& type,
+                  const ControlJson& id);
+  nlohmann::json dispatch(Client& client, ControlMessage& request);
+  nlohmann::json start_load(Client& client, ControlJson& message);
+  void finish_load();
   nlohmann::json hello(Client& client, const ControlJson& message);
   nlohmann::json subscribe(Client& client, const ControlJson& message);
   nlohmann::json unsubscribe(Client& client);
@@ -136,10 +151,17 @@ class ControlServer {
   double last_frame_time_s_ = 0.0;       // servo_time_s of the last frame fetched (stream thread).
   double stray_pause_until_s_ = 0.0;     // Stream socket not read until then.
   std::size_t large_message_bytes_ = 0;  // Reserved by clients for messages being read.
+  LoadWorker<PreparedLoad> load_worker_;
+  bool load_left_running_ = false;
   std::thread thread_;
   std::thread stream_thread_;
   std::atomic<bool> quit_{false};
 };
+
+// At shutdown, how long a load on its way gets to reach its next stage; a
+// longer stage (building the Space of a large scene takes seconds) is left
+// behind, so shutdown never waits for a load longer than this.
+inline constexpr double kLoadStopWait_s = 0.1;
 
 // Unsent replies: over this a client is not read (it is not reading its
 // replies); over it for kBacklogCutOff_s, or over kMaxClientBacklog, it is cut off.

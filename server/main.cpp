@@ -139,6 +139,16 @@ int list_devices(const Options& options) {
 #endif
 }
 
+// The process's exit code once everything is wound up. A load left inside a
+// stage at shutdown (ControlServer::stop) still runs on its own thread, which
+// static destructors would pull the ground from under: exit without them.
+int exit_code(ControlServer* control, int code) {
+  if (control == nullptr || !control->load_left_running()) return code;
+  std::fflush(stdout);
+  std::fflush(stderr);
+  std::_Exit(code);
+}
+
 // After a signal, the loop gets its --stop-ramp and this much more to end (a
 // few ticks late at most); the rest of the process then this much to wind up.
 constexpr double kSignalLoopGrace_s = 0.2;
@@ -164,7 +174,7 @@ int wind_down_after_signal(Servo& servo, ControlServer* control, double stop_ram
     sleep_until(monotonic_now_s() + 0.001);
   if (done->load()) {
     wind_down.join();
-    return kExitOk;
+    return exit_code(control, kExitOk);
   }
   std::fprintf(stderr,
                "hapticut-servo: a thread did not finish within %g s of the signal (%s); exiting "
@@ -266,7 +276,7 @@ int run(const Options& options) {
   if (signalled) return wind_down_after_signal(servo_state, control.get(), options.stop_ramp_s);
   servo_state.stop();
   if (control) control->stop();
-  return kExitOk;
+  return exit_code(control.get(), kExitOk);
 }
 
 int run_main(int argc, char** argv) {

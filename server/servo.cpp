@@ -114,16 +114,46 @@ SessionConfig Servo::config_from_options() const {
 }
 
 void Servo::load(const SessionConfig& config) {
-  std::lock_guard<std::mutex> lock(mutex_);
+  begin_load();
+  PreparedLoad prepared;
+  try {
+    prepared = prepare_load(config, options_.record_buffer_s);
+  } catch (...) {
+    end_load();
+    throw;
+  }
+  install(std::move(prepared));
+}
+
+void Servo::begin_load() {
+  const std::lock_guard<std::mutex> lock(mutex_);
   if (shared_->running.load() || loop_thread_.joinable()) {
     throw CommandError("cannot load while running (stop first)");
   }
-  auto session = std::make_unique<Session>(config);  // Throws; the old session stays.
-  auto recorder = std::make_unique<Recorder>(session->recording_info(), session->rate_Hz(),
-                                             options_.record_buffer_s);
+  if (loading_) {
+    throw CommandError(
+        "another load is in progress (one at a time); send load again once it is answered "
+        "(status: loading)");
+  }
+  loading_ = true;
+}
+
+void Servo::end_load() {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  loading_ = false;
+}
+
+void Servo::install(PreparedLoad prepared) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  loading_ = false;
+  // begin_load refused a running servo and start refuses while loading, so
+  // the loop is not running: the swap is the one a load always made.
+  if (shared_->running.load() || loop_thread_.joinable()) {
+    throw CommandError("cannot load while running (stop first)");
+  }
   shared_->ring.store(nullptr);
-  session_ = std::move(session);
-  recorder_ = std::move(recorder);
+  session_ = std::move(prepared.session);
+  recorder_ = std::move(prepared.recorder);
   shared_->settings.publish(session_->runtime_settings());  // The scene's, until a "set".
   run_ended_.store(false);
   // The scene's stiffness above a device's limit: that blade runs at the limit
@@ -153,6 +183,9 @@ void Servo::load(const SessionConfig& config) {
 
 void Servo::start() {
   std::lock_guard<std::mutex> lock(mutex_);
+  if (loading_) {
+    throw CommandError("a load is in progress; start once it is answered (status: loading)");
+  }
   if (!session_) throw CommandError("no scene loaded (send \"load\" first)");
   if (loop_thread_.joinable()) throw CommandError("already running");
   LoopShared& s = *shared_;
@@ -306,6 +339,7 @@ nlohmann::json Servo::status() {
   out["state"] = state;
   out["scene"] = session_ ? session_->scene_label() : std::string();
   out["rate_Hz"] = session_ ? session_->rate_Hz() : 0.0;
+  out["loading"] = loading_;
   out["engaged"] = shared_->engaged.load();
   out["realtime"] = realtime_message_;
   RuntimeSettings settings;
@@ -446,54 +480,7 @@ nlohmann::json Servo::set_parameters(const ControlJson& message) {
   return {{"applied", applied}, {"note", "safety limits only lower the device's"}};
 }
 
-nlohmann::json Servo::load_command(const ControlJson& message) {
-  SessionConfig config = config_from_options();
-  config.scene_path.clear();
-  if (has_field(message, "path") && has_field(message, "scene")) {
-    throw CommandError("load takes \"path\" or \"scene\", not both");
-  }
-  if (has_field(message, "path")) {
-    config.scene_path = string_field(message, "path", kMaxPathBytes);
-  } else if (has_field(message, "scene")) {
-    if (!message.at("scene").is_object()) throw CommandError("scene: expected an object");
-    config.scene_json = message.at("scene").dump();
-  } else {
-    throw CommandError("load needs \"path\" or \"scene\"");
-  }
-  if (has_field(message, "devices")) {
-    const ControlJson& devices = message.at("devices");
-    if (!devices.is_array() || devices.size() > kMaxBlades) {
-      throw CommandError("devices: expected a list of at most " + std::to_string(kMaxBlades) +
-                         " --device texts");
-    }
-    config.devices.clear();
-    config.remote_bridge_allowed = false;  // A client's texts bind loopback only.
-    for (const ControlJson& d : devices) {
-      if (!d.is_string() || d.get_ref<const std::string&>().empty() ||
-          d.get_ref<const std::string&>().size() > kMaxNameBytes) {
-        throw CommandError("devices: expected strings of 1 to " + std::to_string(kMaxNameBytes) +
-                           " bytes");
-      }
-      config.devices.push_back(d.get<std::string>());
-    }
-  }
-  if (has_field(message, "rate_Hz")) {
-    config.rate_Hz = number_field(message, "rate_Hz", 1.0, kMaxRate_Hz);
-  }
-  if (has_field(message, "as_fast_as_possible")) {
-    config.as_fast_as_possible = boolean_field(message, "as_fast_as_possible");
-  }
-  try {
-    load(config);
-  } catch (const FileRefused& e) {
-    throw CommandError(std::string("scene: ") + e.what());
-  } catch (const SceneError& e) {
-    if (config.scene_path.empty()) throw;
-    // A file that is not a scene: say so, not what its "format" holds.
-    throw CommandError("scene: '" + config.scene_path + "': " +
-                       (e.field() == "/format" ? std::string("not a hapticut scene file")
-                                               : std::string(e.what())));
-  }
+nlohmann::json Servo::loaded_reply() {
   std::lock_guard<std::mutex> lock(mutex_);
   nlohmann::json blades = nlohmann::json::array();
   for (const Binding& b : session_->bindings()) {

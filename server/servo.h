@@ -16,6 +16,7 @@
 #include "recording/recorder.h"
 #include "servo_loop.h"
 #include "session.h"
+#include "session_load.h"
 
 namespace hapticut::servo {
 
@@ -27,9 +28,21 @@ class Servo {
   Servo& operator=(const Servo&) = delete;
 
   // Throws SceneError (scene) or DeviceError (bindings); the old session stays
-  // when the new one fails.
+  // when the new one fails. Reads and builds on the calling thread (the
+  // command line's scene); a client's `load` goes through the three steps below.
   void load(const SessionConfig& config);
   SessionConfig config_from_options() const;
+
+  // A client's load, built off the control thread (session_load.h):
+  // begin_load refuses while running or while another load is on its way
+  // (CommandError) and from then on `start` is refused; then either install
+  // (the prepared session replaces the old one, as load does) or end_load
+  // (it failed, or nobody waits for it: the old session stays).
+  void begin_load();
+  void install(PreparedLoad prepared);
+  void end_load();
+  // The reply to a `load` that succeeded: the blades, rate and sizes.
+  nlohmann::json loaded_reply();
   // Throws CommandError (nothing loaded, already running), DeviceError
   // (a device cannot start) or std::runtime_error (recording file).
   void start();
@@ -41,7 +54,6 @@ class Servo {
   // and returning the reply without "id"; the control server's table
   // (ControlServer::dispatch) names which message type calls which. Each
   // throws CommandError with the reason when it cannot be done.
-  nlohmann::json load_command(const ControlJson& message);
   nlohmann::json start_command();
   nlohmann::json stop_command();
   nlohmann::json engage_command(const ControlJson& message);
@@ -72,6 +84,7 @@ class Servo {
   std::atomic<bool> shutdown_{false};
   std::atomic<bool> quit_housekeeping_{false};
   std::atomic<bool> run_ended_{false};
+  bool loading_ = false;  // Between begin_load and install or end_load (under mutex_).
   std::string realtime_message_;
   std::array<std::array<std::uint64_t, kSafetyFlagCount>, kMaxBlades> reported_{};
   int runs_ = 0;

@@ -15,7 +15,7 @@ namespace hapticut::servo {
 
 namespace {
 
-Scene read_scene_source(const SessionConfig& config) {
+Scene read_scene_source(const SessionConfig& config, const std::function<void()>& between_stages) {
   if (config.scene) return *config.scene;
   if (!config.scene_json.empty()) {
     const std::vector<std::uint8_t> bytes(config.scene_json.begin(), config.scene_json.end());
@@ -28,6 +28,7 @@ Scene read_scene_source(const SessionConfig& config) {
   } catch (const FileRefused& e) {
     throw SceneError("(file)", e.what());
   }
+  between_stages();
   return parse_scene(bytes, encoding_for_path(config.scene_path));
 }
 
@@ -43,8 +44,9 @@ void bounds(const Scene& scene, Vec3& lo, Vec3& hi) {
 
 }  // namespace
 
-Session::Session(const SessionConfig& config) {
-  scene_ = read_scene_source(config);
+Session::Session(const SessionConfig& config, const std::function<void()>& between_stages) {
+  scene_ = read_scene_source(config, between_stages);
+  between_stages();
   scene_label_ = config.scene                ? std::string("(in memory)")
                  : config.scene_json.empty() ? config.scene_path
                                              : std::string("(inline)");
@@ -63,7 +65,9 @@ Session::Session(const SessionConfig& config) {
   } catch (const MeshError& e) {
     throw SceneError("/mesh/tets", e.what());
   }
+  between_stages();
   shading_ = std::make_shared<const ForceShading>(*space_);
+  between_stages();
 
   std::vector<DeviceSpec> specs;
   for (const std::string& text : config.devices) specs.push_back(parse_device_spec(text));
@@ -147,6 +151,7 @@ Session::Session(const SessionConfig& config) {
     }
     binding.snapshot = BladeTickSnapshot(blade_spec.points);
     bindings_.push_back(std::move(binding));
+    between_stages();
   }
   if (frame_bytes() > kMaxFrameBytes) {
     throw SceneError("/blades", "a stream frame of this scene's blades would be " +

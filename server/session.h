@@ -3,6 +3,7 @@
 // channel. Everything the tick touches is allocated here, before the run.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -68,7 +69,11 @@ struct Binding {
 class Session {
  public:
   // Throws SceneError for the scene, DeviceError for the bindings.
-  explicit Session(const SessionConfig& config);
+  // `between_stages` is called after reading, parsing, building the Space and
+  // the force shading, and after each blade's device: a load on a worker
+  // thread stops there when asked (it throws).
+  explicit Session(
+      const SessionConfig& config, const std::function<void()>& between_stages = [] {});
 
   const Scene& scene() const { return scene_; }
   const std::string& scene_label() const { return scene_label_; }

@@ -44,7 +44,8 @@ case "${1:-run}" in
       tests/python/test_servo_devices.py tests/python/test_servo_stiffness_limit.py
       tests/python/test_servo_hostile_client.py tests/python/test_servo_recording_end.py
       tests/python/test_servo_stall.py tests/python/test_servo_device_files.py
-      tests/python/test_servo_strict_protocol.py tests/python/test_servo_forcedimension.py)
+      tests/python/test_servo_strict_protocol.py tests/python/test_servo_forcedimension.py
+      tests/python/test_servo_load_in_background.py)
     reports="$PWD/build/tsan/reports"
     rm -rf "$reports"
     mkdir -p "$reports"
