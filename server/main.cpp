@@ -18,6 +18,7 @@
 #include "devices/bridge_device.h"
 #include "devices/device_limits_json.h"
 #include "devices/dhd_device.h"
+#include "devices/hd_device.h"
 #include "devices/hid_device.h"
 #endif
 #include "devices/sim_device.h"
@@ -84,31 +85,50 @@ std::vector<DeviceKindInfo> other_device_kinds() {
 }
 #endif
 
-// The listing's "forcedimension" object: whether the DHD library loaded (its
-// path, or why not), and the devices it sees with their bindings and limits.
-std::string with_dhd_listing(const std::string& listing_json, const DhdListing& dhd,
-                             double rate_Hz) {
+// A vendor library's object in the listing: whether it loaded (its path, or
+// why not), its enumeration error if any, and the devices it sees.
+nlohmann::json vendor_listing(bool found, const std::string& library, const std::string& error,
+                              nlohmann::json devices) {
+  return {{"library_found", found},
+          {"library", found ? nlohmann::json(library) : nlohmann::json(nullptr)},
+          {"error", found ? (error.empty() ? nlohmann::json(nullptr) : nlohmann::json(error))
+                          : nlohmann::json(library)},
+          {"devices", std::move(devices)}};
+}
+
+// A device row's limits, or its error.
+nlohmann::json device_row(nlohmann::json row, const std::string& error, const DeviceLimits& limits,
+                          double rate_Hz) {
+  if (error.empty()) {
+    row["limits"] = device_limits_json(limits, rate_Hz);
+    row["error"] = nullptr;
+  } else {
+    row["error"] = error;
+  }
+  return row;
+}
+
+// The listing's "forcedimension" and "openhaptics" objects: each vendor
+// library, and the devices it sees with their bindings and limits.
+std::string with_vendor_listings(const std::string& listing_json, const DhdListing& dhd,
+                                 const HdListing& hd, double rate_Hz) {
   nlohmann::json listing = nlohmann::json::parse(listing_json);
-  nlohmann::json devices = nlohmann::json::array();
+  nlohmann::json arms = nlohmann::json::array();
   for (const DhdDeviceRow& row : dhd.devices) {
     nlohmann::json device = {{"id", row.index}, {"binding", row.binding}};
     if (row.error.empty()) {
       device["system_type"] = row.system_type;
       device["model"] = row.model;
-      device["limits"] = device_limits_json(row.limits, rate_Hz);
-      device["error"] = nullptr;
-    } else {
-      device["error"] = row.error;
     }
-    devices.push_back(device);
+    arms.push_back(device_row(device, row.error, row.limits, rate_Hz));
   }
-  listing["forcedimension"] = {
-      {"library_found", dhd.library_found},
-      {"library", dhd.library_found ? nlohmann::json(dhd.library) : nlohmann::json(nullptr)},
-      {"error", dhd.library_found
-                    ? (dhd.error.empty() ? nlohmann::json(nullptr) : nlohmann::json(dhd.error))
-                    : nlohmann::json(dhd.library)},
-      {"devices", devices}};
+  listing["forcedimension"] = vendor_listing(dhd.library_found, dhd.library, dhd.error, arms);
+  nlohmann::json touches = nlohmann::json::array();
+  for (const HdDeviceRow& row : hd.devices) {
+    nlohmann::json device = {{"name", row.name}, {"binding", row.binding}};
+    touches.push_back(device_row(device, row.error, row.limits, rate_Hz));
+  }
+  listing["openhaptics"] = vendor_listing(hd.library_found, hd.library, "", touches);
   return listing.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 
@@ -121,11 +141,13 @@ int list_devices(const Options& options) {
     // The stiffness limits at --rate, else at a scene's default rate.
     const double rate_Hz = options.rate_Hz > 0.0 ? options.rate_Hz : Scene{}.servo_rate_Hz;
     const DhdListing dhd = list_dhd_devices();
+    const HdListing hd = list_hd_devices();
     const std::string text =
-        options.json ? with_dhd_listing(
+        options.json ? with_vendor_listings(
                            list_devices_json(options.profiles_dir, other_device_kinds(), rate_Hz),
-                           dhd, rate_Hz)
-                     : list_hid_devices_text(options.profiles_dir) + "\n" + format_dhd_listing(dhd);
+                           dhd, hd, rate_Hz)
+                     : list_hid_devices_text(options.profiles_dir) + "\n" +
+                           format_dhd_listing(dhd) + format_hd_listing(hd);
     std::printf("%s", text.c_str());
     return kExitOk;
   } catch (const std::exception& e) {

@@ -11,6 +11,7 @@
 #ifdef HAPTICUT_WITH_DEVICES
 #include "devices/bridge_device.h"
 #include "devices/dhd_device.h"
+#include "devices/hd_device.h"
 #include "devices/hid_device.h"
 #endif
 
@@ -57,6 +58,12 @@ std::unique_ptr<Device> make_forcedimension(const DeviceSpec& spec,
                                             const DeviceContext& /*context*/) {
   return as_device_error(spec, [&] { return make_dhd_device(spec.value, spec.options); });
 }
+
+std::unique_ptr<Device> make_openhaptics(const DeviceSpec& spec, const DeviceContext& context) {
+  // The scheduler's callback zeroes a loop force older than the servo's own watchdog.
+  return as_device_error(
+      spec, [&] { return make_hd_device(spec.value, spec.options, context.watchdog_s); });
+}
 #endif
 
 }  // namespace
@@ -71,6 +78,7 @@ const std::vector<DeviceKind>& device_kinds() {
       {"hid", kHidDeviceUsage, make_hid},
       {"bridge", kBridgeDeviceUsage, make_bridge},
       {"forcedimension", kDhdDeviceUsage, make_forcedimension},
+      {"openhaptics", kHdDeviceUsage, make_openhaptics},
 #endif
   };
   return kinds;

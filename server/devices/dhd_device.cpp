@@ -80,11 +80,7 @@ void DhdDevice::open() {
   }
   model_ = dhd_model(type);
   if (model_.system_type == 0) model_.system_type = type;
-  DeviceLimits device = dhd_model_limits(model_);
-  if (options_.max_force_N > 0.0) device.max_force_N = options_.max_force_N;
-  if (options_.max_stiffness_N_per_mm > 0.0) {
-    device.max_stiffness_N_per_mm = options_.max_stiffness_N_per_mm;
-  }
+  DeviceLimits device = with_arm_limit_options(dhd_model_limits(model_), options_);
   // A limit set in the device itself (its own tools, or another program) is kept: never above it.
   const double device_limit_N = dhd.get_max_force(id_);
   if (device_limit_N > 0.0 && device_limit_N < device.max_force_N) {
@@ -302,8 +298,9 @@ std::string format_dhd_listing(const DhdListing& listing) {
 }
 
 DhdDeviceOptions dhd_device_options(const std::string& bare_id, const DeviceOptions& options) {
-  check_device_options(options, "forcedimension",
-                       {"id", "scale", "offset", "max_force", "max_stiffness"});
+  std::vector<std::string> keys = arm_device_option_keys();
+  keys.insert(keys.begin(), "id");
+  check_device_options(options, "forcedimension", keys);
   DhdDeviceOptions out;
   std::string id = bare_id;
   const auto given = options.find("id");
@@ -323,29 +320,7 @@ DhdDeviceOptions dhd_device_options(const std::string& bare_id, const DeviceOpti
     }
     out.index = static_cast<int>(value);
   }
-  out.mapping.scale = device_option_number(options, "scale", 1.0, "forcedimension");
-  if (!(out.mapping.scale > 0.0) || out.mapping.scale > 100.0) {
-    throw std::invalid_argument("forcedimension: option 'scale' must be in (0, 100]");
-  }
-  const auto offset = options.find("offset");
-  if (offset != options.end()) {
-    double xyz[3] = {0, 0, 0};
-    char extra = 0;
-    if (std::sscanf(offset->second.c_str(), "%lf:%lf:%lf%c", &xyz[0], &xyz[1], &xyz[2], &extra) !=
-            3 ||
-        !std::isfinite(xyz[0]) || !std::isfinite(xyz[1]) || !std::isfinite(xyz[2])) {
-      throw std::invalid_argument("forcedimension: option 'offset=" + offset->second +
-                                  "' must be X:Y:Z in mm");
-    }
-    out.mapping.offset_mm = {xyz[0], xyz[1], xyz[2]};
-  }
-  out.max_force_N = device_option_number(options, "max_force", 0.0, "forcedimension");
-  out.max_stiffness_N_per_mm =
-      device_option_number(options, "max_stiffness", 0.0, "forcedimension");
-  if (out.max_force_N < 0.0 || out.max_stiffness_N_per_mm < 0.0 ||
-      !std::isfinite(out.max_force_N) || !std::isfinite(out.max_stiffness_N_per_mm)) {
-    throw std::invalid_argument("forcedimension: max_force and max_stiffness must be positive");
-  }
+  parse_arm_device_options(options, "forcedimension", out);
   return out;
 }
 

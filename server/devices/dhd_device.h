@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "devices/arm_device_options.h"
 #include "devices/arm_pose_mapping.h"
 #include "devices/device.h"
 #include "devices/device_options.h"
@@ -38,11 +39,9 @@ namespace hapticut::servo {
 // y away, z up): scene = (y, -x, z).
 inline constexpr Matrix3 kDhdToSceneAxes{{{0, 1, 0}, {-1, 0, 0}, {0, 0, 1}}};
 
-struct DhdDeviceOptions {
+struct DhdDeviceOptions : ArmDeviceOptions {
+  DhdDeviceOptions() { mapping.axes = kDhdToSceneAxes; }
   int index = 0;  // dhdOpenID's enumeration index (the ID in forcedimension:ID).
-  ArmPoseMappingSettings mapping{kDhdToSceneAxes, 1.0, {}};
-  double max_force_N = 0.0;             // > 0: instead of the model's default.
-  double max_stiffness_N_per_mm = 0.0;  // > 0: instead of the model's default.
 };
 
 struct DhdDeviceCounters {
