@@ -7,9 +7,11 @@
 # (tests/run_all.sh calls it).
 #
 # The Python tests: every servo test file that runs the loop, control/stream, recorder
-# and housekeeping threads (and the bridge device's receive thread, and the Force Dimension
+# and housekeeping threads (and the bridge device's receive thread, the Force Dimension
 # device's library calls from the tick and from reconnection, through the DHD stand-in built
-# here too, which test_servo_forcedimension.py finds beside the servo), about a minute
+# here too, which test_servo_forcedimension.py finds beside the servo, and the OpenHaptics
+# device's scheduler callback handing samples and forces to the loop, through the HD
+# stand-in's own scheduler thread, test_servo_openhaptics.py), about a minute
 # under TSan on 2 cores; left out: test_servo_layout.py (--print-layout, no thread runs),
 # test_servo_memory.py (its bounds are on the resident set, which TSan's shadow memory
 # multiplies) and test_servo_rightful_client.py (floods the control thread alone, whose
@@ -35,7 +37,7 @@ case "${1:-run}" in
       -DCMAKE_CXX_FLAGS="-fsanitize=thread -fno-omit-frame-pointer" \
       -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=thread" >/dev/null
     cmake --build build/tsan -j 2 --target hapticut-servo hapticut_servo_tests \
-      hapticut_dhd_standin
+      hapticut_dhd_standin hapticut_hd_standin
     ;;
   run)
     tests=(tests/python/test_servo_stream.py tests/python/test_servo_replay.py
@@ -45,7 +47,7 @@ case "${1:-run}" in
       tests/python/test_servo_hostile_client.py tests/python/test_servo_recording_end.py
       tests/python/test_servo_stall.py tests/python/test_servo_device_files.py
       tests/python/test_servo_strict_protocol.py tests/python/test_servo_forcedimension.py
-      tests/python/test_servo_load_in_background.py)
+      tests/python/test_servo_load_in_background.py tests/python/test_servo_openhaptics.py)
     reports="$PWD/build/tsan/reports"
     rm -rf "$reports"
     mkdir -p "$reports"

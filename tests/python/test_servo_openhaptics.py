@@ -1,0 +1,292 @@
+"""The openhaptics device kind through the real servo binary, with the OpenHaptics stand-in
+(server/devices/tests/hd_standin.h, built with the C++ tests: libHD's C symbols and its own
+scheduler thread at 1 kHz) loaded in place of 3D Systems' library through
+$HAPTICUT_OPENHAPTICS_LIB: a session clamped, recorded and replayed bit for bit, with the
+sample-to-force latency measured; an HD error mid-session (force zero in that frame, the
+device reopened, the force ramped back); the scheduler stalling; the errors of a missing
+library, no device, an uncalibrated device and one in use; `--list-devices`."""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hapticut.servo_layout import flag_bit
+from hd_standin_support import STANDIN_NAME, standin_library
+from servo_test_support import (
+    REPLAYED_BLOCK_FIELDS,
+    SPHERE,
+    ServoProcess,
+    bake,
+    connect,
+    independent_scene,
+    offline_check,
+    read_recording,
+    run_servo,
+)
+
+# Times a real servo's clock-paced threads: runs alone, never beside other tests.
+pytestmark = pytest.mark.serial
+
+EXIT_DEVICE = 4  # docs/servo.md
+MAX_FORCE_N = 0.5
+# Down from 10 mm above the sphere's centre to 10 mm below it over 1000 frames (OpenHaptics's
+# frame, mm: y is up), then held there, pushing.
+DESCENT = "from=0:10:0,to=0:-10:0,frames=1000"
+FORCE = "hdSetDoublev(FORCE)"
+TRANSFORM = "hdGetDoublev(TRANSFORM)"
+CONTINUOUS_FORCE = float(0x2604)  # HD_NOMINAL_MAX_CONTINUOUS_FORCE, as the record holds it
+
+
+@dataclass(frozen=True)
+class Call:
+    name: str
+    args: tuple[float, float, float]
+    frame: int
+    in_frame: bool
+    result: int
+
+
+@dataclass
+class Standin:
+    log: Path
+    monkeypatch: pytest.MonkeyPatch
+
+    def script(self, text: str) -> None:
+        self.monkeypatch.setenv("HAPTICUT_HD_STANDIN", text)
+
+    def calls(self) -> list[Call]:
+        out = []
+        for line in self.log.read_text().splitlines():
+            name, a, b, c, frame, in_frame, result = line.split()
+            args = (float(a), float(b), float(c))
+            out.append(Call(name, args, int(frame), in_frame == "1", int(result)))
+        return out
+
+
+@pytest.fixture
+def standin(monkeypatch, tmp_path) -> Standin:
+    log = tmp_path / "hd_calls.txt"
+    monkeypatch.setenv("HAPTICUT_OPENHAPTICS_LIB", str(standin_library()))
+    monkeypatch.setenv("HAPTICUT_HD_STANDIN_LOG", str(log))
+    monkeypatch.delenv("HAPTICUT_HD_STANDIN", raising=False)
+    return Standin(log, monkeypatch)
+
+
+def index_of(calls: list[Call], name: str, start: int = 0, a: float | None = None) -> int:
+    return next(
+        i
+        for i in range(start, len(calls))
+        if calls[i].name == name and (a is None or calls[i].args[0] == a)
+    )
+
+
+def scene_force(call: Call) -> tuple[float, float, float]:
+    """A force set in OpenHaptics's axes, in the scene's: scene = (x, -z, y)."""
+    x, y, z = call.args
+    return (x + 0.0, -z + 0.0, y + 0.0)  # + 0.0: -0.0 compares as 0.0 in a set of tuples
+
+
+def run_session(scene: Path, record: Path, until, timeout_s: float = 20.0) -> dict:
+    """The servo on openhaptics until `until(status)` holds; its last status."""
+    args = [str(scene), "--device", f"scalpel=openhaptics:max_force={MAX_FORCE_N}"]
+    args += ["--engage", "--ramp", "0.05", "--record", str(record)]
+    with ServoProcess(args) as servo:
+        client = connect(servo, ["scalpel"])
+        deadline = time.monotonic() + timeout_s
+        status = client.status()
+        while not until(status) and time.monotonic() < deadline:
+            time.sleep(0.05)
+            status = client.status()
+        client.close()
+        assert servo.stop() == 0
+    return status
+
+
+def counters(status: dict) -> dict:
+    return status["blades"][0]["device_counters"]
+
+
+def test_a_session_is_clamped_recorded_replayed_and_its_latency_measured(standin, tmp_path):
+    """The stylus drives the blade; each force the callback sets is in a frame, in the
+    device's axes, within the clamp, ramped in, and one the servo recorded; the force output
+    is enabled only after the limits are read; the recorded proxies equal an offline engine
+    run of the recorded poses, and a replay of the recording gives them again bit for bit.
+    Prints the sample-to-force latency the callback measured (not asserted)."""
+    standin.script(DESCENT)
+    scene = independent_scene(tmp_path / "sphere.hapticut.json")
+    record = tmp_path / "hd.rec"
+    status = run_session(scene, record, lambda s: counters(s).get("samples", 0) > 2000)
+    blade = status["blades"][0]
+    assert blade["kind"] == "openhaptics" and blade["passivity"] is True
+    assert blade["device_error"] == ""
+    found = counters(status)
+    assert found["faults"] == 0 and found["forces_written"] > 2000
+    print(
+        "\nsample to force through the OpenHaptics stand-in at 1 kHz: "
+        f"median {found['sample_to_force_ns_p50'] / 1e3:.0f} us, "
+        f"p99 {found['sample_to_force_ns_p99'] / 1e3:.0f} us "
+        f"({found['frames']} frames, {found['stale_force_frames']} zeroed as stale)"
+    )
+
+    calls = standin.calls()
+    limits = index_of(calls, "hdGetDoublev", a=CONTINUOUS_FORCE)
+    enable = index_of(calls, "hdEnable")
+    assert index_of(calls, "hdInitDevice") < limits < enable < index_of(calls, "hdStartScheduler")
+    forces = [c for c in calls if c.name == FORCE]
+    assert all(c.in_frame and c.result == 0 for c in forces), "a force set outside a frame"
+    assert forces[-1].args == (0.0, 0.0, 0.0)
+    tail = [
+        c.name for c in calls if c.name in ("hdUnschedule", "hdStopScheduler", "hdDisableDevice")
+    ]
+    assert tail[-3:] == ["hdUnschedule", "hdStopScheduler", "hdDisableDevice"]
+    magnitudes = np.array([np.linalg.norm(c.args) for c in forces])
+    assert 0.1 < magnitudes.max() <= MAX_FORCE_N + 1e-9
+
+    recording = read_recording(record)
+    block = recording.blade("scalpel")["block"]
+    recorded = {tuple(float(v) + 0.0 for v in f) for f in block["force_N"]}
+    pushed = [scene_force(c) for c in forces if any(c.args)]
+    assert len(pushed) > 500
+    assert all(f in recorded for f in pushed), "a force reached the arm that was not recorded"
+    assert block["ramp"][np.argmax(np.linalg.norm(block["force_N"], axis=1) > 0)] < 1.0
+    z = block["pose"][:, 2]
+    assert z.max() > 9.0 and z.min() < -9.0  # The descent, in mm.
+    engine = np.linalg.norm(block["engine_force_N"], axis=1)
+    assert engine.max() > MAX_FORCE_N, "the engine never asked for more than the clamp"
+    assert np.any(block["safety_flags"] & flag_bit("force_clamped"))
+    assert offline_check(scene, recording, "scalpel") > 500
+
+    replayed = tmp_path / "replayed.rec"
+    bake(scene, replayed, f"scalpel=replay:{record}")
+    again = read_recording(replayed).blade("scalpel")
+    n = len(recording)
+    original = recording.blade("scalpel")
+    for name in ("q", "p", "state"):
+        assert np.array_equal(original[name], again[name][:n]), name
+    for name in REPLAYED_BLOCK_FIELDS:
+        assert np.array_equal(original["block"][name], again["block"][name][:n]), name
+
+
+def test_an_hd_error_mid_session_zeroes_the_force_in_that_frame_and_ramps_back(standin, tmp_path):
+    """A failed read of the transform while pushing: a zero force in that same frame, the
+    device lost, nothing pushed until maintain() reopened it (limits read before the force
+    output is enabled again), then the force ramped back in."""
+    standin.script(f"{DESCENT},fail_frame_at=1500,fail_count=1")
+    scene = independent_scene(tmp_path / "sphere.hapticut.json")
+    record = tmp_path / "fault.rec"
+
+    def reopened_and_pushing(status: dict) -> bool:
+        return counters(status).get("reconnects", 0) >= 1 and counters(status)["samples"] > 2500
+
+    status = run_session(scene, record, reopened_and_pushing)
+    assert counters(status)["faults"] == 1 and counters(status)["reconnects"] == 1
+    assert status["blades"][0]["events"]["device_lost"] >= 1
+
+    calls = standin.calls()
+    failed = next(i for i, c in enumerate(calls) if c.name == TRANSFORM and c.result != 0)
+    zero = index_of(calls, FORCE, failed)
+    assert calls[zero].frame == calls[failed].frame and calls[zero].args == (0.0, 0.0, 0.0)
+    pushing = [c for c in calls[:failed] if c.name == FORCE][-1]
+    assert np.linalg.norm(pushing.args) > 0.05, "not pushing at the fault: proves nothing"
+    stopped = index_of(calls, "hdStopScheduler", zero)
+    reopened = index_of(calls, "hdInitDevice", stopped)
+    limits = index_of(calls, "hdGetDoublev", reopened, a=CONTINUOUS_FORCE)
+    enabled = index_of(calls, "hdEnable", limits)
+    assert stopped < index_of(calls, "hdDisableDevice", stopped) < reopened < limits < enabled
+    between = [c for c in calls[zero + 1 : enabled] if c.name == FORCE]
+    assert between == [], "the ended callback still set forces"
+
+    block = read_recording(record).blade("scalpel")["block"]
+    force = np.linalg.norm(block["force_N"], axis=1)
+    lost = np.nonzero(block["events"] & flag_bit("device_lost"))[0]
+    assert len(lost) == 1
+    k = int(lost[0])
+    assert force[k - 1] > 0.05 and force[k] == 0.0
+    back = k + int(np.argmax(block["device_status"][k:] != 2))
+    assert back > k and np.all(force[k:back] == 0.0)
+    assert block["ramp"][back] < 0.2
+    assert force[back:].max() > 0.05
+
+
+def test_a_stalled_scheduler_trips_the_servos_watchdog_and_the_force_ramps_back(standin, tmp_path):
+    """The device's scheduler stops for 300 ms while pushing: the loop sees no new sample,
+    its watchdog zeroes the force, and once frames come again the force ramps back."""
+    standin.script(f"{DESCENT},stall_at=1500,stall_ms=300")
+    scene = independent_scene(tmp_path / "sphere.hapticut.json")
+    record = tmp_path / "stall.rec"
+    status = run_session(scene, record, lambda s: counters(s).get("frames", 0) > 2500)
+    assert counters(status)["faults"] == 0
+    block = read_recording(record).blade("scalpel")["block"]
+    force = np.linalg.norm(block["force_N"], axis=1)
+    tripped = np.nonzero(block["events"] & flag_bit("watchdog"))[0]
+    assert len(tripped) >= 1
+    k = int(tripped[0])
+    assert force[k] == 0.0 and force[k - 120 : k - 100].max() > 0.05
+    assert force[k:].max() > 0.05, "the force never came back"
+    calls = standin.calls()
+    stalled = [c for c in calls if c.name == FORCE and c.frame == 1500]
+    assert stalled and all(c.in_frame for c in stalled)
+
+
+def test_a_clients_load_binds_the_device(standin):
+    standin.script(DESCENT)
+    with ServoProcess(["--device", "sim"]) as servo:
+        client = connect(servo)
+        loaded = client.load(SPHERE, devices=["openhaptics:max_force=0.5"])
+        assert loaded["blades"][0]["kind"] == "openhaptics"
+        client.start()
+        deadline = time.monotonic() + 20.0
+        while counters(client.status()).get("samples", 0) < 100 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        status = client.status()
+        client.close()
+        assert servo.stop() == 0
+    assert counters(status)["samples"] >= 100 and counters(status)["faults"] == 0
+
+
+@pytest.mark.parametrize(
+    ("script", "library", "message"),
+    [
+        (None, "/nonexistent/libHD.so.3.4", "HAPTICUT_OPENHAPTICS_LIB=/nonexistent/libHD.so.3.4"),
+        ("devices=0", None, "hdInitDevice failed: Communication error"),
+        ("init_error=0x301", None, "another program (or another servo) holds the device"),
+        ("calibration=manual", None, "not calibrated"),
+    ],
+)
+def test_no_library_no_device_uncalibrated_or_in_use_is_a_clear_device_error(
+    standin, script, library, message
+):
+    if script is not None:
+        standin.script(script)
+    if library is not None:
+        standin.monkeypatch.setenv("HAPTICUT_OPENHAPTICS_LIB", library)
+    result = run_servo(str(SPHERE), "--device", "scalpel=openhaptics", "--duration", "0.5")
+    assert result.returncode == EXIT_DEVICE, result.stderr
+    assert message in result.stderr
+    assert "scalpel" in result.stderr  # The binding is named.
+
+
+def test_list_devices_says_where_the_library_is_and_the_devices_limits(standin):
+    standin.script("continuous=0.88,stiffness=1.2")
+    result = run_servo("--list-devices", "--json", "--rate", "500")
+    assert result.returncode == 0, result.stderr
+    hd = json.loads(result.stdout)["openhaptics"]
+    assert hd["library_found"] is True and hd["library"].endswith(STANDIN_NAME)
+    assert [d["binding"] for d in hd["devices"]] == ["openhaptics"]
+    limits = hd["devices"][0]["limits"]
+    assert limits["has_force_output"] is True and limits["max_force_N"] == 0.88
+    assert limits["max_stiffness_N_per_mm_at_rate"] == 0.6
+    text = run_servo("--list-devices").stdout
+    assert STANDIN_NAME in text and "max continuous force 0.88 N" in text
+
+    standin.monkeypatch.setenv("HAPTICUT_OPENHAPTICS_LIB", "/nonexistent/libHD.so")
+    missing = run_servo("--list-devices", "--json")
+    assert missing.returncode == 0, missing.stderr
+    hd = json.loads(missing.stdout)["openhaptics"]
+    assert hd["library_found"] is False and hd["devices"] == []
+    assert "No such file" in hd["error"]  # dlerror()'s words
