@@ -1,13 +1,13 @@
 """The devices the session panel offers, from ``hapticut-servo --list-devices --json`` (run as a
 child process, at most ``LIST_TIMEOUT_S``), and the limits of the device a binding names.
 
-The listing (docs/devices.md) holds the HID devices hidapi finds with the profile each
-matches, the shipped profiles, the other kinds (sim, viewport, bridge) and the Force
-Dimension arms its library sees, each with its limits, the stiffness limit among them at
-the loop rate the listing was asked for (``--rate``: the servo's own rule, so the add-on has
-none). It is read on *Refresh devices* (and when a check needs limits at a rate the kept
-one was not read at) and kept; the panel's items are made from the kept listing only, so
-drawing never runs a process.
+The listing (docs/devices.md) holds the HID devices hidapi finds with the profile each matches, the
+shipped profiles, the other kinds (sim, viewport, bridge), the Force Dimension arms its library sees
+and the 3D Systems Touch OpenHaptics opens, each with its limits, the stiffness limit among them at
+the loop rate the listing was asked for (``--rate``: the servo's own rule, so the add-on has none).
+It is read on *Refresh devices* (and when a check needs limits at a rate the kept one was not read
+at) and kept; the panel's items are made from the kept listing only, so drawing never runs a
+process.
 No bpy here.
 """
 
@@ -31,7 +31,9 @@ class DeviceListError(RuntimeError):
 class Choice:
     """One item of the panel's Device menu."""
 
-    identifier: str  # VIEWPORT, SIM, BRIDGE, HID:<profile>, FORCEDIMENSION:<id>, BLADES, CUSTOM
+    # VIEWPORT, SIM, BRIDGE, HID:<profile>, FORCEDIMENSION:<id>, OPENHAPTICS[:<name>], BLADES,
+    # CUSTOM
+    identifier: str
     label: str
     description: str
     limits: dict = field(default_factory=dict)  # The listing's limits; {} unknown.
@@ -138,10 +140,21 @@ def forcedimension_devices(listing: dict) -> list[dict]:
     return [d for d in found.get("devices", []) if not d.get("error")]
 
 
+def openhaptics_devices(listing: dict) -> list[dict]:
+    """The 3D Systems devices OpenHaptics's library opened (a servo older than the kind, or a
+    library not found, lists none)."""
+    found = listing.get("openhaptics") or {}
+    return [d for d in found.get("devices", []) if not d.get("error")]
+
+
+def _openhaptics_identifier(device: dict) -> str:
+    return f"OPENHAPTICS:{device['name']}" if device.get("name") else "OPENHAPTICS"
+
+
 def choices(listing: dict | None) -> list[Choice]:
     """The Device menu: viewport, sim, bridge, the HID devices found (with their profile),
     the shipped profiles not found (for a device plugged in later), the Force Dimension arms
-    found, blade devices, custom."""
+    found, the 3D Systems devices OpenHaptics opens, blade devices, custom."""
     if listing is None:
         return [VIEWPORT, SIM, BRIDGE, BLADES, CUSTOM]
     kinds = {k["kind"]: k.get("limits", {}) for k in listing["kinds"]}
@@ -178,7 +191,17 @@ def choices(listing: dict | None) -> list[Choice]:
         )
         for d in forcedimension_devices(listing)
     ]
-    return [*fixed, *hid, *arms, BLADES, CUSTOM]
+    touches = [
+        Choice(
+            _openhaptics_identifier(d),
+            f"3D Systems Touch ({d['binding']})",
+            f"3D Systems Touch or Phantom through OpenHaptics: {d['binding']} "
+            f"({limits_text(d.get('limits', {}))})",
+            d.get("limits", {}),
+        )
+        for d in openhaptics_devices(listing)
+    ]
+    return [*fixed, *hid, *arms, *touches, BLADES, CUSTOM]
 
 
 def binding(identifier: str, bridge_port: int = BRIDGE_DEFAULT_PORT, custom: str = "") -> str:
@@ -193,6 +216,10 @@ def binding(identifier: str, bridge_port: int = BRIDGE_DEFAULT_PORT, custom: str
         return f"hid:{identifier[4:]}"
     if identifier.startswith("FORCEDIMENSION:"):
         return f"forcedimension:{identifier[len('FORCEDIMENSION:') :]}"
+    if identifier == "OPENHAPTICS":
+        return "openhaptics"
+    if identifier.startswith("OPENHAPTICS:"):
+        return f"openhaptics:{identifier[len('OPENHAPTICS:') :]}"
     if identifier == "CUSTOM":
         return custom
     return ""
@@ -235,18 +262,23 @@ LIMIT_OPTIONS = {
         ("max_force", "max_force_N"),
         ("max_stiffness", "max_stiffness_N_per_mm"),
     ),
+    "openhaptics": (
+        ("max_force", "max_force_N"),
+        ("max_stiffness", "max_stiffness_N_per_mm"),
+    ),
 }
+# The kinds whose scale= divides the stiffness limit (a positional arm's, docs/devices.md).
+SCALED_KINDS = ("forcedimension", "openhaptics")
 
 
 def limits_for(listing: dict, device_text: str) -> dict:
     """The limits of the device a ``--device`` text binds, with its limit options applied
-    (sim's max_force_N, max_torque_N_mm, max_stiffness_N_per_mm, the bridge's max_force,
-    max_torque, max_stiffness, a Force Dimension arm's max_force, max_stiffness); {} when
-    the listing does not know them (a profile file, replay, an unknown kind, an arm not
-    listed). An arm's scale= divides its stiffness limit (the servo's rule, docs/devices.md),
-    known here only as stated. A stiffness limit given in the text has no limit at the
-    listing's rate here (only the servo knows it): the servo's ``set`` refuses a stiffness
-    above it (docs/protocol.md)."""
+    (sim's max_force_N, max_torque_N_mm, max_stiffness_N_per_mm, the bridge's max_force, max_torque,
+    max_stiffness, a Force Dimension arm's or a Touch's max_force, max_stiffness); {} when the
+    listing does not know them (a profile file, replay, an unknown kind, an arm not listed). An
+    arm's scale= divides its stiffness limit (the servo's rule, docs/devices.md), known here only as
+    stated. A stiffness limit given in the text has no limit at the listing's rate here (only the
+    servo knows it): the servo's ``set`` refuses a stiffness above it (docs/protocol.md)."""
     kind, _, args = device_text.strip().partition(":")
     bare, options = _options(args)
     if kind == "hid":
@@ -261,6 +293,10 @@ def limits_for(listing: dict, device_text: str) -> dict:
         index = options.get("id", bare) or "0"
         arm = next((d for d in forcedimension_devices(listing) if str(d["id"]) == index), None)
         limits = dict(arm.get("limits", {})) if arm else {}
+    elif kind == "openhaptics":
+        name = options.get("device", bare)
+        touch = next((d for d in openhaptics_devices(listing) if d.get("name", "") == name), None)
+        limits = dict(touch.get("limits", {})) if touch else {}
     else:
         limits = dict(
             next((k.get("limits", {}) for k in listing["kinds"] if k["kind"] == kind), {})
@@ -271,7 +307,7 @@ def limits_for(listing: dict, device_text: str) -> dict:
             limits[name] = _number(options, key, limits.get(name, 0.0))
             if name == "max_stiffness_N_per_mm":
                 limits.pop(STIFFNESS_AT_RATE, None)
-    if kind == "forcedimension" and limits and "scale" in options:
+    if kind in SCALED_KINDS and limits and "scale" in options:
         scale = _number(options, "scale", 1.0)
         if scale > 0:
             limits["max_stiffness_N_per_mm"] = limits.get("max_stiffness_N_per_mm", 0.0) / scale

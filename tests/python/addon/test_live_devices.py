@@ -128,6 +128,35 @@ def test_a_force_dimension_arm_the_servo_sees_is_offered_and_bound(scene, monkey
     assert device_list.STIFFNESS_AT_RATE not in scaled
 
 
+def test_a_touch_openhaptics_opens_is_offered_and_bound(scene, monkeypatch):
+    """The Touch OpenHaptics's library opens (the HD stand-in in its place) is an item of the
+    menu with its limits, and makes the openhaptics binding; a binding's own limit options
+    and scale change the limits the panel checks against."""
+    from addon.live import device_list, live_link, live_properties
+    from tests.python.hd_standin_support import standin_library
+
+    monkeypatch.setenv("HAPTICUT_OPENHAPTICS_LIB", str(standin_library()))
+    monkeypatch.setenv("HAPTICUT_HD_STANDIN", "continuous=0.88,stiffness=1.2")
+    settings = scene.hapticut_live
+    assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
+    assert settings.device_error == ""
+    listing = device_list.cached()
+    touch = listing["openhaptics"]["devices"][0]
+    identifiers = [item[0] for item in live_properties.device_items(settings)]
+    assert identifiers[-3:] == ["OPENHAPTICS", "BLADES", "CUSTOM"]
+    settings.device_mode = "OPENHAPTICS"
+    chosen = live_properties.choice(settings)
+    assert chosen.label == "3D Systems Touch (openhaptics)"
+    assert chosen.limits == touch["limits"] and touch["limits"]["max_force_N"] == 0.88
+    assert live_link.devices(scene) == ["Knife=openhaptics"]
+    assert device_list.limits_for(listing, "openhaptics:max_force=0.5")["max_force_N"] == 0.5
+    assert device_list.limits_for(listing, "openhaptics:Other") == {}  # Not listed.
+    scaled = device_list.limits_for(listing, "openhaptics:scale=2")
+    assert scaled["max_stiffness_N_per_mm"] == 0.6
+    assert device_list.STIFFNESS_AT_RATE not in scaled
+
+
 def test_a_choice_saved_before_its_listing_stays_offered(scene):
     from addon.live import live_link, live_properties
 
