@@ -1,10 +1,11 @@
 // Device: what the servo loop reads a tool pose from and writes a force to.
 // One small interface for every backend (sim, replay, viewport, HID, UDP
-// bridge, Force Dimension, OpenHaptics), one file each in server/devices/. The loop calls read() and
-// write() once per tick on the real-time thread; they must not block,
-// allocate, lock or log. A backend that talks to hardware or a socket does
-// its I/O on its own thread at its own rate and hands the newest sample over
-// through a LatestValue (rt/latest_value.h); read() then only copies it.
+// bridge, Force Dimension, OpenHaptics), one file each in server/devices/.
+// The loop calls read() and write() once per tick on the real-time thread;
+// they must not block, allocate, lock or log. A backend that talks to
+// hardware or a socket does its I/O on its own thread at its own rate and
+// hands the newest sample over through a LatestValue (rt/latest_value.h);
+// read() then only copies it.
 // A vendor library that runs its own servicing thread and calls us back on
 // it (OpenHaptics's scheduler, hd_device.h) makes that callback the I/O thread.
 // The exception is a vendor library made to be called from the haptic loop
