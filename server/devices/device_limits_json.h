@@ -1,6 +1,6 @@
 // A device's limits as the listing's JSON object (--list-devices --json,
 // docs/devices.md): one writer for the HID profiles, the other kinds and the
-// Force Dimension devices.
+// vendor libraries' devices (Force Dimension, OpenHaptics).
 #pragma once
 
 #include <nlohmann/json.hpp>

@@ -2,9 +2,9 @@
 // OpenHaptics's HD library loaded at run time (hd_library.h).
 //
 // Threads. OpenHaptics services the device from its own scheduler thread
-// (about 1 kHz, started by hdStartScheduler); device state may be read and
-// forces set only inside a haptic frame on that thread. So the callback this
-// device schedules (hdScheduleAsynchronous) is its I/O thread in device.h's
+// (started by hdStartScheduler); device state may be read and forces set
+// only inside a haptic frame on that thread. So the callback this device
+// schedules (hdScheduleAsynchronous) is its I/O thread in device.h's
 // sense: each frame it reads the stylus's transform and buttons, publishes
 // them newest-wins (LatestValue), and sets the newest force the servo's loop
 // published. read() and write() on the loop's tick only copy through those
