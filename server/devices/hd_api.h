@@ -12,10 +12,10 @@
 //
 // The constants' values and the types: OpenHaptics's HD/hdDefines.h as
 // published in the public repository hhmai/PhantomAPI
-// (include/HD/hdDefines.h); HD_CALLBACK_DONE / HD_CALLBACK_CONTINUE,
-// HDSchedulerHandle and the callback's type from its HD/hdScheduler.h (the
-// same SDK's, copies of which are public beside it in OpenHaptics-based
-// projects).
+// (include/HD/hdDefines.h). HD_CALLBACK_DONE (0) / HD_CALLBACK_CONTINUE (1),
+// HDCallbackCode, HDSchedulerHandle and the callback's type are the SDK's
+// HD/hdScheduler.h's (its text as indexed publicly, without a repository we
+// could name), and the reference guide's "HDAPI Types" chapter.
 //
 // Units: mm, N, N/mm. The device's frame: x right, y up, z towards the user.
 // HD_CURRENT_TRANSFORM is a 4x4 matrix in column-major order (OpenGL's),
