@@ -158,6 +158,17 @@ TEST_F(HdDeviceTest, BadOptionsAreRefusedBeforeTheLibraryIsTouched) {
   EXPECT_TRUE(calls().empty());
 }
 
+TEST_F(HdDeviceTest, ANamedDeviceIsOpenedByItsNameTheDefaultByNone) {
+  configure_("");
+  make_hd_device("", {}, 0.1).reset();
+  EXPECT_EQ(calls()[static_cast<std::size_t>(first("hdInitDevice"))].a, 0.0);  // HD_DEFAULT_DEVICE
+  configure_("");
+  make_hd_device("", {{"device", "Right"}}, 0.1).reset();
+  EXPECT_EQ(calls()[static_cast<std::size_t>(first("hdInitDevice"))].a, 1.0);
+  EXPECT_THROW(make_hd_device("Left", {{"device", "Right"}}, 0.1), std::invalid_argument);
+  EXPECT_EQ(hd_device_options("Left", {}).name, "Left");
+}
+
 TEST_F(HdDeviceTest, ForceOutputIsEnabledOnlyAfterTheLimitsAreReadAndNeverSetOutsideAFrame) {
   std::unique_ptr<Device> device = make("");
   EXPECT_EQ(first("hdEnable"), -1) << "force enabled before start()";
