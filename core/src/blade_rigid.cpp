@@ -23,6 +23,7 @@
 //     or shortens the slide.
 // Force and torque are today's sums with q_i = x_i(ideal pose).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -53,6 +54,11 @@ constexpr double kLeastAdvance = 1e-9;
 constexpr double kSweptDeviation = 1e-4;
 // Linearised fits per round at most (free orientation).
 constexpr int kFitPasses = 4;
+// Contacts this far from the pose (a fraction of the blade's length, beyond
+// the tolerance) support it: friction holds them, a turn about them is free.
+constexpr double kSupportTouch = 1e-3;
+// Supports tried per end of the contacts when turning about them.
+constexpr int kSupportSearches = 3;
 
 // The contact for a stretch a -> b of the edge that enters rigid material
 // through plane `in` (at fraction s_in) and leaves it through plane `out` (at
@@ -165,7 +171,11 @@ bool Blade::probe_motion(const EdgePose& edge, double& advance, bool add_contact
       const SegmentProbe probe = probe_segment(space, a_tet, a, trial_points_[i], walls_[i]);
       if (probe.hit) {
         free = false;
-        advance = std::min(advance, from + (to - from) * probe.fraction);
+        const double at = from + (to - from) * probe.fraction;
+        if (at < advance) {
+          advance = at;
+          earliest_hit_fraction_ = fractions_[i];
+        }
         if (add_contacts && !probe.exhausted) {
           add_contact(fractions_[i], probe.contact, probe.wall_tet);
         }
@@ -223,7 +233,10 @@ bool Blade::sweep_stretches(const EdgePose& first, const EdgePose& last, double 
                       last.point(f0, length_mm_), last.point(f1, length_mm_), from, to, tolerance);
     if (!hit.hit) continue;
     free = false;
-    advance = std::min(advance, hit.motion);
+    if (hit.motion < advance) {
+      advance = hit.motion;
+      earliest_hit_fraction_ = f0 + hit.along * (f1 - f0);
+    }
     if (add_contacts) add_contact(f0 + hit.along * (f1 - f0), hit.contact, hit.wall_tet);
   }
   return free;
@@ -235,58 +248,148 @@ void Blade::accept_trial(const EdgePose& edge) {
   ideal_tets_.swap(trial_tets_);
 }
 
+void Blade::advance_verified(const EdgePose& trial, double advance) {
+  double fraction = advance;
+  for (int h = 0; h <= kMaxAdvanceHalvings && fraction > kLeastAdvance; ++h, fraction *= 0.5) {
+    const EdgePose part = interpolate_edge(ideal_edge_, trial, fraction, motion_pivot_, length_mm_);
+    double ignored = 1.0;
+    if (probe_motion(part, ignored, false)) {
+      accept_trial(part);
+      return;
+    }
+  }
+}
+
+double Blade::spring_energy() const {
+  double energy = 0.0;
+  for (std::size_t i = 0; i < proxies_.size(); ++i) {
+    energy += squared_norm(ideal_edge_.point(fractions_[i], length_mm_) - targets_[i]);
+  }
+  return energy;
+}
+
+void Blade::roll_on_support() {
+  if (orientation_ == BladeOrientation::Locked || proxies_.size() < 2 || !(length_mm_ > 0.0)) {
+    return;
+  }
+  // The support: the contacts nearest the pose (the fit leaves them a margin
+  // away, the walks' advance a little more; a sample may rest between two
+  // of the contacts' samples).
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const EdgeContact& c : contacts_.constraints()) {
+    nearest = std::min(nearest, c.plane.signed_distance(ideal_edge_.point(c.fraction, length_mm_)));
+  }
+  const double touching = nearest + 8.0 * space_->tolerance() + kSupportTouch * length_mm_;
+  double least = std::numeric_limits<double>::infinity();
+  double greatest = -least;
+  for (const EdgeContact& c : contacts_.constraints()) {
+    if (c.plane.signed_distance(ideal_edge_.point(c.fraction, length_mm_)) <= touching) {
+      least = std::min(least, c.fraction);
+      greatest = std::max(greatest, c.fraction);
+    }
+  }
+  if (!(least <= greatest)) return;
+  // Turned about either end of the support, the one the springs' torque
+  // favours first; a turn into the material about the wrong end is refused by
+  // the walks.
+  const EdgePose start = ideal_edge_;
+  const double start_energy = spring_energy();
+  const auto energy_about = [&](double pivot) {
+    ideal_edge_ = fit_edge_about(start, pivot, fractions_, targets_, length_mm_);
+    const double energy = spring_energy();
+    ideal_edge_ = start;
+    return energy;
+  };
+  std::array<double, 2> pivots{least, greatest};
+  const int candidates = greatest > least ? 2 : 1;
+  if (candidates == 2 && energy_about(greatest) < energy_about(least)) {
+    std::swap(pivots[0], pivots[1]);
+  }
+  const auto turned = [&] { return squared_norm(ideal_edge_.direction - start.direction) > 0.0; };
+  const double motion_pivot = motion_pivot_;
+  for (int c = 0; c < candidates && !turned(); ++c) {
+    double pivot = pivots[c];
+    // The contacts found are samples; where the edge rests between them the
+    // turn meets the material at once, and that meeting is the support.
+    for (int attempt = 0; attempt < kSupportSearches; ++attempt) {
+      const EdgePose rolled = fit_edge_about(start, pivot, fractions_, targets_, length_mm_);
+      ideal_edge_ = rolled;
+      const bool lower = spring_energy() < start_energy;
+      ideal_edge_ = start;
+      if (!lower) break;
+      motion_pivot_ = pivot;
+      double advance = 1.0;
+      if (probe_motion(rolled, advance, false)) {
+        accept_trial(rolled);
+        break;
+      }
+      const double met = earliest_hit_fraction_;
+      advance_verified(rolled, advance);
+      if (turned() || met == pivot) break;
+      pivot = met;
+    }
+  }
+  motion_pivot_ = motion_pivot;
+}
+
 void Blade::apply_friction(const EdgePose& start) {
   const std::size_t n = proxies_.size();
   const bool sliding = sliding_;
   sliding_ = false;
   if (contacts_.plane_count() == 0 || !(contact_static_friction_ > 0.0)) return;
-  // The springs' pull (over k) at the start and at the frictionless pose,
-  // where the contacts' reaction balances it: its direction is their normal.
-  Vec3 at_start;
+  // The springs' pull (over k) at the frictionless pose, where the contacts'
+  // reaction balances it: its direction is their normal.
   Vec3 at_end;
-  for (std::size_t i = 0; i < n; ++i) {
-    at_start += start_points_[i] - targets_[i];
-    at_end += ideal_points_[i] - targets_[i];
-  }
+  for (std::size_t i = 0; i < n; ++i) at_end += ideal_points_[i] - targets_[i];
   const double push_end = norm(at_end);
   if (!(push_end > space_->tolerance())) return;
   const Vec3 normal = at_end / push_end;
-  const double push = dot(at_start, normal);
-  if (!(push > 0.0)) return;  // Pulled off the contacts: no friction.
-  const double pull = norm(at_start - normal * push);
-  const double mu_static = contact_static_friction_;
-  const double mu_dynamic = std::min(contact_dynamic_friction_, mu_static);
-  const auto restore_start = [&] {
-    ideal_edge_ = start;
-    std::copy(start_points_.begin(), start_points_.end(), ideal_points_.begin());
-    std::copy(start_tets_.begin(), start_tets_.end(), ideal_tets_.begin());
+  const EdgePose frictionless = ideal_edge_;
+  std::copy(ideal_points_.begin(), ideal_points_.end(), held_points_.begin());
+  std::copy(ideal_tets_.begin(), ideal_tets_.end(), held_tets_.begin());
+  const auto keep_frictionless = [&] {
+    ideal_edge_ = frictionless;
+    std::copy(held_points_.begin(), held_points_.end(), ideal_points_.begin());
+    std::copy(held_tets_.begin(), held_tets_.end(), ideal_tets_.begin());
   };
-  if (pull <= (sliding ? mu_dynamic : mu_static) * push) {
-    restore_start();  // Stuck: inside the cone.
+  // The stuck pose: the tick's first, turned about its support as far as the
+  // springs turn it (friction holds the support, not a turn about it).
+  ideal_edge_ = start;
+  std::copy(start_points_.begin(), start_points_.end(), ideal_points_.begin());
+  std::copy(start_tets_.begin(), start_tets_.end(), ideal_tets_.begin());
+  roll_on_support();
+  const EdgePose stuck = ideal_edge_;
+  Vec3 at_stuck;
+  for (std::size_t i = 0; i < n; ++i) at_stuck += ideal_points_[i] - targets_[i];
+  // There the pull splits into a push along the normal and a pull across it.
+  const double push = dot(at_stuck, normal);
+  if (!(push > 0.0)) {  // Pulled off the contacts: no friction.
+    keep_frictionless();
     return;
   }
+  const double pull = norm(at_stuck - normal * push);
+  const double mu_static = contact_static_friction_;
+  const double mu_dynamic = std::min(contact_dynamic_friction_, mu_static);
+  if (pull <= (sliding ? mu_dynamic : mu_static) * push) return;  // Stuck: inside the cone.
   sliding_ = true;
   // Along the way to the frictionless pose the pull along the contacts falls
   // as (1 - s) pull and the push moves linearly to push_end: the fraction s
   // where pull = mu_d push.
   const double denominator = pull + mu_dynamic * (push_end - push);
   const double s = denominator > 0.0 ? (pull - mu_dynamic * push) / denominator : 1.0;
-  if (!(s < 1.0)) return;
+  if (!(s < 1.0)) {
+    keep_frictionless();
+    return;
+  }
   const EdgePose part =
-      interpolate_edge(start, ideal_edge_, std::max(s, 0.0), motion_pivot_, length_mm_);
-  const EdgePose frictionless = ideal_edge_;
-  std::copy(ideal_points_.begin(), ideal_points_.end(), held_points_.begin());
-  std::copy(ideal_tets_.begin(), ideal_tets_.end(), held_tets_.begin());
-  restore_start();
+      interpolate_edge(stuck, frictionless, std::max(s, 0.0), motion_pivot_, length_mm_);
   double ignored = 1.0;
   if (probe_motion(part, ignored, false)) {
     accept_trial(part);
     return;
   }
-  // The slide's pose is not verified from the start: the frictionless one is.
-  ideal_edge_ = frictionless;
-  std::copy(held_points_.begin(), held_points_.end(), ideal_points_.begin());
-  std::copy(held_tets_.begin(), held_tets_.end(), ideal_tets_.begin());
+  // The slide's pose is not verified from the stuck one: the frictionless one is.
+  keep_frictionless();
 }
 
 bool Blade::seat_at(const EdgePose& edge) {
@@ -396,16 +499,7 @@ BladeTick Blade::step_rigid(const Pose& pose, double dt_s, const RuntimeSettings
     }
     // As far as every walk got, verified; halved while the edge between the
     // points (or the arc the turn makes of a chord) still meets rigid material.
-    double fraction = advance;
-    for (int h = 0; h <= kMaxAdvanceHalvings && fraction > kLeastAdvance; ++h, fraction *= 0.5) {
-      const EdgePose part =
-          interpolate_edge(ideal_edge_, trial, fraction, motion_pivot_, length_mm_);
-      double ignored = 1.0;
-      if (probe_motion(part, ignored, false)) {
-        accept_trial(part);
-        break;
-      }
-    }
+    advance_verified(trial, advance);
     if (contacts_.changes() == known && advance <= kLeastAdvance) break;  // Nothing new to fit.
     // Sequential: each fit linearised about the last one's answer, so a
     // turn's second-order error (the edge keeps its length) is gone before

@@ -170,6 +170,22 @@ EdgeFitStatus fit_edge_constrained(const EdgePose& base, std::span<const double>
                                                : EdgeFitStatus::IterationLimit;
 }
 
+EdgePose fit_edge_about(const EdgePose& base, double pivot_fraction,
+                        std::span<const double> fractions, std::span<const Vec3> targets,
+                        double length_mm) {
+  // With x_i = c + (f_i - f_c) length u and |u| = 1, the error is least for u
+  // along sum (f_i - f_c)(t_i - c).
+  const Vec3 pivot = base.point(pivot_fraction, length_mm);
+  Vec3 spread;
+  for (std::size_t i = 0; i < fractions.size(); ++i) {
+    spread += (targets[i] - pivot) * (fractions[i] - pivot_fraction);
+  }
+  const double size = norm(spread);
+  if (!(length_mm > 0.0) || !(size > 1e-12 * length_mm) || !std::isfinite(size)) return base;
+  const Vec3 direction = spread / size;
+  return {pivot - direction * (pivot_fraction * length_mm), direction};
+}
+
 EdgePose interpolate_edge(const EdgePose& a, const EdgePose& b, double t, double pivot_fraction,
                           double length_mm) {
   const Vec3 from = a.point(pivot_fraction, length_mm);

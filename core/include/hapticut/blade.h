@@ -213,11 +213,20 @@ class Blade {
   void add_contact(double fraction, const Plane& plane, std::int32_t wall_tet);
   // Friction at the contacts (docs/decisions.md, "Friction at rigid
   // contacts"): from `start` (the tick's first verified pose, its points in
-  // start_points_) to the frictionless ideal pose, the blade sticks while the
-  // springs' pull along the contacts stays within the static coefficient
-  // times their push, else slides as far as leaves the pull at the dynamic
-  // coefficient times the push.
+  // start_points_), rolled on its support, to the frictionless ideal pose, the
+  // blade sticks while the springs' pull along the contacts stays within the
+  // static coefficient times their push, else slides as far as leaves the
+  // pull at the dynamic coefficient times the push.
   void apply_friction(const EdgePose& start);
+  // From the ideal pose toward `trial`, as far as the walks got (`advance`),
+  // halved while the motion still meets rigid material; verified.
+  void advance_verified(const EdgePose& trial, double advance);
+  // Sum |x_i - t_i|^2 over the points of the ideal edge.
+  double spring_energy() const;
+  // The ideal pose turned about the contacts it rests on, toward the springs'
+  // least energy, as far as the walks allow: a blade rolls on its support
+  // where friction holds the support still.
+  void roll_on_support();
   // Makes the probed edge (trial_*) the ideal one.
   void accept_trial(const EdgePose& edge);
   void update_ideal_pose(const Pose& device);
@@ -263,6 +272,9 @@ class Blade {
   // the middle, or once there are contacts the one the pose rests on, so a
   // turn does not swing the held sample into its plane.
   double motion_pivot_ = 0.5;
+  // The sample of the edge where the last probe_motion met rigid material
+  // first (a point, or a place between two).
+  double earliest_hit_fraction_ = 0.5;
   // Whether the Space has a material that holds a point back (drag, viscous,
   // membrane): only then do a rigid blade's points tick for their targets.
   bool resisting_materials_ = true;
