@@ -9,28 +9,6 @@
 
 namespace hapticut {
 
-Vec3 Quaternion::rotate(const Vec3& v) const {
-  const Vec3 u{x, y, z};
-  const Vec3 t = cross(u, v) * 2.0;
-  return v + t * w + cross(u, t);
-}
-
-bool Quaternion::valid() const {
-  const double n = std::sqrt(w * w + x * x + y * y + z * z);
-  return std::isfinite(n) && n >= kMinNorm;
-}
-
-Quaternion multiply(const Quaternion& a, const Quaternion& b) {
-  return {
-      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
-}
-
-Quaternion Quaternion::normalized() const {
-  const double n = std::sqrt(w * w + x * x + y * y + z * z);
-  return {w / n, x / n, y / n, z / n};
-}
-
 namespace {
 
 const char* pose_check_message(PoseCheck check) {

@@ -34,19 +34,6 @@ namespace hapticut {
 
 namespace {
 
-// The least rotation taking unit vector `from` onto unit vector `to`.
-Quaternion rotation_between(const Vec3& from, const Vec3& to) {
-  const double c = dot(from, to);
-  if (c < -1.0 + 1e-12) {
-    Vec3 across1;
-    Vec3 across2;
-    frame_across(from, across1, across2);
-    return {0.0, across1.x, across1.y, across1.z};  // Half a turn about an axis across.
-  }
-  const Vec3 axis = cross(from, to);
-  return Quaternion{1.0 + c, axis.x, axis.y, axis.z}.normalized();
-}
-
 // A pose's advance below this fraction is no advance.
 constexpr double kLeastAdvance = 1e-9;
 // The swept test cuts a turn into pieces whose chords every sample's arc

@@ -19,40 +19,13 @@
 #include "hapticut/edge_contact_set.h"
 #include "hapticut/edge_fit.h"
 #include "hapticut/force_shading.h"
+#include "hapticut/pose.h"
 #include "hapticut/proxy.h"
 #include "hapticut/scene.h"
 #include "hapticut/segment_probe.h"
 #include "hapticut/swept_stretch.h"
 
 namespace hapticut {
-
-// Quaternion (w, x, y, z) rotating the tool frame into the world; normalised
-// on use. One whose norm is not finite or below kMinNorm is refused.
-struct Quaternion {
-  double w = 1.0;
-  double x = 0.0;
-  double y = 0.0;
-  double z = 0.0;
-  static constexpr double kMinNorm = 1e-6;
-  Vec3 rotate(const Vec3& v) const;
-  // The unit quaternion; only for a valid() one.
-  Quaternion normalized() const;
-  bool valid() const;
-};
-
-// The rotation b, then a (the Hamilton product a b).
-Quaternion multiply(const Quaternion& a, const Quaternion& b);
-
-// q, or -q (the same rotation) when that is nearer `last` (a dot product < 0).
-inline Quaternion same_hemisphere(const Quaternion& q, const Quaternion& last) {
-  const double d = q.w * last.w + q.x * last.x + q.y * last.y + q.z * last.z;
-  return d < 0.0 ? Quaternion{-q.w, -q.x, -q.y, -q.z} : q;
-}
-
-struct Pose {
-  Vec3 position_mm;  // The tool origin in the world.
-  Quaternion rotation;
-};
 
 // Whether a pose can be used, and why not.
 enum class PoseCheck : std::uint8_t { Fine, NotFinite, ZeroRotation, OutOfWorkspace };

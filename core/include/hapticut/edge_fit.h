@@ -66,7 +66,4 @@ EdgePose fit_edge_about(const EdgePose& base, double pivot_fraction,
 EdgePose interpolate_edge(const EdgePose& a, const EdgePose& b, double t, double pivot_fraction,
                           double length_mm);
 
-// Two unit vectors across `direction`, with it a right-handed frame.
-void frame_across(const Vec3& direction, Vec3& across1, Vec3& across2);
-
 }  // namespace hapticut
