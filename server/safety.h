@@ -24,6 +24,7 @@
 
 #include "devices/device.h"
 #include "hapticut/parameter_range.h"
+#include "hapticut/scene.h"
 #include "passivity.h"
 
 namespace hapticut::servo {

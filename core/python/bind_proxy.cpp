@@ -14,6 +14,7 @@
 #include "arrays.h"
 #include "hapticut/blade.h"
 #include "hapticut/force_shading.h"
+#include "hapticut/parameter_range.h"
 #include "hapticut/proxy.h"
 
 namespace hapticut::python {
@@ -456,9 +457,11 @@ void bind_proxy(nb::module_& m) {
           },
           [](PyBlade& b, const std::string& orientation) {
             const auto busy = claim(b);
-            b.blade.set_orientation(orientation_from(orientation));
+            b.blade.set_orientation(orientation_from(orientation),
+                                    hapticut::setting_range::kRampTime.default_value);
           },
-          "A rigid blade's orientation, \"free\" or \"locked\"; from the next step on.")
+          "A rigid blade's orientation, \"free\" or \"locked\"; from the next step on, turned in "
+          "over the default ramp time (0.5 s) so the force does not jump.")
       .def_prop_ro(
           "ideal_pose",
           [](const PyBlade& b) {

@@ -9,28 +9,6 @@
 
 namespace hapticut {
 
-Vec3 Quaternion::rotate(const Vec3& v) const {
-  const Vec3 u{x, y, z};
-  const Vec3 t = cross(u, v) * 2.0;
-  return v + t * w + cross(u, t);
-}
-
-bool Quaternion::valid() const {
-  const double n = std::sqrt(w * w + x * x + y * y + z * z);
-  return std::isfinite(n) && n >= kMinNorm;
-}
-
-Quaternion multiply(const Quaternion& a, const Quaternion& b) {
-  return {
-      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
-}
-
-Quaternion Quaternion::normalized() const {
-  const double n = std::sqrt(w * w + x * x + y * y + z * z);
-  return {w / n, x / n, y / n, z / n};
-}
-
 namespace {
 
 const char* pose_check_message(PoseCheck check) {
@@ -115,7 +93,12 @@ Blade::Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
         std::any_of(space_->materials().begin(), space_->materials().end(), [](const Material& m) {
           return m.model != MaterialModel::Free && m.model != MaterialModel::Rigid;
         });
-    if (n > 1) rigid_edges_ = std::make_unique<const RigidSurfaceEdges>(*space_);
+    if (n > 1) {
+      rigid_edges_ = std::make_unique<const RigidSurfaceEdges>(*space_);
+      swept_candidates_.reserve(rigid_edges_->size());
+      active_candidates_.reserve(rigid_edges_->size());
+      stretch_candidates_.reserve(rigid_edges_->size());
+    }
   }
 }
 
@@ -159,10 +142,19 @@ void Blade::reset(const Pose& pose) {
   ideal_pose_ = device_pose_;
   if (coupling_ == BladeCoupling::Rigid) {
     sliding_ = false;
+    orientation_ramp_s_ = 0.0;
     std::fill(point_forces_.begin(), point_forces_.end(), Vec3{});
     seated_ = seat_at(device_edge());
     if (seated_) place_proxies_on_ideal(space_->runtime_settings());
   }
+}
+
+void Blade::set_orientation(BladeOrientation orientation, double ramp_s) {
+  if (orientation == orientation_) return;
+  orientation_ = orientation;
+  orientation_ramp_s_ = std::isfinite(ramp_s) && ramp_s > 0.0 ? ramp_s : 0.0;
+  orientation_ramp_elapsed_s_ = 0.0;
+  ramp_from_direction_ = ideal_edge_.direction;
 }
 
 Vec3 Blade::ideal_point(int i) const {

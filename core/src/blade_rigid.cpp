@@ -23,6 +23,7 @@
 //     or shortens the slide.
 // Force and torque are today's sums with q_i = x_i(ideal pose).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -33,19 +34,6 @@ namespace hapticut {
 
 namespace {
 
-// The least rotation taking unit vector `from` onto unit vector `to`.
-Quaternion rotation_between(const Vec3& from, const Vec3& to) {
-  const double c = dot(from, to);
-  if (c < -1.0 + 1e-12) {
-    Vec3 across1;
-    Vec3 across2;
-    frame_across(from, across1, across2);
-    return {0.0, across1.x, across1.y, across1.z};  // Half a turn about an axis across.
-  }
-  const Vec3 axis = cross(from, to);
-  return Quaternion{1.0 + c, axis.x, axis.y, axis.z}.normalized();
-}
-
 // A pose's advance below this fraction is no advance.
 constexpr double kLeastAdvance = 1e-9;
 // The swept test cuts a turn into pieces whose chords every sample's arc
@@ -53,6 +41,14 @@ constexpr double kLeastAdvance = 1e-9;
 constexpr double kSweptDeviation = 1e-4;
 // Linearised fits per round at most (free orientation).
 constexpr int kFitPasses = 4;
+// Contacts this far from the pose (a fraction of the blade's length, beyond
+// the tolerance) support it: friction holds them, a turn about them is free.
+constexpr double kSupportTouch = 1e-3;
+// Rigid surface edges per stretch, at most, that the swept test's broad
+// phase gathers for a piece of the motion.
+constexpr std::size_t kBroadPhasePerStretch = 4;
+// Supports tried per end of the contacts when turning about them.
+constexpr int kSupportSearches = 3;
 
 // The contact for a stretch a -> b of the edge that enters rigid material
 // through plane `in` (at fraction s_in) and leaves it through plane `out` (at
@@ -165,7 +161,11 @@ bool Blade::probe_motion(const EdgePose& edge, double& advance, bool add_contact
       const SegmentProbe probe = probe_segment(space, a_tet, a, trial_points_[i], walls_[i]);
       if (probe.hit) {
         free = false;
-        advance = std::min(advance, from + (to - from) * probe.fraction);
+        const double at = from + (to - from) * probe.fraction;
+        if (at < advance) {
+          advance = at;
+          earliest_hit_fraction_ = fractions_[i];
+        }
         if (add_contacts && !probe.exhausted) {
           add_contact(fractions_[i], probe.contact, probe.wall_tet);
         }
@@ -209,9 +209,8 @@ bool Blade::probe_motion(const EdgePose& edge, double& advance, bool add_contact
   return free;
 }
 
-bool Blade::sweep_stretches(const EdgePose& first, const EdgePose& last, double from, double to,
-                            double& advance, bool add_contacts) {
-  if (!rigid_edges_ || rigid_edges_->size() == 0) return true;
+bool Blade::sweep_stretches_each(const EdgePose& first, const EdgePose& last, double from,
+                                 double to, double& advance, bool add_contacts) {
   const std::size_t n = proxies_.size();
   const double tolerance = space_->tolerance();
   bool free = true;
@@ -223,7 +222,82 @@ bool Blade::sweep_stretches(const EdgePose& first, const EdgePose& last, double 
                       last.point(f0, length_mm_), last.point(f1, length_mm_), from, to, tolerance);
     if (!hit.hit) continue;
     free = false;
-    advance = std::min(advance, hit.motion);
+    if (hit.motion < advance) {
+      advance = hit.motion;
+      earliest_hit_fraction_ = f0 + hit.along * (f1 - f0);
+    }
+    if (add_contacts) add_contact(f0 + hit.along * (f1 - f0), hit.contact, hit.wall_tet);
+  }
+  return free;
+}
+
+bool Blade::sweep_stretches(const EdgePose& first, const EdgePose& last, double from, double to,
+                            double& advance, bool add_contacts) {
+  if (!rigid_edges_ || rigid_edges_->size() == 0) return true;
+  const std::size_t n = proxies_.size();
+  const double tolerance = space_->tolerance();
+  // The broad phase, once for the whole edge: the rigid surface's edges near
+  // its motion, each with the span along the first pose's edge where it can
+  // meet a stretch. A sample's move is a mix of the ends' moves, so it moves
+  // along the edge by at most the larger of them.
+  const Vec3 a0 = first.start_mm;
+  const Vec3 b0 = first.point(1.0, length_mm_);
+  const Vec3 a1 = last.start_mm;
+  const Vec3 b1 = last.point(1.0, length_mm_);
+  Aabb box;
+  box.grow(a0);
+  box.grow(b0);
+  box.grow(a1);
+  box.grow(b1);
+  const Vec3 pad{tolerance, tolerance, tolerance};
+  box.lo = box.lo - pad;
+  box.hi = box.hi + pad;
+  const double reach = std::max(norm(a1 - a0), norm(b1 - b0)) + tolerance;
+  // Where the surface's edges are small beside the motion (a fine mesh, a long
+  // step) the stretches' own queries find fewer: past a few per stretch the
+  // broad phase gives way to them.
+  const std::size_t most = kBroadPhasePerStretch * (n - 1);
+  swept_candidates_.clear();
+  const bool broad = rigid_edges_->tree().for_each_overlapping_while(box, [&](std::int32_t k) {
+    if (swept_candidates_.size() == most) return false;
+    const auto& segment = rigid_edges_->segment(k);
+    const double t0 = dot(segment[0] - a0, first.direction);
+    const double t1 = dot(segment[1] - a0, first.direction);
+    swept_candidates_.push_back({k, std::min(t0, t1) - reach, std::max(t0, t1) + reach});
+    return true;
+  });
+  if (!broad) return sweep_stretches_each(first, last, from, to, advance, add_contacts);
+  if (swept_candidates_.empty()) return true;
+  // Along the edge in order: a candidate joins when the stretches reach its
+  // span and leaves once they have passed it.
+  std::sort(swept_candidates_.begin(), swept_candidates_.end(),
+            [](const SweptCandidate& a, const SweptCandidate& b) {
+              return a.least_mm < b.least_mm || (a.least_mm == b.least_mm && a.edge < b.edge);
+            });
+  std::size_t next = 0;
+  active_candidates_.clear();
+  bool free = true;
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    const double f0 = fractions_[i];
+    const double f1 = fractions_[i + 1];
+    while (next < swept_candidates_.size() && swept_candidates_[next].least_mm <= f1 * length_mm_) {
+      active_candidates_.push_back(swept_candidates_[next++]);
+    }
+    std::erase_if(active_candidates_,
+                  [&](const SweptCandidate& c) { return c.greatest_mm < f0 * length_mm_; });
+    if (active_candidates_.empty()) continue;
+    stretch_candidates_.clear();
+    for (const SweptCandidate& c : active_candidates_) stretch_candidates_.push_back(c.edge);
+    const SweptHit hit =
+        sweep_stretch_among(*rigid_edges_, stretch_candidates_, first.point(f0, length_mm_),
+                            first.point(f1, length_mm_), last.point(f0, length_mm_),
+                            last.point(f1, length_mm_), from, to, tolerance);
+    if (!hit.hit) continue;
+    free = false;
+    if (hit.motion < advance) {
+      advance = hit.motion;
+      earliest_hit_fraction_ = f0 + hit.along * (f1 - f0);
+    }
     if (add_contacts) add_contact(f0 + hit.along * (f1 - f0), hit.contact, hit.wall_tet);
   }
   return free;
@@ -235,58 +309,148 @@ void Blade::accept_trial(const EdgePose& edge) {
   ideal_tets_.swap(trial_tets_);
 }
 
-void Blade::apply_friction(const EdgePose& start) {
+void Blade::advance_verified(const EdgePose& trial, double advance) {
+  double fraction = advance;
+  for (int h = 0; h <= kMaxAdvanceHalvings && fraction > kLeastAdvance; ++h, fraction *= 0.5) {
+    const EdgePose part = interpolate_edge(ideal_edge_, trial, fraction, motion_pivot_, length_mm_);
+    double ignored = 1.0;
+    if (probe_motion(part, ignored, false)) {
+      accept_trial(part);
+      return;
+    }
+  }
+}
+
+double Blade::spring_energy() const {
+  double energy = 0.0;
+  for (std::size_t i = 0; i < proxies_.size(); ++i) {
+    energy += squared_norm(ideal_edge_.point(fractions_[i], length_mm_) - targets_[i]);
+  }
+  return energy;
+}
+
+void Blade::roll_on_support(bool locked) {
+  if (locked || proxies_.size() < 2 || !(length_mm_ > 0.0)) {
+    return;
+  }
+  // The support: the contacts nearest the pose (the fit leaves them a margin
+  // away, the walks' advance a little more; a sample may rest between two
+  // of the contacts' samples).
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const EdgeContact& c : contacts_.constraints()) {
+    nearest = std::min(nearest, c.plane.signed_distance(ideal_edge_.point(c.fraction, length_mm_)));
+  }
+  const double touching = nearest + 8.0 * space_->tolerance() + kSupportTouch * length_mm_;
+  double least = std::numeric_limits<double>::infinity();
+  double greatest = -least;
+  for (const EdgeContact& c : contacts_.constraints()) {
+    if (c.plane.signed_distance(ideal_edge_.point(c.fraction, length_mm_)) <= touching) {
+      least = std::min(least, c.fraction);
+      greatest = std::max(greatest, c.fraction);
+    }
+  }
+  if (!(least <= greatest)) return;
+  // Turned about either end of the support, the one the springs' torque
+  // favours first; a turn into the material about the wrong end is refused by
+  // the walks.
+  const EdgePose start = ideal_edge_;
+  const double start_energy = spring_energy();
+  const auto energy_about = [&](double pivot) {
+    ideal_edge_ = fit_edge_about(start, pivot, fractions_, targets_, length_mm_);
+    const double energy = spring_energy();
+    ideal_edge_ = start;
+    return energy;
+  };
+  std::array<double, 2> pivots{least, greatest};
+  const int candidates = greatest > least ? 2 : 1;
+  if (candidates == 2 && energy_about(greatest) < energy_about(least)) {
+    std::swap(pivots[0], pivots[1]);
+  }
+  const auto turned = [&] { return squared_norm(ideal_edge_.direction - start.direction) > 0.0; };
+  const double motion_pivot = motion_pivot_;
+  for (int c = 0; c < candidates && !turned(); ++c) {
+    double pivot = pivots[c];
+    // The contacts found are samples; where the edge rests between them the
+    // turn meets the material at once, and that meeting is the support.
+    for (int attempt = 0; attempt < kSupportSearches; ++attempt) {
+      const EdgePose rolled = fit_edge_about(start, pivot, fractions_, targets_, length_mm_);
+      ideal_edge_ = rolled;
+      const bool lower = spring_energy() < start_energy;
+      ideal_edge_ = start;
+      if (!lower) break;
+      motion_pivot_ = pivot;
+      double advance = 1.0;
+      if (probe_motion(rolled, advance, false)) {
+        accept_trial(rolled);
+        break;
+      }
+      const double met = earliest_hit_fraction_;
+      advance_verified(rolled, advance);
+      if (turned() || met == pivot) break;
+      pivot = met;
+    }
+  }
+  motion_pivot_ = motion_pivot;
+}
+
+void Blade::apply_friction(const EdgePose& start, bool locked) {
   const std::size_t n = proxies_.size();
   const bool sliding = sliding_;
   sliding_ = false;
   if (contacts_.plane_count() == 0 || !(contact_static_friction_ > 0.0)) return;
-  // The springs' pull (over k) at the start and at the frictionless pose,
-  // where the contacts' reaction balances it: its direction is their normal.
-  Vec3 at_start;
+  // The springs' pull (over k) at the frictionless pose, where the contacts'
+  // reaction balances it: its direction is their normal.
   Vec3 at_end;
-  for (std::size_t i = 0; i < n; ++i) {
-    at_start += start_points_[i] - targets_[i];
-    at_end += ideal_points_[i] - targets_[i];
-  }
+  for (std::size_t i = 0; i < n; ++i) at_end += ideal_points_[i] - targets_[i];
   const double push_end = norm(at_end);
   if (!(push_end > space_->tolerance())) return;
   const Vec3 normal = at_end / push_end;
-  const double push = dot(at_start, normal);
-  if (!(push > 0.0)) return;  // Pulled off the contacts: no friction.
-  const double pull = norm(at_start - normal * push);
-  const double mu_static = contact_static_friction_;
-  const double mu_dynamic = std::min(contact_dynamic_friction_, mu_static);
-  const auto restore_start = [&] {
-    ideal_edge_ = start;
-    std::copy(start_points_.begin(), start_points_.end(), ideal_points_.begin());
-    std::copy(start_tets_.begin(), start_tets_.end(), ideal_tets_.begin());
+  const EdgePose frictionless = ideal_edge_;
+  std::copy(ideal_points_.begin(), ideal_points_.end(), held_points_.begin());
+  std::copy(ideal_tets_.begin(), ideal_tets_.end(), held_tets_.begin());
+  const auto keep_frictionless = [&] {
+    ideal_edge_ = frictionless;
+    std::copy(held_points_.begin(), held_points_.end(), ideal_points_.begin());
+    std::copy(held_tets_.begin(), held_tets_.end(), ideal_tets_.begin());
   };
-  if (pull <= (sliding ? mu_dynamic : mu_static) * push) {
-    restore_start();  // Stuck: inside the cone.
+  // The stuck pose: the tick's first, turned about its support as far as the
+  // springs turn it (friction holds the support, not a turn about it).
+  ideal_edge_ = start;
+  std::copy(start_points_.begin(), start_points_.end(), ideal_points_.begin());
+  std::copy(start_tets_.begin(), start_tets_.end(), ideal_tets_.begin());
+  roll_on_support(locked);
+  const EdgePose stuck = ideal_edge_;
+  Vec3 at_stuck;
+  for (std::size_t i = 0; i < n; ++i) at_stuck += ideal_points_[i] - targets_[i];
+  // There the pull splits into a push along the normal and a pull across it.
+  const double push = dot(at_stuck, normal);
+  if (!(push > 0.0)) {  // Pulled off the contacts: no friction.
+    keep_frictionless();
     return;
   }
+  const double pull = norm(at_stuck - normal * push);
+  const double mu_static = contact_static_friction_;
+  const double mu_dynamic = std::min(contact_dynamic_friction_, mu_static);
+  if (pull <= (sliding ? mu_dynamic : mu_static) * push) return;  // Stuck: inside the cone.
   sliding_ = true;
   // Along the way to the frictionless pose the pull along the contacts falls
   // as (1 - s) pull and the push moves linearly to push_end: the fraction s
   // where pull = mu_d push.
   const double denominator = pull + mu_dynamic * (push_end - push);
   const double s = denominator > 0.0 ? (pull - mu_dynamic * push) / denominator : 1.0;
-  if (!(s < 1.0)) return;
+  if (!(s < 1.0)) {
+    keep_frictionless();
+    return;
+  }
   const EdgePose part =
-      interpolate_edge(start, ideal_edge_, std::max(s, 0.0), motion_pivot_, length_mm_);
-  const EdgePose frictionless = ideal_edge_;
-  std::copy(ideal_points_.begin(), ideal_points_.end(), held_points_.begin());
-  std::copy(ideal_tets_.begin(), ideal_tets_.end(), held_tets_.begin());
-  restore_start();
+      interpolate_edge(stuck, frictionless, std::max(s, 0.0), motion_pivot_, length_mm_);
   double ignored = 1.0;
   if (probe_motion(part, ignored, false)) {
     accept_trial(part);
     return;
   }
-  // The slide's pose is not verified from the start: the frictionless one is.
-  ideal_edge_ = frictionless;
-  std::copy(held_points_.begin(), held_points_.end(), ideal_points_.begin());
-  std::copy(held_tets_.begin(), held_tets_.end(), ideal_tets_.begin());
+  // The slide's pose is not verified from the stuck one: the frictionless one is.
+  keep_frictionless();
 }
 
 bool Blade::seat_at(const EdgePose& edge) {
@@ -333,6 +497,61 @@ void Blade::place_proxies_on_ideal(const RuntimeSettings& settings) {
   }
 }
 
+bool Blade::solve_pose(bool lock, const Vec3& lock_direction, int& rounds) {
+  const std::span<const double> fractions(fractions_);
+  const std::span<const Vec3> targets(targets_);
+  EdgePose trial = fit_edge(fractions, targets, length_mm_, lock_direction, lock);
+  contacts_.clear();
+  motion_pivot_ = 0.5;
+  contact_static_friction_ = 0.0;
+  contact_dynamic_friction_ = 0.0;
+  // The fit keeps contacts this far on their free side: a rounding error of
+  // the pose then never reads as a step into the plane.
+  const double margin = 4.0 * space_->tolerance();
+  rounds = 0;
+  while (rounds < kMaxRigidRounds) {
+    ++rounds;
+    const int known = contacts_.changes();
+    double advance = 1.0;
+    if (probe_motion(trial, advance, true)) {
+      accept_trial(trial);
+      return true;
+    }
+    // As far as every walk got, verified; halved while the edge between the
+    // points (or the arc the turn makes of a chord) still meets rigid material.
+    advance_verified(trial, advance);
+    if (contacts_.changes() == known && advance <= kLeastAdvance) break;  // Nothing new to fit.
+    // Sequential: each fit linearised about the last one's answer, so a
+    // turn's second-order error (the edge keeps its length) is gone before
+    // the walks judge it.
+    EdgePose base = lock ? EdgePose{ideal_edge_.start_mm, lock_direction} : ideal_edge_;
+    const std::span<const EdgeContact> contacts = contacts_.constraints();
+    // The motion turns about the contact the pose is nearest to (the one it
+    // rests on): that sample then moves straight off its plane.
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const EdgeContact& c : contacts) {
+      const double d = c.plane.signed_distance(ideal_edge_.point(c.fraction, length_mm_));
+      if (d < nearest || (d == nearest && c.fraction < motion_pivot_)) {
+        nearest = d;
+        motion_pivot_ = c.fraction;
+      }
+    }
+    for (int pass = 0; pass < (lock ? 1 : kFitPasses); ++pass) {
+      if (fit_edge_constrained(base, fractions, targets, length_mm_, lock, contacts, margin,
+                               trial) == EdgeFitStatus::Infeasible) {
+        return false;
+      }
+      const bool settled =
+          squared_norm(trial.start_mm - base.start_mm) +
+              squared_norm(trial.direction - base.direction) * length_mm_ * length_mm_ <=
+          margin * margin;
+      base = trial;
+      if (settled) break;
+    }
+  }
+  return false;
+}
+
 BladeTick Blade::step_rigid(const Pose& pose, double dt_s, const RuntimeSettings& settings) {
   (void)pose;
   const std::size_t n = proxies_.size();
@@ -369,76 +588,35 @@ BladeTick Blade::step_rigid(const Pose& pose, double dt_s, const RuntimeSettings
     walls_[i] = membrane_walls(place, world_points_[i], ideal_tets_[i]);
   }
   // 2-4. The pose.
-  const bool lock = orientation_ == BladeOrientation::Locked;
-  const std::span<const double> fractions(fractions_);
-  const std::span<const Vec3> targets(targets_);
-  EdgePose trial = fit_edge(fractions, targets, length_mm_, device.direction, lock);
-  contacts_.clear();
-  motion_pivot_ = 0.5;
-  contact_static_friction_ = 0.0;
-  contact_dynamic_friction_ = 0.0;
+  bool lock = orientation_ == BladeOrientation::Locked;
   const EdgePose start = ideal_edge_;
   std::copy(ideal_points_.begin(), ideal_points_.end(), start_points_.begin());
   std::copy(ideal_tets_.begin(), ideal_tets_.end(), start_tets_.begin());
-  // The fit keeps contacts this far on their free side: a rounding error of
-  // the pose then never reads as a step into the plane.
-  const double margin = 4.0 * space_->tolerance();
-  bool resolved = false;
-  int rounds = 0;
-  while (rounds < kMaxRigidRounds) {
-    ++rounds;
-    const int known = contacts_.changes();
-    double advance = 1.0;
-    if (probe_motion(trial, advance, true)) {
-      accept_trial(trial);
-      resolved = true;
-      break;
+  // The direction a locked edge keeps: the device's. While a switch of
+  // orientation turns in, one moving from the edge's direction at the switch
+  // to the new rule's (the device's, or where this tick's free solve turns
+  // the edge), the pose solved about it as a locked one's.
+  Vec3 lock_direction = device.direction;
+  if (orientation_ramp_elapsed_s_ < orientation_ramp_s_) {
+    orientation_ramp_elapsed_s_ += dt_s;
+    const double s = std::min(1.0, orientation_ramp_elapsed_s_ / orientation_ramp_s_);
+    Vec3 goal = device.direction;
+    if (!lock) {
+      int ignored = 0;
+      solve_pose(false, device.direction, ignored);
+      goal = ideal_edge_.direction;
+      ideal_edge_ = start;
+      std::copy(start_points_.begin(), start_points_.end(), ideal_points_.begin());
+      std::copy(start_tets_.begin(), start_tets_.end(), ideal_tets_.begin());
     }
-    // As far as every walk got, verified; halved while the edge between the
-    // points (or the arc the turn makes of a chord) still meets rigid material.
-    double fraction = advance;
-    for (int h = 0; h <= kMaxAdvanceHalvings && fraction > kLeastAdvance; ++h, fraction *= 0.5) {
-      const EdgePose part =
-          interpolate_edge(ideal_edge_, trial, fraction, motion_pivot_, length_mm_);
-      double ignored = 1.0;
-      if (probe_motion(part, ignored, false)) {
-        accept_trial(part);
-        break;
-      }
-    }
-    if (contacts_.changes() == known && advance <= kLeastAdvance) break;  // Nothing new to fit.
-    // Sequential: each fit linearised about the last one's answer, so a
-    // turn's second-order error (the edge keeps its length) is gone before
-    // the walks judge it.
-    EdgePose base = lock ? EdgePose{ideal_edge_.start_mm, device.direction} : ideal_edge_;
-    const std::span<const EdgeContact> contacts = contacts_.constraints();
-    // The motion turns about the contact the pose is nearest to (the one it
-    // rests on): that sample then moves straight off its plane.
-    double nearest = std::numeric_limits<double>::infinity();
-    for (const EdgeContact& c : contacts) {
-      const double d = c.plane.signed_distance(ideal_edge_.point(c.fraction, length_mm_));
-      if (d < nearest || (d == nearest && c.fraction < motion_pivot_)) {
-        nearest = d;
-        motion_pivot_ = c.fraction;
-      }
-    }
-    bool feasible = true;
-    for (int pass = 0; pass < (lock ? 1 : kFitPasses); ++pass) {
-      if (fit_edge_constrained(base, fractions, targets, length_mm_, lock, contacts, margin,
-                               trial) == EdgeFitStatus::Infeasible) {
-        feasible = false;
-        break;
-      }
-      const bool settled =
-          squared_norm(trial.start_mm - base.start_mm) +
-              squared_norm(trial.direction - base.direction) * length_mm_ * length_mm_ <=
-          margin * margin;
-      base = trial;
-      if (settled) break;
-    }
-    if (!feasible) break;
+    const Vec3 mixed = ramp_from_direction_ + (goal - ramp_from_direction_) * s;
+    const double size = norm(mixed);
+    lock_direction = size > 1e-9 ? mixed / size : goal;
+    lock = true;
   }
-  apply_friction(start);
+  int rounds = 0;
+  const bool resolved = solve_pose(lock, lock_direction, rounds);
+  apply_friction(start, lock);
   update_ideal_pose(device_pose_);
   place_proxies_on_ideal(settings);
   Vec3 force;

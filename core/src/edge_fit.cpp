@@ -53,18 +53,6 @@ Vector backward(const Matrix& l, const Vector& v, int n) {
 
 }  // namespace
 
-void frame_across(const Vec3& direction, Vec3& across1, Vec3& across2) {
-  // The world axis least along the direction gives a well-conditioned cross product.
-  const double ax = std::abs(direction.x);
-  const double ay = std::abs(direction.y);
-  const double az = std::abs(direction.z);
-  const Vec3 axis =
-      ax <= ay && ax <= az ? Vec3{1, 0, 0} : (ay <= az ? Vec3{0, 1, 0} : Vec3{0, 0, 1});
-  across1 = cross(direction, axis);
-  across1 = across1 / norm(across1);
-  across2 = cross(direction, across1);
-}
-
 EdgePose fit_edge(std::span<const double> fractions, std::span<const Vec3> targets,
                   double length_mm, const Vec3& fallback, bool lock_direction) {
   const std::size_t n = fractions.size();
@@ -168,6 +156,22 @@ EdgeFitStatus fit_edge_constrained(const EdgePose& base, std::span<const double>
   }
   return status == LeastDistanceStatus::Solved ? EdgeFitStatus::Solved
                                                : EdgeFitStatus::IterationLimit;
+}
+
+EdgePose fit_edge_about(const EdgePose& base, double pivot_fraction,
+                        std::span<const double> fractions, std::span<const Vec3> targets,
+                        double length_mm) {
+  // With x_i = c + (f_i - f_c) length u and |u| = 1, the error is least for u
+  // along sum (f_i - f_c)(t_i - c).
+  const Vec3 pivot = base.point(pivot_fraction, length_mm);
+  Vec3 spread;
+  for (std::size_t i = 0; i < fractions.size(); ++i) {
+    spread += (targets[i] - pivot) * (fractions[i] - pivot_fraction);
+  }
+  const double size = norm(spread);
+  if (!(length_mm > 0.0) || !(size > 1e-12 * length_mm) || !std::isfinite(size)) return base;
+  const Vec3 direction = spread / size;
+  return {pivot - direction * (pivot_fraction * length_mm), direction};
 }
 
 EdgePose interpolate_edge(const EdgePose& a, const EdgePose& b, double t, double pivot_fraction,

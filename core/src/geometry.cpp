@@ -136,4 +136,16 @@ ClippedSegment clip_far_segment_to_box(const Vec3& a, const Vec3& b, const Aabb&
   return clipped;
 }
 
+void frame_across(const Vec3& direction, Vec3& across1, Vec3& across2) {
+  // The world axis least along the direction gives a well-conditioned cross product.
+  const double ax = std::abs(direction.x);
+  const double ay = std::abs(direction.y);
+  const double az = std::abs(direction.z);
+  const Vec3 axis =
+      ax <= ay && ax <= az ? Vec3{1, 0, 0} : (ay <= az ? Vec3{0, 1, 0} : Vec3{0, 0, 1});
+  across1 = cross(direction, axis);
+  across1 = across1 / norm(across1);
+  across2 = cross(direction, across1);
+}
+
 }  // namespace hapticut

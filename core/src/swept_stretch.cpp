@@ -84,46 +84,62 @@ bool segment_crosses_triangle(const Vec3& p, const Vec3& q, const Vec3& v0, cons
 
 }  // namespace
 
-SweptHit sweep_stretch(const RigidSurfaceEdges& edges, const Vec3& a0, const Vec3& b0,
-                       const Vec3& a1, const Vec3& b1, double motion_from, double motion_to,
-                       double tolerance_mm) {
-  SweptHit best;
-  Aabb box;
-  box.grow(a0);
-  box.grow(b0);
-  box.grow(a1);
-  box.grow(b1);
-  const Vec3 pad{tolerance_mm, tolerance_mm, tolerance_mm};
-  box.lo = box.lo - pad;
-  box.hi = box.hi + pad;
-  edges.tree().for_each_overlapping(box, [&](std::int32_t k) {
-    const auto& seg = edges.segment(k);
+namespace {
+
+// One stretch's motion tested edge by edge; keeps the earliest crossing.
+class StretchSweep {
+ public:
+  StretchSweep(const RigidSurfaceEdges& edges, const Vec3& a0, const Vec3& b0, const Vec3& a1,
+               const Vec3& b1, double tolerance_mm)
+      : edges_(edges),
+        a0_(a0),
+        b0_(b0),
+        a1_(a1),
+        b1_(b1),
+        tolerance_(tolerance_mm),
+        // Each triangle's plane, once: an edge with both ends strictly on one
+        // side of it cannot cross it (most edges near a patch that slides
+        // over the surface lie under it).
+        n1_(cross(b0 - a0, b1 - a0)),
+        n2_(cross(b1 - a0, a1 - a0)) {}
+
+  Aabb box() const {
+    Aabb box;
+    box.grow(a0_);
+    box.grow(b0_);
+    box.grow(a1_);
+    box.grow(b1_);
+    const Vec3 pad{tolerance_, tolerance_, tolerance_};
+    box.lo = box.lo - pad;
+    box.hi = box.hi + pad;
+    return box;
+  }
+
+  void consider(std::int32_t k) {
+    const auto& seg = edges_.segment(k);
+    const bool off1 = one_side(n1_, seg[0], seg[1]);
+    const bool off2 = one_side(n2_, seg[0], seg[1]);
+    if (off1 && off2) return;
     // The patch's (along, motion) at a crossing: triangle a0 b0 b1 holds
     // (0,0), (1,0), (1,1); triangle a0 b1 a1 holds (0,0), (1,1), (0,1).
     double u = 0.0;
     double v = 0.0;
     double along = 0.0;
     double motion = 0.0;
-    if (segment_crosses_triangle(seg[0], seg[1], a0, b0, b1, u, v)) {
+    if (!off1 && segment_crosses_triangle(seg[0], seg[1], a0_, b0_, b1_, u, v)) {
       along = u + v;
       motion = v;
-    } else if (segment_crosses_triangle(seg[0], seg[1], a0, b1, a1, u, v)) {
+    } else if (!off2 && segment_crosses_triangle(seg[0], seg[1], a0_, b1_, a1_, u, v)) {
       along = u;
       motion = u + v;
     } else {
       return;
     }
-    // The earliest crossing; of crossings at one motion, the one nearest the
-    // stretch's start. Ties (edges meeting at a vertex) are settled after the
-    // plane is known, not by the tree's order, which follows the tets'.
-    if (best.hit && (motion > best.motion || (motion == best.motion && along > best.along))) {
-      return;
-    }
     // The stretch's sample there, at the start and as it moves.
-    const Vec3 start = a0 + (b0 - a0) * along;
-    const Vec3 moved = (a1 + (b1 - a1) * along) - start;
+    const Vec3 start = a0_ + (b0_ - a0_) * along;
+    const Vec3 moved = (a1_ + (b1_ - a1_) * along) - start;
     const Vec3 edge = seg[1] - seg[0];
-    const Vec3 stretch = (b0 - a0) + ((b1 - a1) - (b0 - a0)) * motion;
+    const Vec3 stretch = (b0_ - a0_) + ((b1_ - a1_) - (b0_ - a0_)) * motion;
     Vec3 normal = cross(edge, stretch);
     double size = norm(normal);
     if (!(size > 1e-9 * norm(edge) * norm(stretch))) {
@@ -135,24 +151,82 @@ SweptHit sweep_stretch(const RigidSurfaceEdges& edges, const Vec3& a0, const Vec
     }
     normal = normal / size;
     std::int32_t rigid_tet = kNoTet;
-    const int side = edges.material_side(k, normal, tolerance_mm, rigid_tet);
+    const int side = edges_.material_side(k, normal, tolerance_, rigid_tet);
     if (side == 0) return;
     if (side > 0) normal = -normal;
     const Plane plane{normal, dot(normal, seg[0])};
     // Only a stretch that goes into the material's side is stopped.
-    if (plane.signed_distance(start + moved) > -tolerance_mm) return;
-    if (best.hit && motion == best.motion && along == best.along &&
-        !plane_before(plane, best.contact)) {
+    const double from_plane = plane.signed_distance(start);
+    const double to_plane = plane.signed_distance(start + moved);
+    if (to_plane > -tolerance_) return;
+    // The sample moves on a straight line, so it reaches the plane (where it
+    // meets the edge) at one motion: the patch's triangles only approximate
+    // where, and badly near an end that hardly moves (a turn about it).
+    motion = from_plane <= 0.0 ? 0.0 : std::min(motion, from_plane / (from_plane - to_plane));
+    // The earliest crossing; of crossings at one motion, the one nearest the
+    // stretch's start, then the plane first in plane_before's order (not the
+    // tree's order, which follows the tets').
+    if (best_.hit && (motion > best_.motion || (motion == best_.motion && along > best_.along))) {
       return;
     }
-    best.hit = true;
-    best.motion = motion;
-    best.along = along;
-    best.contact = plane;
-    best.wall_tet = rigid_tet;
-  });
-  if (best.hit) best.motion = motion_from + (motion_to - motion_from) * best.motion;
-  return best;
+    if (best_.hit && motion == best_.motion && along == best_.along &&
+        !plane_before(plane, best_.contact)) {
+      return;
+    }
+    best_.hit = true;
+    best_.motion = motion;
+    best_.along = along;
+    best_.contact = plane;
+    best_.wall_tet = rigid_tet;
+  }
+
+  SweptHit result(double motion_from, double motion_to) const {
+    SweptHit out = best_;
+    if (out.hit) out.motion = motion_from + (motion_to - motion_from) * out.motion;
+    return out;
+  }
+
+ private:
+  bool one_side(const Vec3& normal, const Vec3& p, const Vec3& q) const {
+    const double dp = dot(normal, p - a0_);
+    const double dq = dot(normal, q - a0_);
+    return (dp > 0.0 && dq > 0.0) || (dp < 0.0 && dq < 0.0);
+  }
+
+  const RigidSurfaceEdges& edges_;
+  Vec3 a0_;
+  Vec3 b0_;
+  Vec3 a1_;
+  Vec3 b1_;
+  double tolerance_;
+  Vec3 n1_;
+  Vec3 n2_;
+  SweptHit best_;
+};
+
+}  // namespace
+
+SweptHit sweep_stretch(const RigidSurfaceEdges& edges, const Vec3& a0, const Vec3& b0,
+                       const Vec3& a1, const Vec3& b1, double motion_from, double motion_to,
+                       double tolerance_mm) {
+  StretchSweep sweep(edges, a0, b0, a1, b1, tolerance_mm);
+  edges.tree().for_each_overlapping(sweep.box(), [&](std::int32_t k) { sweep.consider(k); });
+  return sweep.result(motion_from, motion_to);
+}
+
+SweptHit sweep_stretch_among(const RigidSurfaceEdges& edges,
+                             std::span<const std::int32_t> candidates, const Vec3& a0,
+                             const Vec3& b0, const Vec3& a1, const Vec3& b1, double motion_from,
+                             double motion_to, double tolerance_mm) {
+  StretchSweep sweep(edges, a0, b0, a1, b1, tolerance_mm);
+  const Aabb box = sweep.box();
+  for (const std::int32_t k : candidates) {
+    Aabb edge;
+    edge.grow(edges.segment(k)[0]);
+    edge.grow(edges.segment(k)[1]);
+    if (edge.overlaps(box)) sweep.consider(k);
+  }
+  return sweep.result(motion_from, motion_to);
 }
 
 int swept_pieces(double turn_rad, double length_mm, double deviation_mm) {

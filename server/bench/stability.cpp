@@ -8,7 +8,7 @@
 #include <stdexcept>
 
 #include "devices/virtual_hand.h"
-#include "hapticut/proxy.h"
+#include "hapticut/blade.h"
 #include "hapticut/reference_meshes.h"
 #include "hapticut/space.h"
 #include "safety.h"
@@ -21,11 +21,13 @@ constexpr double kStartHeight_mm = 10.0;
 constexpr double kPressDepth_mm = -15.0;  // Where the hand aims below the bone's surface (z = 0).
 constexpr double kPressSpeed_mm_per_s = 60.0;
 
+constexpr double kBladeHalfLength_mm = 20.0;
+
 // A block of bone under z = 0: every tet rigid.
 std::shared_ptr<const Space> bone_block(const StabilityCase& c) {
   const MeshData block = grid_mesh({-30.0, 0.0, 30.0}, {-30.0, 0.0, 30.0}, {-30.0, 0.0});
   EngineSettings settings;
-  settings.stiffness_N_per_mm = c.stiffness_N_per_mm;
+  settings.stiffness_N_per_mm = point_stiffness_N_per_mm(c);
   settings.servo_rate_Hz = c.servo_rate_Hz;
   Material bone{"bone", MaterialModel::Rigid};
   return Space::create(
@@ -40,11 +42,21 @@ Vec3 hand_target(double t_s) {
 
 }  // namespace
 
+double point_stiffness_N_per_mm(const StabilityCase& c) {
+  if (c.points < 1) throw std::invalid_argument("a blade has at least 1 point");
+  return c.coupling == BladeCoupling::Rigid ? c.stiffness_N_per_mm / c.points
+                                            : c.stiffness_N_per_mm;
+}
+
 StabilityResult run_stability_case(const StabilityCase& c) {
   const auto space = bone_block(c);
-  Proxy proxy(space);
+  BladeSpec spec{
+      "bench", {-kBladeHalfLength_mm, 0.0, 0.0}, {kBladeHalfLength_mm, 0.0, 0.0}, c.points};
+  if (c.points == 1) spec.end_mm = spec.start_mm = {};
+  spec.coupling = c.coupling;
+  Blade blade(space, spec);
   const Vec3 start{0.0, 0.0, kStartHeight_mm};
-  proxy.reset(start);
+  blade.reset({start, {}});
   VirtualHand hand;
   hand.reset(start);
 
@@ -70,10 +82,10 @@ StabilityResult run_stability_case(const StabilityCase& c) {
     if (i % substeps_per_tick == 0) {
       // The servo sees the hand as it was a link delay ago.
       const Vec3 seen = history[static_cast<std::size_t>(std::max(0, i - delay_substeps))];
-      proxy.step(seen, tick_s);
+      const Vec3 force_N = blade.step({seen, {}}, tick_s).force_N;
       const Vec3 velocity = (seen - last_seen) / tick_s;
       last_seen = seen;
-      rendered_N = passivity.observe(proxy.force_N(), velocity, tick_s);
+      rendered_N = passivity.observe(force_N, velocity, tick_s);
       result.peak_force_N = std::max(result.peak_force_N, norm(rendered_N));
     }
     const Vec3 before = hand.position_mm();
@@ -141,8 +153,10 @@ std::vector<StabilityRow> absolute_grid(const DeviceLimits& device,
   return rows;
 }
 
-StabilityCase stability_case(const StabilityRow& row, bool passivity) {
+StabilityCase stability_case(const StabilityRow& row, bool passivity, const StabilityBlade& blade) {
   StabilityCase c;
+  c.points = blade.points;
+  c.coupling = blade.coupling;
   c.servo_rate_Hz = row.servo_rate_Hz;
   c.link_delay_s = row.link_delay_s;
   c.stiffness_N_per_mm = row.stiffness_N_per_mm;
@@ -150,10 +164,10 @@ StabilityCase stability_case(const StabilityRow& row, bool passivity) {
   return c;
 }
 
-void run_stability_rows(std::vector<StabilityRow>& rows) {
+void run_stability_rows(std::vector<StabilityRow>& rows, const StabilityBlade& blade) {
   for (StabilityRow& row : rows) {
-    row.without = run_stability_case(stability_case(row, false));
-    row.with = run_stability_case(stability_case(row, true));
+    row.without = run_stability_case(stability_case(row, false, blade));
+    row.with = run_stability_case(stability_case(row, true, blade));
   }
 }
 

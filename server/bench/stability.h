@@ -1,6 +1,7 @@
 // The stability bench (`hapticut bench stability`, docs/stability.md): the
 // closed loop of a virtual hand (devices/virtual_hand.h) pressing on a rigid block
-// ("bone") through the real engine (a Proxy on a Space), with a link delay
+// ("bone") through the real engine (a Blade, rigid or independent, lying flat
+// on the block's top as the hand pushes it down), with a link delay
 // and a servo rate, with and without the passivity controller. It measures
 // the energy the loop gives the hand: the work of the rendered force on the
 // hand's own motion, integrated at the hand's 10 kHz physics step.
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "devices/device.h"
+#include "hapticut/scene.h"
 #include "passivity.h"
 
 namespace hapticut::servo {
@@ -22,7 +24,16 @@ struct StabilityCase {
   double stiffness_N_per_mm = 1.0;
   bool passivity = true;
   double duration_s = 2.0;
+  // The blade stepped in the loop, its edge 40 mm long lying flat on the
+  // block. stiffness_N_per_mm is what it renders pressed on the block: its
+  // points' spring k is that over the points for a rigid blade (n k in
+  // contact), that itself for independent points (hapticut.stiffness).
+  int points = 1;
+  BladeCoupling coupling = BladeCoupling::Rigid;
 };
+
+// The spring k of each point of the case's blade.
+double point_stiffness_N_per_mm(const StabilityCase& c);
 
 struct StabilityResult {
   // Work of the rendered force on the hand, mJ (N mm): the largest running
@@ -46,6 +57,12 @@ inline constexpr double kTestForceDeviceMaxStiffness_N_per_mm = 2.0;
 // The bench's default rates and link delays.
 inline const std::vector<double> kStabilityRates_Hz{250.0, 500.0, 1000.0};
 inline const std::vector<double> kStabilityDelays_s{0.0, 0.001, 0.002, 0.005};
+
+// The blade every row of a table is run with.
+struct StabilityBlade {
+  int points = 1;
+  BladeCoupling coupling = BladeCoupling::Rigid;
+};
 
 // One row of a table: a rate, a delay and a stiffness, run without and with
 // the controller.
@@ -80,10 +97,11 @@ std::vector<StabilityRow> absolute_grid(const DeviceLimits& device,
                                         const std::vector<double>& stiffnesses_N_per_mm);
 
 // The case of a row, without or with the controller.
-StabilityCase stability_case(const StabilityRow& row, bool passivity);
+StabilityCase stability_case(const StabilityRow& row, bool passivity,
+                             const StabilityBlade& blade = {});
 
 // Runs every row without and with the controller.
-void run_stability_rows(std::vector<StabilityRow>& rows);
+void run_stability_rows(std::vector<StabilityRow>& rows, const StabilityBlade& blade = {});
 
 // Rows with energy > 0 (the loop gave the hand energy), without or with the controller.
 int rows_giving_energy(const std::vector<StabilityRow>& rows, bool passivity);

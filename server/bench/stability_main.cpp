@@ -39,7 +39,8 @@ std::vector<double> parse_list(const char* text, double unit) {
 
 constexpr const char* kUsage =
     "usage: hapticut-stability [--rates HZ,...] [--delays MS,...] [--stiffness N_PER_MM,...]\n"
-    "                          [--profile FILE.json]\n"
+    "                          [--profile FILE.json] [--points N]\n"
+    "                          [--coupling rigid|independent]\n"
     "  A virtual hand presses on bone through the engine at each servo rate, link delay and\n"
     "  stiffness, without and with the passivity controller; prints the energy the loop gives\n"
     "  the hand. Defaults: rates 250,500,1000; delays 0,1,2,5 ms; the device is the test\n"
@@ -49,6 +50,9 @@ constexpr const char* kUsage =
     "  min(1, rate/1000)); (2) a stress test, a quarter, half and all of the device's 1 kHz\n"
     "  maximum at every rate, rows above the servo's limit at their rate marked.\n"
     "  --stiffness: only table (2), with these absolute stiffnesses.\n"
+    "  --points, --coupling: the blade stepped in the loop (default 1 point), its edge flat\n"
+    "  on the bone; the stiffness is what it renders there: a rigid blade's points have k / N\n"
+    "  each (N k together), independent points k each.\n"
     "Exit codes: 0 printed, 2 bad option.\n";
 
 std::string number(double value) {
@@ -67,6 +71,7 @@ int main(int argc, char** argv) {
   DeviceLimits device;
   device.max_stiffness_N_per_mm = kTestForceDeviceMaxStiffness_N_per_mm;
   std::string device_name = "the test force-device profile";
+  StabilityBlade blade;
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string option = argv[i];
@@ -82,6 +87,21 @@ int main(int argc, char** argv) {
         delays = parse_list(value, 1e-3);
       } else if (option == "--stiffness") {
         stiffness = parse_list(value, 1.0);
+      } else if (option == "--points") {
+        const std::vector<double> points = parse_list(value, 1.0);
+        if (points.size() != 1 || points[0] < 1.0 || points[0] > 1000.0 ||
+            points[0] != std::floor(points[0])) {
+          throw std::invalid_argument("--points takes one whole number, 1-1000");
+        }
+        blade.points = static_cast<int>(points[0]);
+      } else if (option == "--coupling") {
+        if (std::strcmp(value, "rigid") == 0) {
+          blade.coupling = hapticut::BladeCoupling::Rigid;
+        } else if (std::strcmp(value, "independent") == 0) {
+          blade.coupling = hapticut::BladeCoupling::Independent;
+        } else {
+          throw std::invalid_argument("--coupling is rigid or independent");
+        }
       } else if (option == "--profile") {
         device = load_profile(value).limits;
         if (!(device.max_stiffness_N_per_mm > 0.0)) {
@@ -105,11 +125,14 @@ int main(int argc, char** argv) {
       "contact's swing in the last second (mm), without and with the passivity controller.\n"
       "Device: ",
       stdout);
-  std::printf("%s, %s at 1 kHz.\n\n", device_name.c_str(), k_max.c_str());
+  std::printf("%s, %s at 1 kHz.\n", device_name.c_str(), k_max.c_str());
+  std::printf("Blade in the loop: %s, %d point%s.\n\n",
+              hapticut::blade_coupling_name(blade.coupling), blade.points,
+              blade.points == 1 ? "" : "s");
   const bool both_tables = stiffness.empty();  // No --stiffness: the servo's grid first.
   if (both_tables) {
     std::vector<StabilityRow> rows = servo_limit_grid(device, rates, delays);
-    run_stability_rows(rows);
+    run_stability_rows(rows, blade);
     const std::string title =
         "Within the servo's limit: at each rate a quarter, half and all of the stiffness the\n"
         "servo allows there (stiffness_limit: " +
@@ -118,7 +141,7 @@ int main(int argc, char** argv) {
     stiffness = quarter_half_all(stiffness_limit(device, kStiffnessLimitRate_Hz));
   }
   std::vector<StabilityRow> rows = absolute_grid(device, rates, delays, stiffness);
-  run_stability_rows(rows);
+  run_stability_rows(rows, blade);
   const std::string title =
       (both_tables ? "Stress test, beyond the servo's limit: a quarter, half and all of " + k_max +
                          " at every rate."

@@ -23,7 +23,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "hapticut/blade.h"
+#include "hapticut/pose.h"
 #include "hapticut/vec3.h"
 
 namespace hapticut::servo {

@@ -19,7 +19,7 @@
 #include <utility>
 #include <vector>
 
-#include "hapticut/blade.h"
+#include "hapticut/pose.h"
 #include "hapticut/vec3.h"
 
 namespace hapticut::servo {

@@ -10,17 +10,6 @@
 
 namespace hapticut::servo {
 
-namespace {
-
-Quaternion nlerp(const Quaternion& a, Quaternion b, double s) {
-  if (a.w * b.w + a.x * b.x + a.y * b.y + a.z * b.z < 0.0) b = {-b.w, -b.x, -b.y, -b.z};
-  return Quaternion{a.w + (b.w - a.w) * s, a.x + (b.x - a.x) * s, a.y + (b.y - a.y) * s,
-                    a.z + (b.z - a.z) * s}
-      .normalized();
-}
-
-}  // namespace
-
 SimPath SimPath::from_file(const std::string& path) {
   // The file rules of every path the servo opens (client_files.h): a regular
   // file, opened without waiting, of bounded size; the strict decoder, whose

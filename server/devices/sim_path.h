@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "hapticut/blade.h"
+#include "hapticut/pose.h"
 
 namespace hapticut::servo {
 

@@ -1,7 +1,9 @@
 // Friction at a rigid blade's contacts: pressed onto a round bone it stays
 // where it landed (without friction it slides round to the side); pulled
 // along a flat bone it sticks until the pull reaches the static coefficient
-// times the push, then slides once and for all at the dynamic one.
+// times the push, then slides once and for all at the dynamic one; landed on
+// one end it turns down onto the bone about that end (friction holds a
+// support still, not a turn about it).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -126,6 +128,48 @@ TEST(RigidBladeFriction, PulledAlongAFlatBoneItSticksThenSlidesOnce) {
       }
       EXPECT_NEAR(force.z, push_N, 1e-4);
     }
+  }
+}
+
+TEST(RigidBladeFriction, LandedOnOneEndItTurnsDownOntoTheBoneAboutThatEnd) {
+  // A flat bone under z = 0. The device comes down tilted 5 degrees (its
+  // start lower) until that end rests on the bone, then levels 2 mm deep.
+  const MeshData mesh = grid_mesh(axis(-60, 60, 4), axis(-16, 16, 4), axis(-16, 8, 4));
+  const double tilt = -5.0 * M_PI / 180.0;
+  const Quaternion tilted{std::cos(tilt / 2), 0.0, std::sin(tilt / 2), 0.0};
+  std::printf("%-14s %-7s %14s %14s %12s\n", "friction", "orient", "highest z mm", "end x moved mm",
+              "Fz N");
+  for (const double mu : {0.0, 0.4}) {
+    const auto space = space_of(
+        mesh, [](const Vec3& c) { return c.z < 0.0; }, bone(mu, 0.75 * mu));
+    BladeSpec spec{"knife", {-50, 0, 0}, {50, 0, 0}, 50};
+    Blade blade(*space, spec);
+    blade.reset({{0, 0, 6}, tilted});
+    double landed_x = 0.0;
+    for (int k = 1; k <= 400; ++k) {
+      const BladeTick tick = blade.step({{0, 0, 6.0 - 0.01 * k}, tilted}, kDt);
+      if (landed_x == 0.0 && tick.contacts > 0) landed_x = blade.ideal_point(0).x;
+    }
+    ASSERT_NE(landed_x, 0.0) << "the low end never reached the bone";
+    // Levelled over 0.5 s, 2 mm under the bone's surface, then held.
+    Vec3 force;
+    for (int k = 1; k <= 700; ++k) {
+      const double s = std::min(1.0, k / 500.0);
+      const Quaternion turn{std::cos(tilt * (1 - s) / 2), 0.0, std::sin(tilt * (1 - s) / 2), 0.0};
+      force = blade.step({{0, 0, 2.0 - 4.0 * s}, turn}, kDt).force_N;
+    }
+    double highest = -1e9;
+    for (int i = 0; i < blade.point_count(); ++i) {
+      highest = std::max(highest, blade.ideal_point(i).z);
+      EXPECT_GT(blade.ideal_point(i).z, -1e-6) << "point " << i << " in the bone";
+    }
+    const double moved = blade.ideal_point(0).x - landed_x;
+    std::printf("%-6.2f %-6.2f  %-7s %14.5f %14.5f %12.4f\n", mu, 0.75 * mu, "free", highest, moved,
+                force.z);
+    EXPECT_LT(highest, 0.01) << "friction " << mu << ": it still hangs on its end";
+    EXPECT_NEAR(force.z, 50 * kK * 2.0, 0.1);
+    // With friction the end it landed on stays where it landed: the blade turned about it.
+    if (mu > 0.0) EXPECT_NEAR(moved, 0.0, 0.01);
   }
 }
 

@@ -60,6 +60,7 @@ def run(
         )
     else:
         blade += ": each point renders its own k (the k N/mm column)."
+    args += ["--points", str(points), "--coupling", coupling]
     return blade + "\n\n" + with_point_column(_run_bench(args), per_point)
 
 

@@ -73,6 +73,10 @@ class AabbTree {
   // Calls visit(item) for every item whose box overlaps `box`.
   template <class Visit>
   void for_each_overlapping(const Aabb& box, Visit&& visit) const;
+  // The same while visit(item) returns true; false once it has returned false
+  // (the walk then stops).
+  template <class Visit>
+  bool for_each_overlapping_while(const Aabb& box, Visit&& visit) const;
 
   std::size_t node_count() const { return nodes_.size(); }
   std::size_t memory_bytes() const;
@@ -130,6 +134,14 @@ void AabbTree::for_each_on_segment(const Vec3& a, const Vec3& b, double pad, Vis
 template <class Visit>
 void AabbTree::for_each_overlapping(const Aabb& box, Visit&& visit) const {
   for_each_where([&](const Aabb& node_box) { return node_box.overlaps(box); }, visit);
+}
+
+template <class Visit>
+bool AabbTree::for_each_overlapping_while(const Aabb& box, Visit&& visit) const {
+  bool going = true;
+  for_each_where([&](const Aabb& node_box) { return going && node_box.overlaps(box); },
+                 [&](std::int32_t item) { going = going && visit(item); });
+  return going;
 }
 
 }  // namespace hapticut

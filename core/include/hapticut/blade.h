@@ -19,40 +19,13 @@
 #include "hapticut/edge_contact_set.h"
 #include "hapticut/edge_fit.h"
 #include "hapticut/force_shading.h"
+#include "hapticut/pose.h"
 #include "hapticut/proxy.h"
 #include "hapticut/scene.h"
 #include "hapticut/segment_probe.h"
 #include "hapticut/swept_stretch.h"
 
 namespace hapticut {
-
-// Quaternion (w, x, y, z) rotating the tool frame into the world; normalised
-// on use. One whose norm is not finite or below kMinNorm is refused.
-struct Quaternion {
-  double w = 1.0;
-  double x = 0.0;
-  double y = 0.0;
-  double z = 0.0;
-  static constexpr double kMinNorm = 1e-6;
-  Vec3 rotate(const Vec3& v) const;
-  // The unit quaternion; only for a valid() one.
-  Quaternion normalized() const;
-  bool valid() const;
-};
-
-// The rotation b, then a (the Hamilton product a b).
-Quaternion multiply(const Quaternion& a, const Quaternion& b);
-
-// q, or -q (the same rotation) when that is nearer `last` (a dot product < 0).
-inline Quaternion same_hemisphere(const Quaternion& q, const Quaternion& last) {
-  const double d = q.w * last.w + q.x * last.x + q.y * last.y + q.z * last.z;
-  return d < 0.0 ? Quaternion{-q.w, -q.x, -q.y, -q.z} : q;
-}
-
-struct Pose {
-  Vec3 position_mm;  // The tool origin in the world.
-  Quaternion rotation;
-};
 
 // Whether a pose can be used, and why not.
 enum class PoseCheck : std::uint8_t { Fine, NotFinite, ZeroRotation, OutOfWorkspace };
@@ -169,8 +142,11 @@ class Blade {
 
   BladeCoupling coupling() const { return coupling_; }
   BladeOrientation orientation() const { return orientation_; }
-  // Takes effect from the next tick; never allocates.
-  void set_orientation(BladeOrientation orientation) { orientation_ = orientation; }
+  // Takes effect from the next tick, turned in over ramp_s: a rigid blade's
+  // edge turns from its direction at the switch to the new rule's (the
+  // device's, or the free fit's) over that time, so the force does not jump.
+  // Never allocates.
+  void set_orientation(BladeOrientation orientation, double ramp_s = 0.0);
   // The rigid blade's ideal tool pose (its edge, with the roll about the edge
   // taken from the device); for independent points, the last device pose.
   const Pose& ideal_pose() const { return ideal_pose_; }
@@ -209,15 +185,32 @@ class Blade {
   // `advance` gets the earliest crossing and contacts are added when asked.
   bool sweep_stretches(const EdgePose& first, const EdgePose& last, double from, double to,
                        double& advance, bool add_contacts);
+  // The same with each stretch's own query of the rigid edges (where the
+  // broad phase would gather too many).
+  bool sweep_stretches_each(const EdgePose& first, const EdgePose& last, double from, double to,
+                            double& advance, bool add_contacts);
   // `wall_tet` is the tet whose material holds the edge there (its friction).
   void add_contact(double fraction, const Plane& plane, std::int32_t wall_tet);
   // Friction at the contacts (docs/decisions.md, "Friction at rigid
   // contacts"): from `start` (the tick's first verified pose, its points in
-  // start_points_) to the frictionless ideal pose, the blade sticks while the
-  // springs' pull along the contacts stays within the static coefficient
-  // times their push, else slides as far as leaves the pull at the dynamic
-  // coefficient times the push.
-  void apply_friction(const EdgePose& start);
+  // start_points_), rolled on its support, to the frictionless ideal pose, the
+  // blade sticks while the springs' pull along the contacts stays within the
+  // static coefficient times their push, else slides as far as leaves the
+  // pull at the dynamic coefficient times the push.
+  void apply_friction(const EdgePose& start, bool locked);
+  // Steps 2-4 of a rigid tick (blade_rigid.cpp): from the ideal pose toward
+  // the targets, rounds of walks and constrained fits, the direction kept at
+  // lock_direction when `lock`. True when the last trial verified whole.
+  bool solve_pose(bool lock, const Vec3& lock_direction, int& rounds);
+  // From the ideal pose toward `trial`, as far as the walks got (`advance`),
+  // halved while the motion still meets rigid material; verified.
+  void advance_verified(const EdgePose& trial, double advance);
+  // Sum |x_i - t_i|^2 over the points of the ideal edge.
+  double spring_energy() const;
+  // The ideal pose turned about the contacts it rests on, toward the springs'
+  // least energy, as far as the walks allow: a blade rolls on its support
+  // where friction holds the support still.
+  void roll_on_support(bool locked);
   // Makes the probed edge (trial_*) the ideal one.
   void accept_trial(const EdgePose& edge);
   void update_ideal_pose(const Pose& device);
@@ -263,6 +256,9 @@ class Blade {
   // the middle, or once there are contacts the one the pose rests on, so a
   // turn does not swing the held sample into its plane.
   double motion_pivot_ = 0.5;
+  // The sample of the edge where the last probe_motion met rigid material
+  // first (a point, or a place between two).
+  double earliest_hit_fraction_ = 0.5;
   // Whether the Space has a material that holds a point back (drag, viscous,
   // membrane): only then do a rigid blade's points tick for their targets.
   bool resisting_materials_ = true;
@@ -271,6 +267,11 @@ class Blade {
   double contact_static_friction_ = 0.0;
   double contact_dynamic_friction_ = 0.0;
   bool sliding_ = false;
+  // An orientation switch being turned in (set_orientation): the ideal
+  // edge's direction at the switch, the ramp's length and the time since.
+  Vec3 ramp_from_direction_;
+  double orientation_ramp_s_ = 0.0;
+  double orientation_ramp_elapsed_s_ = 0.0;
   // The tick's first verified pose's points and tets, and the frictionless
   // pose's while a slide is verified.
   std::vector<Vec3> start_points_;
@@ -279,6 +280,17 @@ class Blade {
   std::vector<std::int32_t> held_tets_;
   // The rigid surface's edges, for the stretches' swept test (two points or more).
   std::unique_ptr<const RigidSurfaceEdges> rigid_edges_;
+  // The swept test's broad phase (sized to every rigid surface edge once):
+  // the edges near a piece of the motion with the span along the edge where
+  // each can meet a stretch, and those of one stretch.
+  struct SweptCandidate {
+    std::int32_t edge = 0;
+    double least_mm = 0.0;
+    double greatest_mm = 0.0;
+  };
+  std::vector<SweptCandidate> swept_candidates_;
+  std::vector<SweptCandidate> active_candidates_;
+  std::vector<std::int32_t> stretch_candidates_;
 };
 
 }  // namespace hapticut

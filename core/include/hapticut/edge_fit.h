@@ -52,14 +52,18 @@ EdgeFitStatus fit_edge_constrained(const EdgePose& base, std::span<const double>
                                    bool lock_direction, std::span<const EdgeContact> contacts,
                                    double margin_mm, EdgePose& out);
 
+// The edge nearest the targets among those through base's sample at
+// `pivot_fraction` (that sample held still, the edge turned about it), in
+// closed form: base itself when the targets give no direction.
+EdgePose fit_edge_about(const EdgePose& base, double pivot_fraction,
+                        std::span<const double> fractions, std::span<const Vec3> targets,
+                        double length_mm);
+
 // The edge a fraction t of the way from a to b: the sample at
 // `pivot_fraction` of the edge moves on a straight line, the direction
 // normalised linear. About a contact's sample, that sample stays on its
 // plane's free side all the way (a chord between two points on one side).
 EdgePose interpolate_edge(const EdgePose& a, const EdgePose& b, double t, double pivot_fraction,
                           double length_mm);
-
-// Two unit vectors across `direction`, with it a right-handed frame.
-void frame_across(const Vec3& direction, Vec3& across1, Vec3& across2);
 
 }  // namespace hapticut

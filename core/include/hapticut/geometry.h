@@ -204,4 +204,7 @@ inline ClippedSegment clip_segment_to_box(const Vec3& a, const Vec3& b, const Aa
   return clip_far_segment_to_box(a, b, box);
 }
 
+// Two unit vectors across `direction`, with it a right-handed frame.
+void frame_across(const Vec3& direction, Vec3& across1, Vec3& across2);
+
 }  // namespace hapticut

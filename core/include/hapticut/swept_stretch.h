@@ -16,6 +16,7 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "hapticut/aabb_tree.h"
@@ -72,6 +73,13 @@ struct SweptHit {
 SweptHit sweep_stretch(const RigidSurfaceEdges& edges, const Vec3& a0, const Vec3& b0,
                        const Vec3& a1, const Vec3& b1, double motion_from, double motion_to,
                        double tolerance_mm);
+
+// The same test over the given edges only: a broad phase the caller ran once
+// for the whole blade's motion (any edge the patch can cross among them).
+SweptHit sweep_stretch_among(const RigidSurfaceEdges& edges,
+                             std::span<const std::int32_t> candidates, const Vec3& a0,
+                             const Vec3& b0, const Vec3& a1, const Vec3& b1, double motion_from,
+                             double motion_to, double tolerance_mm);
 
 // How many pieces a motion whose edge turns by `turn_rad` is cut into, so that
 // the path of any sample (at most length_mm from the start) departs from the

@@ -96,5 +96,31 @@ TEST(Stability, FastLocalSoftLoopIsPassiveEitherWay) {
   EXPECT_LE(without.final_energy_to_hand_mJ, 0.0);
 }
 
+// The loop steps a real blade. A rigid blade of 50 points at its rendered
+// stiffness (each point k / 50) is one body on the bone: the loop behaves as
+// for one point at that stiffness. Independent points at that k each render
+// 50 k pressed flat on the bone: without the controller that loop buzzes.
+TEST(Stability, TheBladeInTheLoopRendersItsPointsTogether) {
+  StabilityCase one;
+  one.servo_rate_Hz = 1000.0;
+  one.link_delay_s = 0.002;
+  one.stiffness_N_per_mm = 0.5;
+  one.passivity = false;
+  StabilityCase rigid = one;
+  rigid.points = 50;
+  EXPECT_DOUBLE_EQ(point_stiffness_N_per_mm(rigid), 0.01);
+  const StabilityResult alone = run_stability_case(one);
+  const StabilityResult blade = run_stability_case(rigid);
+  EXPECT_NEAR(blade.peak_force_N, alone.peak_force_N, 1e-6 * alone.peak_force_N);
+  EXPECT_NEAR(blade.late_swing_mm, alone.late_swing_mm, 1e-6);
+  EXPECT_LE(blade.max_energy_to_hand_mJ, 1e-9);
+  StabilityCase independent = rigid;
+  independent.coupling = BladeCoupling::Independent;
+  EXPECT_DOUBLE_EQ(point_stiffness_N_per_mm(independent), 0.5);
+  const StabilityResult points = run_stability_case(independent);
+  EXPECT_GT(points.max_energy_to_hand_mJ, 1.0);
+  EXPECT_GT(points.peak_force_N, 10.0 * alone.peak_force_N);
+}
+
 }  // namespace
 }  // namespace hapticut::servo

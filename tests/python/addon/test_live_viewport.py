@@ -87,12 +87,14 @@ def test_the_servo_follows_the_dragged_knife_and_the_bone_holds_the_ideal_blade(
     assert np.linalg.norm(edge) == pytest.approx(np.linalg.norm(on_bone["p"][-1] - on_bone["p"][0]))
     across = np.cross(q - q[0], edge / np.linalg.norm(edge))
     assert np.abs(across).max() < 1e-6
-    # Sliding sideways in the flesh above the bone: the ideal points lag behind the knife.
+    # Sliding sideways in the flesh above the bone (the knife stays 0.5 mm and more inside the
+    # flesh's 7.2 mm radius): the ideal points lag behind the knife (the soft tissue's drag
+    # distance is 2 mm; the knife's end in the air beyond the finger does not lag).
     drag(knife, (x, 0, z), (x, 0, 6), 0.5)
-    drag(knife, (x, 0, 6), (x, 6, 6), 0.3)
+    drag(knife, (x, 0, 6), (x, 3, 6), 0.3)
     moving = session.stream_frame.blades["Knife"]
     lag = moving["p"][:, 1] - moving["q"][:, 1]
-    assert np.median(lag) > 0.05
+    assert np.median(lag) > 0.3
 
 
 def test_record_while_live_then_bake(live_finger):
