@@ -24,8 +24,8 @@ MAX_COLUMNS_PER_GAP = 8
 # A row where no point went this share of the rows' usual step from the row before is left
 # out (the blade was held still): far above a sliver's width, far below what a render shows.
 STILL_SHARE = 0.05
-# A face narrower than this share of the largest coordinate is dropped: a hundred times what
-# float32 corners round by, so its normal in Blender holds to about a degree.
+# A face narrower than this share of the largest coordinate is dropped: far above what
+# float32 corners round by, so its normal in Blender holds.
 SLIVER_SHARE = 1e-5
 # How many times a triangle that still crosses out of the material (a flat face beside a
 # curved bone) is split in four and cut back again: each halves what the surface drops there.
@@ -33,8 +33,8 @@ SPLITS = 3
 # Where the bisection stops: a crossing is placed within this of the material's boundary (mm).
 CROSSING_TOLERANCE_MM = 1e-3
 # How far a corner of the surface keeps inside the material along each axis (mm): a mesh's
-# float32 corners move by up to about 1e-7 of their coordinates, a few 1e-6 mm on a 100 mm
-# scene, and a corner a hair inside would round out of it.
+# float32 corners are rounded, and a corner a hair inside would round out of it; this is
+# well above that rounding on any scene Blender shows in millimetres.
 FIRM_MM = 1e-4
 
 
@@ -275,9 +275,8 @@ def conform(
 
 def slivers(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """(f,) bool: the face is narrower than SLIVER_SHARE of the largest coordinate (a crossing
-    a hair from a corner makes one). Nothing to see, and in a mesh's float32 corners (which
-    round by about 6e-8 of the coordinate) its normal is noise, so the slit's two sheets of it
-    would not face apart."""
+    a hair from a corner makes one). Nothing to see, and in a mesh's float32 corners its
+    normal is noise, so the slit's two sheets of it would not face apart."""
     if not len(faces):
         return np.zeros(0, bool)
     corners = vertices[faces]
