@@ -27,6 +27,10 @@ STILL_SHARE = 0.05
 # A face narrower than this share of the largest coordinate is dropped: far above what
 # float32 corners round by, so its normal in Blender holds.
 SLIVER_SHARE = 1e-5
+# Where the straight path between two rows leaves the material, ticks this share of the
+# rows' usual step apart are added between them: the quads' dip into a bone shrinks with
+# the square of their width.
+FINE_SHARE = 0.125
 # How many times a triangle that still crosses out of the material (a flat face beside a
 # curved bone) is split in four and cut back again: each halves what the surface drops there.
 SPLITS = 3
@@ -71,6 +75,45 @@ def rows_along_path(q: np.ndarray, rows: np.ndarray) -> np.ndarray:
     return _without_still_rows(q, np.unique(np.concatenate(chosen)), still)
 
 
+def rows_over_material(q: np.ndarray, rows: np.ndarray, cutting: np.ndarray, firmly) -> np.ndarray:
+    """The rows, with the ticks between two of them added (a FINE_SHARE of the rows' usual
+    step apart) where both rows' points cut but the path straight between them leaves the
+    material: a blade sliding over a bone rests on it, and a flat quad between two rows of
+    the slide dips into the bone's curve, so the surface would lose a strip of it. Sampled
+    at the columns the surface is split into, a quarter, half and three quarters across."""
+    q = np.asarray(q, np.float64)
+    rows = np.asarray(rows, np.int64)
+    if len(rows) < 2 or q.shape[1] < 2:
+        return rows
+    parts = columns_per_gap(q[rows])
+    share = (np.arange(parts) / parts)[None, None, :, None]
+    fine = (1 - share) * q[rows][:, :-1, None] + share * q[rows][:, 1:, None]
+    fine = fine.reshape(len(rows), -1, 3)  # (R, (N-1) parts, 3)
+    cuts = np.repeat(cutting[:, :-1] & cutting[:, 1:], parts, axis=1)
+    both = cuts[:-1] & cuts[1:]
+    checked = np.flatnonzero(both.any(axis=1))
+    leaving = np.zeros(len(rows) - 1, bool)
+    for across in (0.25, 0.5, 0.75):
+        if not len(checked):
+            break
+        middles = (1 - across) * fine[checked] + across * fine[checked + 1]
+        inside = firmly(middles.reshape(-1, 3)).reshape(len(checked), -1)
+        leaving[checked] |= (both[checked] & ~inside).any(axis=1)
+    gaps = np.flatnonzero(leaving)
+    if not len(gaps):
+        return rows
+    step = FINE_SHARE * _usual_step(q, rows)
+    added = [_ticks_a_step_apart(q[rows[g] : rows[g + 1] + 1], step) + rows[g] for g in gaps]
+    return np.unique(np.concatenate([rows, *added]))
+
+
+def _usual_step(q: np.ndarray, rows: np.ndarray) -> float:
+    """The median of the rows' steps where the edge moved (the most any point went)."""
+    steps = np.linalg.norm(np.diff(q[rows], axis=0), axis=-1).max(axis=1)
+    moving = steps[steps > 0]
+    return float(np.median(moving)) if len(moving) else 0.0
+
+
 def _without_still_rows(q: np.ndarray, rows: np.ndarray, still: float) -> np.ndarray:
     """The rows less those at which no point has gone ``still`` (mm) from the row kept before
     (the first and last kept): a blade held by a bone's friction creeps by microns, sweeping
@@ -108,11 +151,11 @@ def columns_per_gap(rows_q: np.ndarray) -> int:
 
 
 def split_columns(
-    rows_q: np.ndarray, cutting: np.ndarray, quad_ok: np.ndarray, parts: int, cuttable
+    rows_q: np.ndarray, cutting: np.ndarray, quad_ok: np.ndarray, parts: int, cuttable, firmly
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The rows with each gap split into ``parts`` columns: points (R, M, 3), which cut
-    (R, M) (the points' own ``cutting``; the new ones by ``cuttable``, a function of (k, 3)
-    points), and the quads allowed (R-1, M-1)."""
+    (R, M) (the points' own ``cutting``, the new ones by ``cuttable``, both firmly: settle),
+    and the quads allowed (R-1, M-1). ``cuttable`` and ``firmly`` take (k, 3) points."""
     count, points = rows_q.shape[:2]
     share = np.arange(parts) / parts
     left, right = rows_q[:, :-1, None, :], rows_q[:, 1:, None, :]
@@ -121,13 +164,37 @@ def split_columns(
     inside = np.zeros(grid.shape[:2], bool)
     original = np.arange(points) * parts
     new = np.setdiff1d(np.arange(grid.shape[1]), original)
-    # The points' own cut, less those a hair from leaving the material (FIRM_MM): the mesh
-    # takes those as out and places its outline by bisection, just inside them.
+    # The points' own cut; a point a hair from leaving the material (FIRM_MM: a blade resting
+    # on a bone) is moved off it by a hair, else taken as out.
     inside[:, original] = cutting
-    inside[inside] = firmly_inside(grid[inside], cuttable)
     if len(new):
-        inside[:, new] = firmly_inside(grid[:, new], cuttable).reshape(count, -1)
-    return grid, inside, np.repeat(quad_ok, parts, axis=1)
+        inside[:, new] = cuttable(grid[:, new].reshape(-1, 3)).reshape(count, -1)
+    firm = firmly(grid[inside])
+    loose = np.flatnonzero(inside.reshape(-1))[~firm]
+    flat = grid.reshape(-1, 3)
+    moved, settled = settle(flat[loose], cuttable, firmly)
+    flat[loose] = moved
+    inside.reshape(-1)[loose] = settled
+    return flat.reshape(grid.shape), inside, np.repeat(quad_ok, parts, axis=1)
+
+
+def settle(points: np.ndarray, cuttable, firmly) -> tuple[np.ndarray, np.ndarray]:
+    """Points in the material but within FIRM_MM of leaving it, each moved twice FIRM_MM away
+    from the axis steps that leave it: the points (moved where that made them firm) and which
+    are firm. Moving keeps the point a corner of the faces either side of it (a row where the
+    blade rested on a bone, swept into from above and out of sideways), where taking it as
+    out would part them by a crack."""
+    if not len(points):
+        return points, np.zeros(0, bool)
+    offsets = np.concatenate([FIRM_MM * np.eye(3), -FIRM_MM * np.eye(3)])
+    probes = (points[:, None, :] + offsets[None]).reshape(-1, 3)
+    leaving = ~cuttable(probes).reshape(len(points), -1)
+    away = -(leaving[:, :, None] * offsets[None]).sum(axis=1)
+    length = np.linalg.norm(away, axis=1, keepdims=True)
+    away = np.divide(away, length, out=np.zeros_like(away), where=length > 0)
+    moved = points + 2 * FIRM_MM * away
+    firm = firmly(moved)
+    return np.where(firm[:, None], moved, points), firm
 
 
 def triangles(quad_ok: np.ndarray, columns: int) -> tuple[np.ndarray, np.ndarray]:
@@ -140,7 +207,9 @@ def triangles(quad_ok: np.ndarray, columns: int) -> tuple[np.ndarray, np.ndarray
     return faces, np.concatenate([r, r])
 
 
-def crossings(starts: np.ndarray, ends: np.ndarray, cuttable) -> np.ndarray:
+def crossings(
+    starts: np.ndarray, ends: np.ndarray, cuttable, firmly
+) -> tuple[np.ndarray, np.ndarray]:
     """Where each segment from a point in the material (starts) to one out of it (ends)
     leaves it: the last point found inside, by bisection."""
     inside, outside = starts.copy(), ends.copy()
@@ -157,16 +226,20 @@ def crossings(starts: np.ndarray, ends: np.ndarray, cuttable) -> np.ndarray:
     length = np.linalg.norm(back, axis=1, keepdims=True)
     share = np.divide(CROSSING_TOLERANCE_MM, length, out=np.zeros_like(length), where=length > 0)
     within = inside + np.minimum(share, 1.0) * back
-    safe = firmly_inside(within, cuttable) if len(within) else np.zeros(0, bool)
+    safe = firmly(within) if len(within) else np.zeros(0, bool)
     inside[safe] = within[safe]
-    return inside
+    settled, firm = settle(inside[~safe], cuttable, firmly)
+    inside[~safe] = settled
+    safe[~safe] = firm
+    return inside, safe
 
 
 def clip(
-    points: np.ndarray, inside: np.ndarray, faces: np.ndarray, cuttable
+    points: np.ndarray, inside: np.ndarray, faces: np.ndarray, cuttable, firmly
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The triangles (faces into points, flagged by inside) cut back to the material: the
-    vertices (the points, then the crossings), the faces, and for each face its triangle."""
+    vertices (the points, then the crossings), their flags (a crossing's: placed firmly in),
+    the faces, and for each face its triangle."""
     flags = inside[faces]
     count = flags.sum(axis=1)
     whole = np.flatnonzero(count == 3)
@@ -183,7 +256,7 @@ def clip(
     oriented = np.where(inner_first[:, None], pairs, pairs[:, ::-1])  # (inside, outside)
     unique, which = np.unique(oriented, axis=0, return_inverse=True)
     which = which.reshape(-1)
-    crossed = crossings(points[unique[:, 0]], points[unique[:, 1]], cuttable)
+    crossed, firm = crossings(points[unique[:, 0]], points[unique[:, 1]], cuttable, firmly)
     ids = len(points) + which
     x1, x2 = ids[: len(mixed)], ids[len(mixed) :]
     v0, v1, v2 = turned[:, 0], turned[:, 1], turned[:, 2]
@@ -193,27 +266,28 @@ def clip(
     foot = np.concatenate([np.stack([x1, v1, v2], 1)[~one], np.stack([x1, v2, x2], 1)[~one]])
     faces_out = np.concatenate([faces[whole], tip, foot])
     source = np.concatenate([whole, mixed[one], mixed[~one], mixed[~one]])
-    return np.concatenate([points, crossed]), faces_out, source
+    return np.concatenate([points, crossed]), np.concatenate([inside, firm]), faces_out, source
 
 
-def _crossings_inside(flags: np.ndarray, vertices: np.ndarray) -> np.ndarray:
-    """The flags of clip's vertices: the points' own, then the crossings' (each is the last
-    point bisection found inside)."""
-    return np.concatenate([flags, np.ones(len(vertices) - len(flags), bool)])
+def faces_inside(vertices: np.ndarray, flags: np.ndarray, faces: np.ndarray, firmly) -> np.ndarray:
+    """(f,) bool: the face's corners are flagged firmly in (a crossing that could not be
+    placed firmly is not) and its samples are (samples_inside)."""
+    return flags[faces].all(axis=1) & samples_inside(vertices, faces, firmly)
 
 
-def samples_inside(vertices: np.ndarray, faces: np.ndarray, cuttable) -> np.ndarray:
-    """(f,) bool: the face's centre and its edges' midpoints are in the material."""
+def samples_inside(vertices: np.ndarray, faces: np.ndarray, firmly) -> np.ndarray:
+    """(f,) bool: the face's centre and its edges' midpoints are firmly in the material (a
+    mesh's float32 corners move them too)."""
     corners = vertices[faces]
     samples = np.stack(
         [corners.mean(axis=1), *((corners + np.roll(corners, -1, axis=1)) / 2).transpose(1, 0, 2)],
         axis=1,
     )
-    return cuttable(samples.reshape(-1, 3)).reshape(-1, 4).all(axis=1)
+    return firmly(samples.reshape(-1, 3)).reshape(-1, 4).all(axis=1)
 
 
 def split_in_four(
-    vertices: np.ndarray, inside: np.ndarray, faces: np.ndarray, cuttable
+    vertices: np.ndarray, inside: np.ndarray, faces: np.ndarray, firmly
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Each face split at its edges' midpoints into four (winding kept, the four of a face in
     a row): the vertices with the midpoints added, their flags, the new faces, and each split
@@ -234,7 +308,7 @@ def split_in_four(
     halved = np.stack(
         [np.concatenate([a, b, c]), np.concatenate([b, c, a]), np.arange(count, len(points))], 1
     )
-    return points, np.concatenate([inside, firmly_inside(middles, cuttable)]), quarters, halved
+    return points, np.concatenate([inside, firmly(middles)]), quarters, halved
 
 
 def conform(
@@ -293,39 +367,50 @@ def clipped_sweep(
     quad_ok: np.ndarray,
     row_frames: np.ndarray,
     cuttable,
+    firmly=None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The swept path clipped to the material (module doc): vertices, faces and each face's
-    frame (the frame the edge reached the quad's later row at)."""
+    frame (the frame the edge reached the quad's later row at). ``cuttable(points)`` says
+    which (k, 3) points are in the material, ``firmly(points)`` which are FIRM_MM inside it
+    (firmly_inside by default)."""
+    if firmly is None:
+
+        def firmly(points):
+            return firmly_inside(points, cuttable)
+
     rows_q = np.asarray(rows_q, np.float64)
     parts = columns_per_gap(rows_q)
-    grid, inside, allowed = split_columns(rows_q, cutting, quad_ok, parts, cuttable)
+    grid, inside, allowed = split_columns(rows_q, cutting, quad_ok, parts, cuttable, firmly)
     columns = grid.shape[1]
     faces, face_rows = triangles(allowed, columns)
-    vertices, faces, source = clip(grid.reshape(-1, 3), inside.reshape(-1), faces, cuttable)
-    inside = _crossings_inside(inside.reshape(-1), vertices)
+    vertices, inside, faces, source = clip(
+        grid.reshape(-1, 3), inside.reshape(-1), faces, cuttable, firmly
+    )
     # Which faces have their samples in the material: checked once each, as faces come.
-    passed = samples_inside(vertices, faces, cuttable)
+    passed = faces_inside(vertices, inside, faces, firmly)
     halved = []  # (edge's two ends, its midpoint) of every edge split.
     for _ in range(SPLITS):
         if passed.all():
             break
         leaving = ~passed
-        points, flags, quarters, middles = split_in_four(vertices, inside, faces[leaving], cuttable)
+        points, flags, quarters, middles = split_in_four(vertices, inside, faces[leaving], firmly)
         halved.append(middles)
-        vertices, pieces, piece_source = clip(points, flags, quarters, cuttable)
-        inside = _crossings_inside(flags, vertices)
+        vertices, inside, pieces, piece_source = clip(points, flags, quarters, cuttable, firmly)
         faces = np.concatenate([faces[passed], pieces])
         source = np.concatenate([source[passed], np.repeat(source[leaving], 4)[piece_source]])
-        passed = np.concatenate([passed[passed], samples_inside(vertices, pieces, cuttable)])
+        passed = np.concatenate([passed[passed], faces_inside(vertices, inside, pieces, firmly)])
     # What still leaves the material after the splits is dropped (a sliver at the boundary).
     faces, source = faces[passed], source[passed]
     if halved:
         faces, source, new = conform(faces, source, np.concatenate(halved), len(vertices))
-        kept = np.ones(len(faces), bool)
-        # A half whose corner is a midpoint out of the material is dropped like a face whose
-        # sample is out.
-        kept[new] = samples_inside(vertices, faces[new], cuttable) & inside[faces[new]].all(1)
-        faces, source = faces[kept], source[kept]
+        # A half whose corner is a midpoint out of the material is cut back like any face.
+        vertices, inside, pieces, piece_source = clip(
+            vertices, inside, faces[new], cuttable, firmly
+        )
+        pieces_source = source[new][piece_source]
+        whole = faces_inside(vertices, inside, pieces, firmly)
+        faces = np.concatenate([faces[~new], pieces[whole]])
+        source = np.concatenate([source[~new], pieces_source[whole]])
     solid = ~slivers(vertices, faces)
     faces, source = faces[solid], source[solid]
     frames = np.ceil(np.asarray(row_frames)[face_rows[source] + 1] - 1e-9).astype(np.int32)

@@ -66,6 +66,14 @@ class TetLocator:
         edges = corners[:, 1:] - corners[:, :1]  # (m, 3, 3): rows b-a, c-a, d-a
         # lambda (b, c, d weights) = (x - a) @ inv(edges)
         self.inverse, self.usable = _inverses(edges)
+        # Each tet's least height (three volumes over its largest face): a point whose
+        # barycentric weights are all above d / height lies d or more inside it.
+        faces = corners[:, [[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]]]  # (m, 4, 3, 3)
+        areas = np.linalg.norm(
+            np.cross(faces[:, :, 1] - faces[:, :, 0], faces[:, :, 2] - faces[:, :, 0]), axis=-1
+        ).max(axis=1)
+        volumes = np.abs(np.einsum("ki,ki->k", edges[:, 0], np.cross(edges[:, 1], edges[:, 2])))
+        self.least_height = np.divide(volumes, areas, out=np.zeros(len(areas)), where=areas > 0)
         lo, hi = corners.min(axis=1), corners.max(axis=1)
         self.lo = lo.min(axis=0) if len(lo) else np.zeros(3)
         span = (hi.max(axis=0) - self.lo) if len(hi) else np.ones(3)
@@ -98,15 +106,23 @@ class TetLocator:
 
     def locate(self, points: np.ndarray, chunk: int = 200_000) -> np.ndarray:
         """The index of a tet holding each point ((k, 3) -> (k,) int64), -1 outside them all."""
+        return self.locate_with_depth(points, chunk)[0]
+
+    def locate_with_depth(
+        self, points: np.ndarray, chunk: int = 200_000
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """locate, and for each point found a lower bound of its distance to its tet's faces
+        (0 where not found)."""
         points = np.asarray(points, np.float64).reshape(-1, 3)
         out = np.full(len(points), -1, np.int64)
+        depth = np.zeros(len(points))
         index = np.floor((points - self.lo) / self.cell).astype(np.int64)
         inside_grid = np.all((index >= 0) & (index < self.shape), axis=1) & np.all(
             np.isfinite(points), axis=1
         )
         which = np.flatnonzero(inside_grid)
         if not len(which):
-            return out
+            return out, depth
         i = index[which]
         cells = (i[:, 2] * self.shape[1] + i[:, 1]) * self.shape[0] + i[:, 0]
         start, stop = self.cell_start[cells], self.cell_start[cells + 1]
@@ -117,11 +133,12 @@ class TetLocator:
         while begin < len(which):
             limit = (ends[begin - 1] if begin else 0) + chunk
             end = max(begin + 1, int(np.searchsorted(ends, limit, side="right")))
-            self._locate_some(points, which[begin:end], start[begin:end], counts[begin:end], out)
+            some = (which[begin:end], start[begin:end], counts[begin:end])
+            self._locate_some(points, *some, out, depth)
             begin = end
-        return out
+        return out, depth
 
-    def _locate_some(self, points, which, start, counts, out) -> None:
+    def _locate_some(self, points, which, start, counts, out, depth) -> None:
         total = int(counts.sum())
         if not total:
             return
@@ -139,6 +156,9 @@ class TetLocator:
         # The first hit per point (pairs are grouped by point, in order).
         points_hit, first = np.unique(point_of_pair[hits], return_index=True)
         out[which[points_hit]] = tets[hits[first]]
+        chosen = hits[first]
+        least = np.minimum(weights[chosen].min(axis=1), 1 - weights[chosen].sum(axis=1))
+        depth[which[points_hit]] = np.maximum(least, 0) * self.least_height[tets[chosen]]
 
 
 @dataclass
@@ -330,21 +350,41 @@ def cut_surface(
     rows, _ = row_ticks_at_frames(times_s, fps, frame_start, substeps)
     q = np.asarray(q, np.float64)
     rows = cut_clip.rows_along_path(q, rows)
+    cuttable_material = np.array([m in CUTTABLE_MODELS for m in material_models], bool)
+    materials = np.asarray(tet_materials)
+
+    def located(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        tets, depth = locator.locate_with_depth(points)
+        return (tets >= 0) & cuttable_material[materials[np.maximum(tets, 0)]], depth
+
+    def cuttable(points: np.ndarray) -> np.ndarray:
+        return located(points)[0]
+
+    def firmly(points: np.ndarray) -> np.ndarray:
+        # Only a point near its tet's faces may have a neighbour tet of another material
+        # within FIRM_MM: those alone are probed along the axes.
+        points = np.asarray(points, np.float64).reshape(-1, 3)
+        inside, depth = located(points)
+        near = inside & (depth <= cut_clip.FIRM_MM)
+        inside[near] = cut_clip.firmly_inside(points[near], cuttable)
+        return inside
+
+    def cut_at(rows: np.ndarray) -> np.ndarray:
+        return cutting_tets(
+            q[rows], np.asarray(states)[rows], locator, tet_materials, material_models
+        )
+
+    cut_in = cut_at(rows)
+    finer = cut_clip.rows_over_material(q, rows, cut_in >= 0, firmly)
+    if len(finer) > len(rows):
+        rows, cut_in = finer, cut_at(finer)
     row_frames = frame_start + np.asarray(times_s, np.float64)[rows] * fps
-    cut_in = cutting_tets(
-        q[rows], np.asarray(states)[rows], locator, tet_materials, material_models
-    )
     cutting = cut_in >= 0
     cut_tets = np.unique(cut_in[cutting])
     if len(rows) < 2 or q.shape[1] < 2:
         return replace(sweep(q, states, rows, row_frames, cutting), cut_tets=cut_tets)
-
-    def cuttable(points: np.ndarray) -> np.ndarray:
-        in_tet = np.full(len(points), STATE_TET)
-        return cuttable_points(points, in_tet, locator, tet_materials, material_models)
-
     vertices, faces, face_frames = cut_clip.clipped_sweep(
-        q[rows], cutting, allowed_quads(states, rows), row_frames, cuttable
+        q[rows], cutting, allowed_quads(states, rows), row_frames, cuttable, firmly
     )
     # Its faces' centres and edge midpoints are in the material already (cut_clip drops the
     # rest, the test keep_inside_cuttable makes of whole quads).
