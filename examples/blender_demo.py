@@ -15,6 +15,7 @@ mode); the README's demo command (examples/demo.sh) installs what it needs first
 from __future__ import annotations
 
 import argparse
+import os
 import shutil
 import sys
 import time
@@ -30,6 +31,10 @@ KNIFE_X = -22.0  # Its 40 mm edge over the proximal bone (x -36 to -9) and the j
 
 
 def toolkit_executable() -> str:
+    """The hapticut command beside this Python, else on PATH (HAPTICUT_TOOLKIT overrides, as
+    in the add-on's tests: a toolkit under development renders without installing it)."""
+    if os.environ.get("HAPTICUT_TOOLKIT"):
+        return os.environ["HAPTICUT_TOOLKIT"]
     beside = Path(sys.executable).with_name("hapticut")
     found = str(beside) if beside.exists() else shutil.which("hapticut")
     if not found:

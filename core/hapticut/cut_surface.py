@@ -5,13 +5,19 @@ From a servo recording's proxies ``q`` (ticks, N, 3) and states, and the scene's
 
 - a point *cuts* at a tick when its proxy is inside a tet (state TET, not held on a face,
   edge or vertex) whose material is cuttable (drag, viscous, or a membrane it pierced);
-- the surface is swept between consecutive rows of points (rows are ticks picked at the
-  scene's frames, ``substeps`` per frame): the quad between points i, i+1 of rows r, r+1 is
-  kept when all four corners cut at their rows and both points stayed inside tets at every
-  tick between the rows; it carries the frame of row r+1 (when the blade got there).
+- the tets those points were in at the rows below are the cut tets (``CutSurface.cut_tets``):
+  which tets a stroke cut, decided once, per tet;
+- the surface is the edge's swept path (hapticut.cut_clip): rows of points are ticks picked
+  at the scene's frames (``substeps`` per frame), and between them where the edge jumped
+  further than the rows' usual step (``rows_along_path``); the quads between points i, i+1
+  of rows r, r+1 whose points stayed inside tets at every tick between the rows are split into finer
+  columns along the edge, and their triangles are kept where their corners cut, cut back to
+  where the edge leaves the material (bisection) where only some do; a face carries the
+  frame of row r+1 (when the blade got there). So the outline follows the edge's path and
+  the material's surface, not the tets' steps.
 
 Then every face whose centre or edge midpoint lies outside cuttable material is dropped (a
-flat quad between two points beside a curved bone would clip the bone's surface). So no
+flat triangle between two points beside a curved bone would clip the bone's surface). So no
 face lies in rigid material (its proxies stop on its surface) or in air, at those samples.
 
 A bake computes them in a child process (``hapticut cut-surface``, ``recording_cut_surfaces``)
@@ -23,10 +29,11 @@ from __future__ import annotations
 
 import io
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from hapticut import cut_clip
 from hapticut.atomic_file import write_atomically
 
 CUTTABLE_MODELS = ("drag", "viscous", "membrane")
@@ -59,6 +66,14 @@ class TetLocator:
         edges = corners[:, 1:] - corners[:, :1]  # (m, 3, 3): rows b-a, c-a, d-a
         # lambda (b, c, d weights) = (x - a) @ inv(edges)
         self.inverse, self.usable = _inverses(edges)
+        # Each tet's least height (three volumes over its largest face): a point whose
+        # barycentric weights are all above d / height lies d or more inside it.
+        faces = corners[:, [[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]]]  # (m, 4, 3, 3)
+        areas = np.linalg.norm(
+            np.cross(faces[:, :, 1] - faces[:, :, 0], faces[:, :, 2] - faces[:, :, 0]), axis=-1
+        ).max(axis=1)
+        volumes = np.abs(np.einsum("ki,ki->k", edges[:, 0], np.cross(edges[:, 1], edges[:, 2])))
+        self.least_height = np.divide(volumes, areas, out=np.zeros(len(areas)), where=areas > 0)
         lo, hi = corners.min(axis=1), corners.max(axis=1)
         self.lo = lo.min(axis=0) if len(lo) else np.zeros(3)
         span = (hi.max(axis=0) - self.lo) if len(hi) else np.ones(3)
@@ -91,15 +106,23 @@ class TetLocator:
 
     def locate(self, points: np.ndarray, chunk: int = 200_000) -> np.ndarray:
         """The index of a tet holding each point ((k, 3) -> (k,) int64), -1 outside them all."""
+        return self.locate_with_depth(points, chunk)[0]
+
+    def locate_with_depth(
+        self, points: np.ndarray, chunk: int = 200_000
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """locate, and for each point found a lower bound of its distance to its tet's faces
+        (0 where not found)."""
         points = np.asarray(points, np.float64).reshape(-1, 3)
         out = np.full(len(points), -1, np.int64)
+        depth = np.zeros(len(points))
         index = np.floor((points - self.lo) / self.cell).astype(np.int64)
         inside_grid = np.all((index >= 0) & (index < self.shape), axis=1) & np.all(
             np.isfinite(points), axis=1
         )
         which = np.flatnonzero(inside_grid)
         if not len(which):
-            return out
+            return out, depth
         i = index[which]
         cells = (i[:, 2] * self.shape[1] + i[:, 1]) * self.shape[0] + i[:, 0]
         start, stop = self.cell_start[cells], self.cell_start[cells + 1]
@@ -110,11 +133,12 @@ class TetLocator:
         while begin < len(which):
             limit = (ends[begin - 1] if begin else 0) + chunk
             end = max(begin + 1, int(np.searchsorted(ends, limit, side="right")))
-            self._locate_some(points, which[begin:end], start[begin:end], counts[begin:end], out)
+            some = (which[begin:end], start[begin:end], counts[begin:end])
+            self._locate_some(points, *some, out, depth)
             begin = end
-        return out
+        return out, depth
 
-    def _locate_some(self, points, which, start, counts, out) -> None:
+    def _locate_some(self, points, which, start, counts, out, depth) -> None:
         total = int(counts.sum())
         if not total:
             return
@@ -132,6 +156,9 @@ class TetLocator:
         # The first hit per point (pairs are grouped by point, in order).
         points_hit, first = np.unique(point_of_pair[hits], return_index=True)
         out[which[points_hit]] = tets[hits[first]]
+        chosen = hits[first]
+        least = np.minimum(weights[chosen].min(axis=1), 1 - weights[chosen].sum(axis=1))
+        depth[which[points_hit]] = np.maximum(least, 0) * self.least_height[tets[chosen]]
 
 
 @dataclass
@@ -141,6 +168,9 @@ class CutSurface:
     face_frames: np.ndarray  # (f,) int32: the scene frame each face was cut at
     cutting: np.ndarray  # (rows, N) bool: which point cut at each row
     row_ticks: np.ndarray  # (rows,) the recording index of each row
+    # The tets the cutting points were in at the rows (sorted): the per-tet cut, which the
+    # smooth surface above renders and does not change.
+    cut_tets: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
 
 
 def cuttable_points(
@@ -151,6 +181,18 @@ def cuttable_points(
     material_models,
 ) -> np.ndarray:
     """(…, N) bool: the proxy is in a tet (state TET) of a cuttable material."""
+    return cutting_tets(q, states, locator, tet_materials, material_models) >= 0
+
+
+def cutting_tets(
+    q: np.ndarray,
+    states: np.ndarray,
+    locator: TetLocator,
+    tet_materials: np.ndarray,
+    material_models,
+) -> np.ndarray:
+    """(…, N) int64: the cuttable tet each proxy cuts in (state TET), -1 where it does not
+    cut: the one decision of which points, and so which tets, a stroke cuts."""
     q = np.asarray(q, np.float64)
     shape = q.shape[:-1]
     cuttable_material = np.array([m in CUTTABLE_MODELS for m in material_models], bool)
@@ -159,7 +201,7 @@ def cuttable_points(
     found[in_tet] = locator.locate(q.reshape(-1, 3)[in_tet])
     material = np.where(found >= 0, np.asarray(tet_materials)[np.maximum(found, 0)], -1)
     ok = (found >= 0) & cuttable_material[np.maximum(material, 0)]
-    return ok.reshape(shape)
+    return np.where(ok, found, -1).reshape(shape)
 
 
 def nearest_ticks(times_s: np.ndarray, step_s: float, count: int) -> np.ndarray:
@@ -203,6 +245,24 @@ def row_ticks_at_frames(
     return index, frame_start + times_s[index] * fps
 
 
+def stayed_in_tets(states: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """(rows-1, N) bool: the point stayed inside a tet at every tick between two consecutive
+    rows (both rows included)."""
+    rows = np.asarray(rows, np.int64)
+    left_tet = (np.asarray(states) != STATE_TET).astype(np.int64)
+    zeros = np.zeros((1, left_tet.shape[1]), np.int64)
+    cumulative = np.concatenate([zeros, np.cumsum(left_tet, axis=0)])
+    return (cumulative[rows[1:] + 1] - cumulative[rows[:-1]]) == 0
+
+
+def allowed_quads(states: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """(rows-1, N-1) bool: the quads between points i, i+1 of consecutive rows whose two
+    points stayed inside tets between the rows (a point held on a face, or out of the mesh,
+    went round the material rather than through it)."""
+    stayed = stayed_in_tets(states, rows)
+    return stayed[:, :-1] & stayed[:, 1:]
+
+
 def sweep(
     q: np.ndarray,
     states: np.ndarray,
@@ -222,12 +282,7 @@ def sweep(
             cutting_rows,
             rows,
         )
-    # Stayed inside a tet at every tick between two rows (rows r and r+1 included).
-    in_tet = np.asarray(states) == STATE_TET
-    left_tet = (~in_tet).astype(np.int64)
-    cumulative = np.concatenate([np.zeros((1, points), np.int64), np.cumsum(left_tet, axis=0)])
-    outside_between = cumulative[rows[1:] + 1] - cumulative[rows[:-1]]  # (rows-1, N)
-    stayed = outside_between == 0
+    stayed = stayed_in_tets(states, rows)
     corner = cutting_rows[:-1] & cutting_rows[1:] & stayed  # point i cuts from row r to r+1
     keep = corner[:, :-1] & corner[:, 1:]  # (rows-1, N-1): the quad of points i, i+1
     r, i = np.nonzero(keep)
@@ -273,6 +328,7 @@ def keep_inside_cuttable(
         surface.face_frames[inside],
         surface.cutting,
         surface.row_ticks,
+        surface.cut_tets,
     )
 
 
@@ -291,13 +347,48 @@ def cut_surface(
 ) -> CutSurface:
     """The whole computation (module doc) for one blade of a recording."""
     locator = locator or TetLocator(tet_vertices, tets)
-    rows, row_frames = row_ticks_at_frames(times_s, fps, frame_start, substeps)
+    rows, _ = row_ticks_at_frames(times_s, fps, frame_start, substeps)
     q = np.asarray(q, np.float64)
-    cutting = cuttable_points(
-        q[rows], np.asarray(states)[rows], locator, tet_materials, material_models
+    rows = cut_clip.rows_along_path(q, rows)
+    cuttable_material = np.array([m in CUTTABLE_MODELS for m in material_models], bool)
+    materials = np.asarray(tet_materials)
+
+    def located(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        tets, depth = locator.locate_with_depth(points)
+        return (tets >= 0) & cuttable_material[materials[np.maximum(tets, 0)]], depth
+
+    def cuttable(points: np.ndarray) -> np.ndarray:
+        return located(points)[0]
+
+    def firmly(points: np.ndarray) -> np.ndarray:
+        # Only a point near its tet's faces may have a neighbour tet of another material
+        # within FIRM_MM: those alone are probed along the axes.
+        points = np.asarray(points, np.float64).reshape(-1, 3)
+        inside, depth = located(points)
+        near = inside & (depth <= cut_clip.FIRM_MM)
+        inside[near] = cut_clip.firmly_inside(points[near], cuttable)
+        return inside
+
+    def cut_at(rows: np.ndarray) -> np.ndarray:
+        return cutting_tets(
+            q[rows], np.asarray(states)[rows], locator, tet_materials, material_models
+        )
+
+    cut_in = cut_at(rows)
+    finer = cut_clip.rows_over_material(q, rows, cut_in >= 0, firmly)
+    if len(finer) > len(rows):
+        rows, cut_in = finer, cut_at(finer)
+    row_frames = frame_start + np.asarray(times_s, np.float64)[rows] * fps
+    cutting = cut_in >= 0
+    cut_tets = np.unique(cut_in[cutting])
+    if len(rows) < 2 or q.shape[1] < 2:
+        return replace(sweep(q, states, rows, row_frames, cutting), cut_tets=cut_tets)
+    vertices, faces, face_frames = cut_clip.clipped_sweep(
+        q[rows], cutting, allowed_quads(states, rows), row_frames, cuttable, firmly
     )
-    surface = sweep(q, states, rows, row_frames, cutting)
-    return keep_inside_cuttable(surface, locator, tet_materials, material_models)
+    # Its faces' centres and edge midpoints are in the material already (cut_clip drops the
+    # rest, the test keep_inside_cuttable makes of whole quads).
+    return CutSurface(vertices, faces, face_frames, cutting, rows, cut_tets)
 
 
 def preview_tets(path: str | os.PathLike) -> dict:
@@ -339,7 +430,7 @@ def recording_cut_surfaces(
 
 def write_cut_surfaces(path: str | os.PathLike, surfaces: dict[str, CutSurface]) -> None:
     """The surfaces as .npz: ``names``, then ``vertices_i``, ``faces_i``, ``face_frames_i``,
-    ``cutting_i`` and ``row_ticks_i`` for the i-th name."""
+    ``cutting_i``, ``row_ticks_i`` and ``cut_tets_i`` for the i-th name."""
     arrays: dict[str, np.ndarray] = {"names": np.array(list(surfaces), dtype=str)}
     for i, surface in enumerate(surfaces.values()):
         arrays[f"vertices_{i}"] = surface.vertices
@@ -347,6 +438,7 @@ def write_cut_surfaces(path: str | os.PathLike, surfaces: dict[str, CutSurface])
         arrays[f"face_frames_{i}"] = surface.face_frames
         arrays[f"cutting_{i}"] = surface.cutting
         arrays[f"row_ticks_{i}"] = surface.row_ticks
+        arrays[f"cut_tets_{i}"] = surface.cut_tets
     buffer = io.BytesIO()
     np.savez(buffer, **arrays)
     write_atomically(path, buffer.getvalue())
@@ -362,6 +454,7 @@ def read_cut_surfaces(path: str | os.PathLike) -> dict[str, CutSurface]:
                 data[f"face_frames_{i}"],
                 data[f"cutting_{i}"],
                 data[f"row_ticks_{i}"],
+                data[f"cut_tets_{i}"],
             )
             for i, name in enumerate(data["names"])
         }

@@ -19,7 +19,8 @@ def test_paths_names_the_package_and_the_servo():
     assert found["servo"] == hapticut.servo_path() and os.access(found["servo"], os.X_OK)
     assert found["servo_error"] == ""
     assert found["version"] == hapticut.__version__
-    for name in ("servo_client.py", "recording.py", "servo_layout.py", "cut_surface.py"):
+    pure = ("servo_client.py", "recording.py", "servo_layout.py", "cut_surface.py", "cut_clip.py")
+    for name in pure:
         assert os.path.isfile(os.path.join(found["package"], name))
 
 

@@ -108,6 +108,11 @@ def test_the_cut_surface_of_a_servo_stroke_is_in_cuttable_material_only(finger, 
         assert np.all(own >= 0)
         found = set(engine_models[~tied]) | {models[m] for m in scene.tet_materials[own]}
         assert found <= CUTTABLE, found
+    # The cut tets are the tets the cutting points were in at the rows, all cuttable.
+    rows = surface.row_ticks
+    held = locator.locate(blade["q"][rows][surface.cutting])
+    assert np.array_equal(surface.cut_tets, np.unique(held))
+    assert {models[m] for m in scene.tet_materials[surface.cut_tets]} <= CUTTABLE
     # Through the flesh; the frames run from the first to the last frame.
     found = {models[m] for m in scene.tet_materials[space.locate(centres)]}
     assert "drag" in found
@@ -177,7 +182,7 @@ def test_the_cut_surface_command_writes_what_the_function_computes(finger, tmp_p
     )["scalpel"]
     got = surfaces["scalpel"]
     assert len(got.faces) > 20
-    for field in ("vertices", "faces", "face_frames", "cutting", "row_ticks"):
+    for field in ("vertices", "faces", "face_frames", "cutting", "row_ticks", "cut_tets"):
         assert np.array_equal(getattr(got, field), getattr(expected, field)), field
     # Fewer ticks, fewer rows: the bake cuts only what it keys.
     assert got.row_ticks.max() < 900 < len(rec)

@@ -1,9 +1,9 @@
 """``hapticut paths --json``: where this toolkit lives, for the Blender add-on.
 
 The add-on (pure Python, another interpreter) loads the toolkit's numpy-only modules
-(``servo_client``, ``recording``, ``servo_layout``, ``cut_surface``) from ``package`` and
-starts the servo at ``servo``: one source for the client, and always the client of the
-installed servo (docs/addon.md).
+(``servo_client``, ``recording``, ``servo_layout``, ``cut_surface`` with ``cut_clip``) from
+``package`` and starts the servo at ``servo``: one source for the client, and always the
+client of the installed servo (docs/addon.md).
 """
 
 from __future__ import annotations
