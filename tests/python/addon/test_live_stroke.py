@@ -307,11 +307,13 @@ def test_the_cut_outline_follows_the_edge_path_not_the_tets(baked):
         f"{worst:.3f} mm, 90 % within {most:.3f} mm, median {middle:.3f} mm "
         f"(tets {tet_mm:.2f} mm)"
     )
-    # Whole quads kept by their corners left outline vertices up to about a tet's edge inside
-    # (the 90th percentile near the whole edge). Where the edge grazes the skin one may still
-    # lie a row or two in, by an amount the build decides, so the worst is held looser than
-    # the bulk: it catches the tets' steps, the bulk catches their pattern.
-    assert worst < 0.5 * tet_mm and most < 0.05 * tet_mm and middle < 0.02 * tet_mm
+    # Whole quads kept by their corners left most outline vertices up to about a tet's edge
+    # inside (the 90th percentile near the whole edge). Where the edge grazes the skin a vertex
+    # or two may still lie a row in, by an amount the build decides: the worst is printed, and
+    # at most one vertex in a hundred may stray past a fifth of a tet's edge.
+    strays = int(np.count_nonzero(deviation > 0.2 * tet_mm))
+    assert strays <= 0.01 * len(deviation), f"{strays} of {len(deviation)} vertices stray"
+    assert most < 0.05 * tet_mm and middle < 0.02 * tet_mm
 
 
 def blender_scene_mm(scene) -> float:
