@@ -38,8 +38,8 @@ bash tests/scripts/sanitizers.sh run
 phase "Fuzzing the scene reader and the control parser (libFuzzer, bounded time)"
 bash tests/scripts/fuzz.sh
 # The Python tests in two runs: those that time no servo in parallel, one pytest-xdist worker
-# per core (HAPTICUT_TEST_WORKERS), the tests of a builder scan that they share on one worker
-# (xdist_group); then the suites that time a real servo's threads (marker "serial") alone.
+# per core (HAPTICUT_TEST_WORKERS); then the suites that time a real servo's threads (marker
+# "serial") alone, so no other test's load decides their timing.
 phase "Python tests in parallel (pytest -n ${HAPTICUT_TEST_WORKERS:-$(nproc)})"
 python3 -m pytest -q -m "not slow and not serial" -n "${HAPTICUT_TEST_WORKERS:-$(nproc)}" \
   --dist loadgroup tests/python --ignore=tests/python/addon
