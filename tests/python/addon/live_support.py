@@ -82,8 +82,18 @@ def follow(until, timeout_s: float = 60.0, sleep_s: float = 0.005) -> float:
 def probe_materials(scene_path: str, points, cut: bool = False) -> list[str]:
     """The model of the tet at each point (mm), by the toolkit in a child Python: "" outside.
     cut: a point on a face between a cuttable tet and another counts as cuttable (tet_probe)."""
+    return _probe(scene_path, points, ["--cut"] if cut else [])
+
+
+def bone_depths(scene_path: str, points) -> list[float]:
+    """How deep each point (mm) is in rigid material (its distance to the bone's surface; 0
+    outside), by the toolkit in a child Python (tet_probe)."""
+    return _probe(scene_path, points, ["--depth"])
+
+
+def _probe(scene_path: str, points, options: list[str]) -> list:
     done = subprocess.run(
-        [sys.executable, str(HERE / "tet_probe.py"), scene_path, *(["--cut"] if cut else [])],
+        [sys.executable, str(HERE / "tet_probe.py"), scene_path, *options],
         input=json.dumps([list(map(float, p)) for p in points]),
         capture_output=True,
         text=True,

@@ -14,6 +14,10 @@ import numpy as np
 import pytest
 
 CUTTABLE = {"drag", "viscous", "membrane"}
+# A baked edge resting on the bone touches it: Blender keeps keyframes in single precision,
+# which rounds a pose some 20 mm from the origin by about 1e-6 mm (and a rotation's rounding
+# swings the edge's ends as much again), so a sample this deep is still on the surface.
+ON_BONE_MM = 1e-4
 
 
 @pytest.fixture(scope="module")
@@ -200,8 +204,9 @@ def test_the_baked_knife_rests_on_the_bone_and_never_enters_it(baked):
         line = [a.lerp(b, t) for t in np.linspace(0.0, 1.0, samples_per_frame)]
         samples.extend([list(v * mm) for v in line])
         lowest.append(min(v.z for v in line) * mm)
-    models = live_support.probe_materials(building.scene_file(baked), samples)
-    inside = [samples[i] for i, m in enumerate(models) if m == "rigid"]
+    depths = live_support.bone_depths(building.scene_file(baked), samples)
+    print(f"\ndeepest baked edge sample in bone: {max(depths):.3g} mm")
+    inside = [(samples[i], d) for i, d in enumerate(depths) if d > ON_BONE_MM]
     assert inside == [], f"{len(inside)} of {len(samples)} edge samples in bone: {inside[:3]}"
     # Held up by the bone: at the deepest keyed frame the device is 3 mm under the bone's
     # axis, the baked edge above the bone's top (its radius is about 3.5 mm).
