@@ -209,6 +209,16 @@ bool Blade::probe_motion(const EdgePose& edge, double& advance, bool add_contact
   return free;
 }
 
+void Blade::take_swept_hit(const SweptHit& hit, double f0, double f1, double& advance,
+                           bool add_contacts) {
+  const double fraction = f0 + hit.along * (f1 - f0);
+  if (hit.motion < advance) {
+    advance = hit.motion;
+    earliest_hit_fraction_ = fraction;
+  }
+  if (add_contacts) add_contact(fraction, hit.contact, hit.wall_tet);
+}
+
 bool Blade::sweep_stretches_each(const EdgePose& first, const EdgePose& last, double from,
                                  double to, double& advance, bool add_contacts) {
   const std::size_t n = proxies_.size();
@@ -222,11 +232,7 @@ bool Blade::sweep_stretches_each(const EdgePose& first, const EdgePose& last, do
                       last.point(f0, length_mm_), last.point(f1, length_mm_), from, to, tolerance);
     if (!hit.hit) continue;
     free = false;
-    if (hit.motion < advance) {
-      advance = hit.motion;
-      earliest_hit_fraction_ = f0 + hit.along * (f1 - f0);
-    }
-    if (add_contacts) add_contact(f0 + hit.along * (f1 - f0), hit.contact, hit.wall_tet);
+    take_swept_hit(hit, f0, f1, advance, add_contacts);
   }
   return free;
 }
@@ -244,14 +250,7 @@ bool Blade::sweep_stretches(const EdgePose& first, const EdgePose& last, double 
   const Vec3 b0 = first.point(1.0, length_mm_);
   const Vec3 a1 = last.start_mm;
   const Vec3 b1 = last.point(1.0, length_mm_);
-  Aabb box;
-  box.grow(a0);
-  box.grow(b0);
-  box.grow(a1);
-  box.grow(b1);
-  const Vec3 pad{tolerance, tolerance, tolerance};
-  box.lo = box.lo - pad;
-  box.hi = box.hi + pad;
+  const Aabb box = motion_box(a0, b0, a1, b1, tolerance);
   const double reach = std::max(norm(a1 - a0), norm(b1 - b0)) + tolerance;
   // Where the surface's edges are small beside the motion (a fine mesh, a long
   // step) the stretches' own queries find fewer: past a few per stretch the
@@ -294,11 +293,7 @@ bool Blade::sweep_stretches(const EdgePose& first, const EdgePose& last, double 
                             last.point(f1, length_mm_), from, to, tolerance);
     if (!hit.hit) continue;
     free = false;
-    if (hit.motion < advance) {
-      advance = hit.motion;
-      earliest_hit_fraction_ = f0 + hit.along * (f1 - f0);
-    }
-    if (add_contacts) add_contact(f0 + hit.along * (f1 - f0), hit.contact, hit.wall_tet);
+    take_swept_hit(hit, f0, f1, advance, add_contacts);
   }
   return free;
 }

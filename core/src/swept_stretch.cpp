@@ -103,17 +103,7 @@ class StretchSweep {
         n1_(cross(b0 - a0, b1 - a0)),
         n2_(cross(b1 - a0, a1 - a0)) {}
 
-  Aabb box() const {
-    Aabb box;
-    box.grow(a0_);
-    box.grow(b0_);
-    box.grow(a1_);
-    box.grow(b1_);
-    const Vec3 pad{tolerance_, tolerance_, tolerance_};
-    box.lo = box.lo - pad;
-    box.hi = box.hi + pad;
-    return box;
-  }
+  Aabb box() const { return motion_box(a0_, b0_, a1_, b1_, tolerance_); }
 
   void consider(std::int32_t k) {
     const auto& seg = edges_.segment(k);

@@ -185,6 +185,10 @@ class Blade {
   // `advance` gets the earliest crossing and contacts are added when asked.
   bool sweep_stretches(const EdgePose& first, const EdgePose& last, double from, double to,
                        double& advance, bool add_contacts);
+  // A stretch's hit (between fractions f0 and f1): the earliest sets the
+  // advance and the sample met first; a contact when asked.
+  void take_swept_hit(const SweptHit& hit, double f0, double f1, double& advance,
+                      bool add_contacts);
   // The same with each stretch's own query of the rigid edges (where the
   // broad phase would gather too many).
   bool sweep_stretches_each(const EdgePose& first, const EdgePose& last, double from, double to,

@@ -181,6 +181,17 @@ inline Aabb segment_box(const Vec3& a, const Vec3& b) {
           {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)}};
 }
 
+// The box of a moving segment, a0 -> b0 moved to a1 -> b1 (each end along a
+// straight chord, so every point of the motion lies in its ends' hull),
+// grown by pad on every side.
+inline Aabb motion_box(const Vec3& a0, const Vec3& b0, const Vec3& a1, const Vec3& b1, double pad) {
+  Aabb box = segment_box(a0, b0);
+  box.grow(a1);
+  box.grow(b1);
+  const Vec3 margin{pad, pad, pad};
+  return {box.lo - margin, box.hi + margin};
+}
+
 // Whether box `inner` (a segment's, segment_box) lies wholly beyond one face
 // of the closed `box`: below its lo or above its hi on one axis. Then the
 // segment meets nothing inside the box. Exact, no division; bitwise like box_holds.
