@@ -77,28 +77,12 @@ Blade::Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
   length_mm_ = norm(tool_span_);
   tool_direction_ = length_mm_ > 0.0 ? tool_span_ / length_mm_ : Vec3{1.0, 0.0, 0.0};
   if (coupling_ == BladeCoupling::Rigid) {
-    const std::size_t n = tool_points_.size();
-    ideal_points_.assign(n, Vec3{});
-    ideal_tets_.assign(n, kNoTet);
-    trial_points_.assign(n, Vec3{});
-    trial_tets_.assign(n, kNoTet);
-    targets_.assign(n, Vec3{});
-    walls_.assign(n, ProbeWalls::Rigid);
-    point_forces_.assign(n, Vec3{});
-    start_points_.assign(n, Vec3{});
-    start_tets_.assign(n, kNoTet);
-    held_points_.assign(n, Vec3{});
-    held_tets_.assign(n, kNoTet);
+    rigid_ = std::make_unique<RigidEdge>(space_, fractions_, length_mm_);
+    point_forces_.assign(tool_points_.size(), Vec3{});
     resisting_materials_ =
         std::any_of(space_->materials().begin(), space_->materials().end(), [](const Material& m) {
           return m.model != MaterialModel::Free && m.model != MaterialModel::Rigid;
         });
-    if (n > 1) {
-      rigid_edges_ = std::make_unique<const RigidSurfaceEdges>(*space_);
-      swept_candidates_.reserve(rigid_edges_->size());
-      active_candidates_.reserve(rigid_edges_->size());
-      stretch_candidates_.reserve(rigid_edges_->size());
-    }
   }
 }
 
@@ -141,10 +125,10 @@ void Blade::reset(const Pose& pose) {
   last_tick_ = {};
   ideal_pose_ = device_pose_;
   if (coupling_ == BladeCoupling::Rigid) {
-    sliding_ = false;
+    rigid_->clear_sliding();
     orientation_ramp_s_ = 0.0;
     std::fill(point_forces_.begin(), point_forces_.end(), Vec3{});
-    seated_ = seat_at(device_edge());
+    seated_ = rigid_->seat(device_edge());
     if (seated_) place_proxies_on_ideal(space_->runtime_settings());
   }
 }
@@ -154,11 +138,11 @@ void Blade::set_orientation(BladeOrientation orientation, double ramp_s) {
   orientation_ = orientation;
   orientation_ramp_s_ = std::isfinite(ramp_s) && ramp_s > 0.0 ? ramp_s : 0.0;
   orientation_ramp_elapsed_s_ = 0.0;
-  ramp_from_direction_ = ideal_edge_.direction;
+  if (rigid_) ramp_from_direction_ = rigid_->edge().direction;
 }
 
 Vec3 Blade::ideal_point(int i) const {
-  return coupling_ == BladeCoupling::Rigid ? ideal_points_[i] : proxies_[i].q();
+  return coupling_ == BladeCoupling::Rigid ? rigid_->points()[i] : proxies_[i].q();
 }
 
 Vec3 Blade::point_force(int i) const {
@@ -202,7 +186,7 @@ BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& sett
   if (!settings.valid()) return reject(false);
   const PoseCheck check = place_checked(pose);
   if (check != PoseCheck::Fine) return reject(check == PoseCheck::OutOfWorkspace);
-  if (coupling_ == BladeCoupling::Rigid) return step_rigid(pose, dt_s, settings);
+  if (coupling_ == BladeCoupling::Rigid) return step_rigid(dt_s, settings);
   ideal_pose_ = device_pose_;
   const BladeTick tick = step_points(dt_s, settings);
   count(tick);

@@ -147,6 +147,16 @@ void Proxy::set_place(const ProxyPlace& place) {
   place_ = place;
 }
 
+bool Proxy::seat(const ProxyPlace& place, const Vec3& p, const RuntimeSettings& settings) {
+  const bool in_tet = place.state == ProxyState::Tet && place.tet >= 0 &&
+                      place.tet < space_->mesh().tet_count() && !space_->tet_is_rigid(place.tet);
+  const bool outside = place.state == ProxyState::Outside && place.tet == kNoTet;
+  if (!(in_tet || outside) || place.local != 0 || !is_finite(place.q)) return false;
+  place_ = place;
+  force_N_ = spring_force(p, settings, nullptr);
+  return true;
+}
+
 // (b-2) of TET and FACE, and EDGE's (b) short of the edge's ends: q moved
 // within its tet, face or edge and stopped where the material put it. Called
 // again, the material (same target, q now at its answer) holds q, and FACE's

@@ -16,14 +16,12 @@
 #include <span>
 #include <vector>
 
-#include "hapticut/edge_contact_set.h"
 #include "hapticut/edge_fit.h"
 #include "hapticut/force_shading.h"
 #include "hapticut/pose.h"
 #include "hapticut/proxy.h"
+#include "hapticut/rigid_edge.h"
 #include "hapticut/scene.h"
-#include "hapticut/segment_probe.h"
-#include "hapticut/swept_stretch.h"
 
 namespace hapticut {
 
@@ -98,10 +96,8 @@ struct BladeSnapshot {
 class Blade {
  public:
   static constexpr int kMaxPoints = 10000;
-  // Rounds of a rigid tick (walk, fit, walk again), and the halvings of one
-  // conservative advance: bounded work, counted in BladeTick.
-  static constexpr int kMaxRigidRounds = 8;
-  static constexpr int kMaxAdvanceHalvings = 4;
+  // Rounds of a rigid tick (walk, fit, walk again): bounded work, counted in BladeTick.
+  static constexpr int kMaxRigidRounds = RigidEdge::kMaxRounds;
 
   // Throws std::invalid_argument naming the value when spec.points is outside
   // 1..kMaxPoints or an end is not finite. Builds its own ForceShading from
@@ -163,60 +159,9 @@ class Blade {
   BladeTick step_points(double dt_s, const RuntimeSettings& settings);
   void count(const BladeTick& tick);
   // The rigid coupling (blade_rigid.cpp).
-  BladeTick step_rigid(const Pose& pose, double dt_s, const RuntimeSettings& settings);
+  BladeTick step_rigid(double dt_s, const RuntimeSettings& settings);
   // The device's edge from the last placed pose.
   EdgePose device_edge() const;
-  // Whether every point and every stretch between neighbours of `edge` lies
-  // outside rigid material; if so, makes it the ideal pose (seated).
-  bool seat_at(const EdgePose& edge);
-  // The walls of a point's walks this tick: a membrane is one where the
-  // point's own tick reached it and did not break it (its spring, not its
-  // neighbours' pull, breaks it; once broken in, it resists as a target).
-  // May move start_tet to the tet outside the membrane the point lies on.
-  ProbeWalls membrane_walls(const ProxyPlace& place, const Vec3& device_point,
-                            std::int32_t& start_tet) const;
-  // Walks every point from the ideal pose to `edge` and then the stretches
-  // between neighbours there; true when nothing met rigid material. `advance`
-  // gets the least fraction any point got; contacts found are added when asked.
-  bool probe_motion(const EdgePose& edge, double& advance, bool add_contacts);
-  // The swept test of every stretch between neighbours over one piece of the
-  // motion, from pose `first` to `last` (at from..to of the whole motion;
-  // swept_stretch.h): true when no rigid surface edge crosses any; else
-  // `advance` gets the earliest crossing and contacts are added when asked.
-  bool sweep_stretches(const EdgePose& first, const EdgePose& last, double from, double to,
-                       double& advance, bool add_contacts);
-  // A stretch's hit (between fractions f0 and f1): the earliest sets the
-  // advance and the sample met first; a contact when asked.
-  void take_swept_hit(const SweptHit& hit, double f0, double f1, double& advance,
-                      bool add_contacts);
-  // The same with each stretch's own query of the rigid edges (where the
-  // broad phase would gather too many).
-  bool sweep_stretches_each(const EdgePose& first, const EdgePose& last, double from, double to,
-                            double& advance, bool add_contacts);
-  // `wall_tet` is the tet whose material holds the edge there (its friction).
-  void add_contact(double fraction, const Plane& plane, std::int32_t wall_tet);
-  // Friction at the contacts (docs/decisions.md, "Friction at rigid
-  // contacts"): from `start` (the tick's first verified pose, its points in
-  // start_points_), rolled on its support, to the frictionless ideal pose, the
-  // blade sticks while the springs' pull along the contacts stays within the
-  // static coefficient times their push, else slides as far as leaves the
-  // pull at the dynamic coefficient times the push.
-  void apply_friction(const EdgePose& start, bool locked);
-  // Steps 2-4 of a rigid tick (blade_rigid.cpp): from the ideal pose toward
-  // the targets, rounds of walks and constrained fits, the direction kept at
-  // lock_direction when `lock`. True when the last trial verified whole.
-  bool solve_pose(bool lock, const Vec3& lock_direction, int& rounds);
-  // From the ideal pose toward `trial`, as far as the walks got (`advance`),
-  // halved while the motion still meets rigid material; verified.
-  void advance_verified(const EdgePose& trial, double advance);
-  // Sum |x_i - t_i|^2 over the points of the ideal edge.
-  double spring_energy() const;
-  // The ideal pose turned about the contacts it rests on, toward the springs'
-  // least energy, as far as the walks allow: a blade rolls on its support
-  // where friction holds the support still.
-  void roll_on_support(bool locked);
-  // Makes the probed edge (trial_*) the ideal one.
-  void accept_trial(const EdgePose& edge);
   void update_ideal_pose(const Pose& device);
   void place_proxies_on_ideal(const RuntimeSettings& settings);
 
@@ -243,58 +188,19 @@ class Blade {
   Vec3 tool_direction_;     // (end - start) / length, or +x for a zero length.
   Pose device_pose_;        // The last placed pose.
   Pose ideal_pose_;
-  EdgePose ideal_edge_;
+  // The rigid coupling: the solver of its pose (rigid_edge.h), whether it has
+  // a verified one yet, and the points' forces on it.
+  std::unique_ptr<RigidEdge> rigid_;
   bool seated_ = false;
-  // The rigid solve's storage, sized once: the ideal points and the tets that
-  // hold them (kNoTet outside the mesh), a trial pose's, the targets t_i, the
-  // walls each point's walks meet and the point forces.
-  std::vector<Vec3> ideal_points_;
-  std::vector<std::int32_t> ideal_tets_;
-  std::vector<Vec3> trial_points_;
-  std::vector<std::int32_t> trial_tets_;
-  std::vector<Vec3> targets_;
-  std::vector<ProbeWalls> walls_;
   std::vector<Vec3> point_forces_;
-  EdgeContactSet contacts_;
-  // The sample of the edge a motion moves in a straight line (interpolate_edge):
-  // the middle, or once there are contacts the one the pose rests on, so a
-  // turn does not swing the held sample into its plane.
-  double motion_pivot_ = 0.5;
-  // The sample of the edge where the last probe_motion met rigid material
-  // first (a point, or a place between two).
-  double earliest_hit_fraction_ = 0.5;
   // Whether the Space has a material that holds a point back (drag, viscous,
   // membrane): only then do a rigid blade's points tick for their targets.
   bool resisting_materials_ = true;
-  // The largest friction coefficients of the materials met this tick, and
-  // whether the blade slid on the last tick (then the dynamic one decides).
-  double contact_static_friction_ = 0.0;
-  double contact_dynamic_friction_ = 0.0;
-  bool sliding_ = false;
   // An orientation switch being turned in (set_orientation): the ideal
   // edge's direction at the switch, the ramp's length and the time since.
   Vec3 ramp_from_direction_;
   double orientation_ramp_s_ = 0.0;
   double orientation_ramp_elapsed_s_ = 0.0;
-  // The tick's first verified pose's points and tets, and the frictionless
-  // pose's while a slide is verified.
-  std::vector<Vec3> start_points_;
-  std::vector<std::int32_t> start_tets_;
-  std::vector<Vec3> held_points_;
-  std::vector<std::int32_t> held_tets_;
-  // The rigid surface's edges, for the stretches' swept test (two points or more).
-  std::unique_ptr<const RigidSurfaceEdges> rigid_edges_;
-  // The swept test's broad phase (sized to every rigid surface edge once):
-  // the edges near a piece of the motion with the span along the edge where
-  // each can meet a stretch, and those of one stretch.
-  struct SweptCandidate {
-    std::int32_t edge = 0;
-    double least_mm = 0.0;
-    double greatest_mm = 0.0;
-  };
-  std::vector<SweptCandidate> swept_candidates_;
-  std::vector<SweptCandidate> active_candidates_;
-  std::vector<std::int32_t> stretch_candidates_;
 };
 
 }  // namespace hapticut

@@ -106,6 +106,13 @@ class alignas(64) Proxy {
   // std::invalid_argument naming the value when the state, tet, local index or
   // q is out of range (tet must be kNoTet exactly when OUTSIDE).
   void set_place(const ProxyPlace& place);
+  // Seats the proxy where another solver verified its point (the rigid
+  // blade's ideal pose): a TET place in a tet of the mesh that is not rigid,
+  // or an OUTSIDE one, q finite; the force is eq. (15) there for device point
+  // p, unshaded. False, changing nothing, for any other place. Never allocates.
+  bool seat(const ProxyPlace& place, const Vec3& p, const RuntimeSettings& settings);
+  // Zero force, the place kept (a solver with no valid place for the point).
+  void release_force() { force_N_ = {}; }
   const Vec3& q() const { return place_.q; }
   const Vec3& last_p() const { return last_p_; }
   // Force on the device point, eq. (15), shaded when asked; on a capped tick

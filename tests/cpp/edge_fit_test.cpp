@@ -1,0 +1,120 @@
+// The rigid edge's fit (edge_fit.h) on its own: the edge nearest the targets
+// in closed form, the same with contact planes, turned about one sample, and
+// the motion between two poses.
+#include "hapticut/edge_fit.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <vector>
+
+namespace hapticut {
+namespace {
+
+constexpr double kLength = 40.0;
+
+std::vector<double> fractions(int n) {
+  std::vector<double> f(n);
+  for (int i = 0; i < n; ++i) f[i] = double(i) / (n - 1);
+  return f;
+}
+
+std::vector<Vec3> targets_on(const EdgePose& edge, const std::vector<double>& f) {
+  std::vector<Vec3> t;
+  for (double s : f) t.push_back(edge.point(s, kLength));
+  return t;
+}
+
+void expect_near(const Vec3& a, const Vec3& b, double tolerance) {
+  EXPECT_NEAR(a.x, b.x, tolerance);
+  EXPECT_NEAR(a.y, b.y, tolerance);
+  EXPECT_NEAR(a.z, b.z, tolerance);
+}
+
+TEST(EdgeFit, TargetsOnAnEdgeGiveThatEdgeAndALockKeepsTheDirection) {
+  const std::vector<double> f = fractions(9);
+  const Vec3 direction = Vec3{1.0, 2.0, -0.5} / norm(Vec3{1.0, 2.0, -0.5});
+  const EdgePose truth{{3.0, -1.0, 7.0}, direction};
+  const std::vector<Vec3> t = targets_on(truth, f);
+  const EdgePose free = fit_edge(f, t, kLength, Vec3{1, 0, 0}, false);
+  expect_near(free.start_mm, truth.start_mm, 1e-9);
+  expect_near(free.direction, truth.direction, 1e-12);
+  // Locked along x: the start that puts the samples' mean on the targets' mean.
+  const EdgePose locked = fit_edge(f, t, kLength, Vec3{1, 0, 0}, true);
+  expect_near(locked.direction, Vec3{1, 0, 0}, 0.0);
+  expect_near(locked.point(0.5, kLength), truth.point(0.5, kLength), 1e-9);
+  // Targets all in one place give no direction: the fallback's.
+  const std::vector<Vec3> heap(f.size(), Vec3{1, 1, 1});
+  expect_near(fit_edge(f, heap, kLength, Vec3{0, 1, 0}, false).direction, Vec3{0, 1, 0}, 0.0);
+}
+
+TEST(EdgeFit, AContactPlaneKeepsItsSampleOnItsFreeSideByTheMargin) {
+  // Targets under the plane z = 0 along the whole edge, tilted: the fit
+  // with contacts at both ends lays the edge on the plane, a margin above.
+  const std::vector<double> f = fractions(11);
+  std::vector<Vec3> t;
+  for (double s : f) t.push_back({s * kLength, 0.0, -1.0 - 2.0 * s});
+  const EdgePose base{{0.0, 0.0, 1.0}, {1.0, 0.0, 0.0}};
+  const Plane floor{{0.0, 0.0, 1.0}, 0.0};
+  const std::array<EdgeContact, 2> contacts{EdgeContact{0.0, floor}, EdgeContact{1.0, floor}};
+  const double margin = 1e-6;
+  for (const bool lock : {false, true}) {
+    EdgePose out;
+    // Linearised about its base: a few passes settle the turn.
+    EdgePose at = base;
+    for (int pass = 0; pass < 4; ++pass) {
+      ASSERT_EQ(fit_edge_constrained(at, f, t, kLength, lock, contacts, margin, out),
+                EdgeFitStatus::Solved);
+      at = out;
+    }
+    for (const EdgeContact& c : contacts) {
+      EXPECT_GE(floor.signed_distance(out.point(c.fraction, kLength)), margin * 0.5) << lock;
+      EXPECT_NEAR(floor.signed_distance(out.point(c.fraction, kLength)), margin, 1e-4) << lock;
+    }
+    EXPECT_NEAR(norm(out.direction), 1.0, 1e-12);
+    if (lock) expect_near(out.direction, base.direction, 0.0);
+  }
+  // Two contacts that cannot both hold (a sample above one plane and below
+  // another): infeasible.
+  const std::array<EdgeContact, 2> clash{EdgeContact{0.5, floor},
+                                         EdgeContact{0.5, Plane{{0.0, 0.0, -1.0}, 1.0}}};
+  EdgePose out;
+  EXPECT_EQ(fit_edge_constrained(base, f, t, kLength, true, clash, margin, out),
+            EdgeFitStatus::Infeasible);
+}
+
+TEST(EdgeFit, TurnedAboutASampleThatSampleStaysAndTheRestFollowTheTargets) {
+  const std::vector<double> f = fractions(7);
+  const EdgePose base{{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}};
+  // Targets on an edge through base's sample at 0.25, tilted up by 10 degrees.
+  const double a = 10.0 * M_PI / 180.0;
+  const Vec3 pivot = base.point(0.25, kLength);
+  std::vector<Vec3> t;
+  for (double s : f)
+    t.push_back(pivot + Vec3{std::cos(a), 0.0, std::sin(a)} * ((s - 0.25) * kLength));
+  const EdgePose turned = fit_edge_about(base, 0.25, f, t, kLength);
+  expect_near(turned.point(0.25, kLength), pivot, 1e-9);
+  expect_near(turned.direction, Vec3{std::cos(a), 0.0, std::sin(a)}, 1e-12);
+}
+
+TEST(EdgeFit, AMotionMovesItsPivotSampleOnAStraightLine) {
+  const EdgePose from{{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}};
+  const EdgePose to{{5.0, 2.0, -1.0}, Vec3{0.0, 1.0, 1.0} / std::sqrt(2.0)};
+  const double pivot = 0.3;
+  const EdgePose start = interpolate_edge(from, to, 0.0, pivot, kLength);
+  const EdgePose end = interpolate_edge(from, to, 1.0, pivot, kLength);
+  expect_near(start.start_mm, from.start_mm, 1e-12);
+  expect_near(end.start_mm, to.start_mm, 1e-12);
+  expect_near(end.direction, to.direction, 1e-12);
+  const Vec3 a = from.point(pivot, kLength);
+  const Vec3 b = to.point(pivot, kLength);
+  for (const double s : {0.1, 0.5, 0.9}) {
+    const EdgePose mid = interpolate_edge(from, to, s, pivot, kLength);
+    expect_near(mid.point(pivot, kLength), a + (b - a) * s, 1e-9);
+    EXPECT_NEAR(norm(mid.direction), 1.0, 1e-12);
+  }
+}
+
+}  // namespace
+}  // namespace hapticut
