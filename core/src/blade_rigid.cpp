@@ -21,7 +21,8 @@
 //  4. After kMaxRigidRounds rounds the tick ends on the last verified pose.
 //  5. Friction (apply_friction) keeps the tick's first pose inside the cone
 //     or shortens the slide.
-// Force and torque are today's sums with q_i = x_i(ideal pose).
+// Force and torque are the sums of the point springs with q_i = x_i(ideal
+// pose), shaded when the settings ask (shade_rigid_force, blade_shading.cpp).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -124,7 +125,8 @@ EdgePose Blade::device_edge() const {
       length_mm_ > 0.0 ? world_span_ / length_mm_ : device_pose_.rotation.rotate(tool_direction_)};
 }
 
-void Blade::add_contact(double fraction, const Plane& plane, std::int32_t wall_tet) {
+void Blade::add_contact(double fraction, const Plane& plane, std::int32_t wall_tet,
+                        const ContactFeature& feature) {
   if (wall_tet != kNoTet) {
     const Material& material = space_->material_of_tet(wall_tet);
     contact_static_friction_ = std::max(contact_static_friction_, material.static_friction);
@@ -133,7 +135,7 @@ void Blade::add_contact(double fraction, const Plane& plane, std::int32_t wall_t
   // Planes a tolerance apart are one: coplanar faces of a tet mesh differ by
   // rounding. A plane the full set cannot keep: the walks still refuse every
   // pose that enters the material; the fit only lacks it.
-  contacts_.add(fraction, plane, space_->tolerance());
+  contacts_.add(fraction, plane, space_->tolerance(), feature);
 }
 
 bool Blade::probe_motion(const EdgePose& edge, double& advance, bool add_contacts) {
@@ -167,7 +169,11 @@ bool Blade::probe_motion(const EdgePose& edge, double& advance, bool add_contact
           earliest_hit_fraction_ = fractions_[i];
         }
         if (add_contacts && !probe.exhausted) {
-          add_contact(fractions_[i], probe.contact, probe.wall_tet);
+          ContactFeature met;
+          if (probe.owner_tet != kNoTet) {
+            met = {ContactFeature::Kind::Face, probe.owner_tet, probe.owner_face};
+          }
+          add_contact(fractions_[i], probe.contact, probe.wall_tet, met);
         }
       } else {
         trial_tets_[i] = probe.end_tet;
@@ -202,7 +208,7 @@ bool Blade::probe_motion(const EdgePose& edge, double& advance, bool add_contact
     if (wedge_contact(ahead.contact, back.contact, direction, trial_points_[i],
                       trial_points_[i + 1], ahead.fraction, 1.0 - back.fraction, contact)) {
       contact.fraction = fractions_[i] + contact.fraction * gap;
-      add_contact(contact.fraction, contact.plane, ahead.wall_tet);
+      add_contact(contact.fraction, contact.plane, ahead.wall_tet, {});
     }
   }
   if (!free) advance = 0.0;  // The points got there; the edge between them did not.
@@ -216,7 +222,10 @@ void Blade::take_swept_hit(const SweptHit& hit, double f0, double f1, double& ad
     advance = hit.motion;
     earliest_hit_fraction_ = fraction;
   }
-  if (add_contacts) add_contact(fraction, hit.contact, hit.wall_tet);
+  if (add_contacts) {
+    add_contact(fraction, hit.contact, hit.wall_tet,
+                {ContactFeature::Kind::Edge, hit.mesh_edge, 0});
+  }
 }
 
 bool Blade::sweep_stretches_each(const EdgePose& first, const EdgePose& last, double from,
@@ -324,18 +333,26 @@ double Blade::spring_energy() const {
   return energy;
 }
 
+double Blade::touching_distance() const {
+  // The nearest contact, with a margin: the fit leaves contacts a margin
+  // away, the walks' advance a little more, and a sample may rest between two
+  // of the contacts' samples.
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const EdgeContactSet::HeldPlane& held : contacts_.planes()) {
+    for (const double fraction : {held.least_fraction, held.greatest_fraction}) {
+      nearest =
+          std::min(nearest, held.plane.signed_distance(ideal_edge_.point(fraction, length_mm_)));
+    }
+  }
+  return nearest + 8.0 * space_->tolerance() + kSupportTouch * length_mm_;
+}
+
 void Blade::roll_on_support(bool locked) {
   if (locked || proxies_.size() < 2 || !(length_mm_ > 0.0)) {
     return;
   }
-  // The support: the contacts nearest the pose (the fit leaves them a margin
-  // away, the walks' advance a little more; a sample may rest between two
-  // of the contacts' samples).
-  double nearest = std::numeric_limits<double>::infinity();
-  for (const EdgeContact& c : contacts_.constraints()) {
-    nearest = std::min(nearest, c.plane.signed_distance(ideal_edge_.point(c.fraction, length_mm_)));
-  }
-  const double touching = nearest + 8.0 * space_->tolerance() + kSupportTouch * length_mm_;
+  // The support: the contacts touching the pose.
+  const double touching = touching_distance();
   double least = std::numeric_limits<double>::infinity();
   double greatest = -least;
   for (const EdgeContact& c : contacts_.constraints()) {
@@ -622,6 +639,7 @@ BladeTick Blade::step_rigid(const Pose& pose, double dt_s, const RuntimeSettings
   }
   tick.force_N = force;
   tick.torque_N_mm = cross(world_lever_, force) + cross(world_span_, weighted_force);
+  if (settings.force_shading) shade_rigid_force(tick.force_N, tick.torque_N_mm);
   tick.rigid_rounds = rounds;
   tick.contacts = static_cast<int>(contacts_.constraints().size());
   tick.unresolved = !resolved;

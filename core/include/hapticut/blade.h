@@ -193,8 +193,10 @@ class Blade {
   // broad phase would gather too many).
   bool sweep_stretches_each(const EdgePose& first, const EdgePose& last, double from, double to,
                             double& advance, bool add_contacts);
-  // `wall_tet` is the tet whose material holds the edge there (its friction).
-  void add_contact(double fraction, const Plane& plane, std::int32_t wall_tet);
+  // `wall_tet` is the tet whose material holds the edge there (its friction);
+  // `feature` what the sample met (its force shading).
+  void add_contact(double fraction, const Plane& plane, std::int32_t wall_tet,
+                   const ContactFeature& feature);
   // Friction at the contacts (docs/decisions.md, "Friction at rigid
   // contacts"): from `start` (the tick's first verified pose, its points in
   // start_points_), rolled on its support, to the frictionless ideal pose, the
@@ -209,6 +211,14 @@ class Blade {
   // From the ideal pose toward `trial`, as far as the walks got (`advance`),
   // halved while the motion still meets rigid material; verified.
   void advance_verified(const EdgePose& trial, double advance);
+  // How far from the ideal edge a contact's sample may lie and still touch
+  // it: the nearest one's distance and a margin.
+  double touching_distance() const;
+  // Force shading of the rigid blade (blade_shading.cpp; docs/decisions.md,
+  // "The rigid blade"): the force's part along the touching contacts' normals
+  // takes their shaded normals, its size kept; the torque takes the change at
+  // the contacts' device points.
+  void shade_rigid_force(Vec3& force_N, Vec3& torque_N_mm) const;
   // Sum |x_i - t_i|^2 over the points of the ideal edge.
   double spring_energy() const;
   // The ideal pose turned about the contacts it rests on, toward the springs'

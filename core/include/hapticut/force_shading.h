@@ -70,6 +70,11 @@ class ForceShading {
   const Vec3& vertex_normal(std::int32_t v) const { return vertex_normals_[v]; }
   std::int32_t vertex_count() const { return static_cast<std::int32_t>(vertex_normals_.size()); }
   bool is_surface_edge(std::int32_t e) const { return surface_edge_[e] != 0; }
+  // The EDGE path's unit normal at x on mesh edge e (its ends' normals
+  // interpolated), zero when e is not on the rigid surface.
+  Vec3 surface_edge_normal(std::int32_t e, const Vec3& x) const {
+    return is_surface_edge(e) ? edge_normal(e, x) : Vec3{};
+  }
   // What the FACE path interpolates at the corners of face f of tet t (the
   // tet's vertices other than f, in order): zeros unless t is not rigid and
   // the face is on the rigid surface. For tests and inspection.
