@@ -25,8 +25,9 @@ namespace {
 // presses on `plane`, from what the sample met: a face of the rigid surface by
 // the FACE path of ForceShading::shade, as a point proxy held there with that
 // device point (its contact point found as the path finds it); a rigid
-// surface edge by the EDGE path. The plane's own normal where shading names
-// nothing there.
+// surface edge (a ridge the edge rests on) by the faces through it
+// (ForceShading::edge_contact_normal). The plane's own normal where shading
+// names nothing there.
 Vec3 shaded_normal(const ForceShading& shading, const Space& space, const ContactFeature& feature,
                    const Plane& plane, const Vec3& device) {
   const double depth = -plane.signed_distance(device);
@@ -40,7 +41,7 @@ Vec3 shaded_normal(const ForceShading& shading, const Space& space, const Contac
     const ProxyPlace place{ProxyState::Face, feature.index, feature.face, on_plane};
     normal = shading.shade(place, plane.normal * push_N) / push_N;
   } else if (feature.kind == ContactFeature::Kind::Edge) {
-    normal = shading.surface_edge_normal(feature.index, on_plane);
+    normal = shading.edge_contact_normal(feature.index, device);
   }
   const double size = norm(normal);
   if (!(size > 0.0) || !(dot(normal, plane.normal) > 0.0)) return plane.normal;

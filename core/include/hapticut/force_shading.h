@@ -65,6 +65,14 @@ class ForceShading {
   // Anywhere else, or a force pulling into the surface: the raw force.
   Vec3 shade(const ProxyPlace& place, const Vec3& raw_force_N) const;
 
+  // The shaded unit normal for a body whose device point p presses on the
+  // rigid surface's edge e (a rigid blade resting on a ridge): of the surface
+  // faces through e, the FACE path's normal (its contact point found from p)
+  // of those whose line from p along that normal leaves the material through
+  // them; where none or all do, the faces' mean; the EDGE path's normal where
+  // no face through e is shaded.
+  Vec3 edge_contact_normal(std::int32_t e, const Vec3& p) const;
+
   // Smoothed unit normal of a mesh vertex out of the rigid region, zero for a
   // vertex not on the rigid surface.
   const Vec3& vertex_normal(std::int32_t v) const { return vertex_normals_[v]; }
@@ -94,6 +102,12 @@ class ForceShading {
     Vec3 normal;               // Unit normal out of the rigid region (into the owner).
   };
 
+  // The FACE path's unit normal on `face` for a proxy at q whose device
+  // point p lies p_height over the face's plane (Morgenbesser and
+  // Srinivasan's contact point); zero when there is none.
+  Vec3 contact_normal(const ShadedFace& face, const Vec3& q, const Vec3& p, double p_height) const;
+  // Faces of the rigid surface through one edge that edge_contact_normal weighs.
+  static constexpr int kMaxEdgeFaces = 8;
   Vec3 edge_normal(std::int32_t e, const Vec3& q) const;
   Vec3 touching_normal(const ProxyPlace& place) const;
   // What the FACE path interpolates at a corner of a face: a function of
