@@ -44,11 +44,10 @@ Vec3 normalized_or_zero(const Vec3& v) {
 // nearest source triangle's corners). The linear interpolation of the FACE
 // path cannot show detail finer than the facets it spans, so the fit
 // averages out detail of that size and keeps what is larger. Points whose
-// normal is kCreaseDegrees or more off the normal being fitted lie beyond a
-// crease (or on the other side of a thin part) and are left out, so a crease
-// sharper than that stays sharp instead of bending the facets beside it.
+// normal is 45 degrees or more off (ForceShading::kCreaseCosine) the normal being fitted lie beyond
+// a crease (or on the other side of a thin part) and are left out, so a crease sharper than that
+// stays sharp instead of bending the facets beside it.
 constexpr double kSmoothingReach = 1.5;
-constexpr double kCreaseCosine = 0.70710678118654752;  // cos(kCreaseDegrees = 45).
 
 // What the tet mesh itself says about its rigid surface.
 struct OneRing {
@@ -125,7 +124,7 @@ class OrientedPoints {
       tree_.for_each_containing(x, radius, [&](std::int32_t i) {
         const Vec3 r = points_[i] - x;
         const double t = squared_norm(r) / (radius * radius);
-        if (t >= 1.0 || !(dot(normals_[i], facing) > kCreaseCosine)) return;
+        if (t >= 1.0 || !(dot(normals_[i], facing) > ForceShading::kCreaseCosine)) return;
         use(i, r, weights_[i] * (1.0 - t) * (1.0 - t) * (1.0 - t) * (1.0 - t));
       });
     };

@@ -28,6 +28,10 @@ RigidSurface extract_rigid_surface(const Space& space);
 
 class ForceShading {
  public:
+  // Surfaces meeting at a sharper angle than 45 degrees (their normals this
+  // cosine apart) are a crease the shading keeps; gentler turns it smooths.
+  static constexpr double kCreaseCosine = 0.70710678118654752;
+
   // Both constructors smooth the normals they interpolate at the scale of the
   // rigid surface's own facets (docs/decisions.md, "Force shading: nearest
   // source and smoothed normals"): a surface vertex takes the normal of a
