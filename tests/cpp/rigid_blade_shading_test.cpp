@@ -141,5 +141,47 @@ TEST(RigidBladeShading, OnAFlatBoneShadingChangesNothing) {
   }
 }
 
+// A V-groove of bone along x, its flanks rising by `slope` x |y| (a Kuhn grid
+// of 4 x 2 x 2 mm cells, every vertex lifted; bone below the lifted z = 0).
+std::shared_ptr<const Space> v_groove(double slope) {
+  MeshData mesh =
+      grid_mesh(testing::axis(-40, 40, 4), testing::axis(-16, 16, 2), testing::axis(-16, 16, 2));
+  std::vector<std::int32_t> labels(mesh.tets.size());
+  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+    double z = 0.0;
+    for (std::int32_t v : mesh.tets[t]) z += mesh.vertices_mm[v].z * 0.25;
+    labels[t] = z < 0.0 ? 2 : 0;
+  }
+  for (Vec3& v : mesh.vertices_mm) v.z += slope * std::abs(v.y);
+  return testing::make_space(mesh, labels);
+}
+
+TEST(RigidBladeShading, InAGrooveTheForceStaysAlongItsMiddle) {
+  // Pressed into a groove along it, the edge rests on both flanks: sharper
+  // than the crease angle (90 degrees) each keeps its push; gentler (30
+  // degrees), the flanks are one smooth surface touching the edge along both
+  // sides. Either way the force stays up the groove's middle, its size kept.
+  for (const double slope : {1.0, std::tan(15.0 * M_PI / 180.0)}) {
+    const auto space = v_groove(slope);
+    const BladeSpec spec{"knife", {-20, 0, 0}, {20, 0, 0}, 50};
+    Blade plain(space, spec);
+    Blade shaded(space, spec);
+    plain.reset({{0, 0, 2}, {}});
+    shaded.reset({{0, 0, 2}, {}});
+    BladeTick a;
+    BladeTick b;
+    for (int k = 1; k <= 300; ++k) {
+      const Pose pose{{0, 0, 2.0 - 0.02 * std::min(k, 150)}, {}};
+      a = plain.step(pose, kDt, shading(*space, false));
+      b = shaded.step(pose, kDt, shading(*space, true));
+    }
+    std::printf("slope %.3f: plain %.6f %.6f %.6f, shaded %.6f %.6f %.6f\n", slope, a.force_N.x,
+                a.force_N.y, a.force_N.z, b.force_N.x, b.force_N.y, b.force_N.z);
+    EXPECT_GT(a.force_N.z, 1.0) << slope;
+    EXPECT_LT(degrees_between(b.force_N, {0, 0, 1}), 0.01) << slope;
+    EXPECT_NEAR(norm(b.force_N), norm(a.force_N), 1e-9 * norm(a.force_N)) << slope;
+  }
+}
+
 }  // namespace
 }  // namespace hapticut
