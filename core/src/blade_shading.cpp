@@ -185,15 +185,21 @@ void Blade::shade_rigid_force(Vec3& force_N, Vec3& torque_N_mm) const {
   Vec3 total_shaded;
   for (int c = 0; c < planes; ++c) {
     if (!(norm(push[c]) > 0.0)) continue;
-    // Its samples in order along the edge, those at one fraction merged.
+    // Its samples in order along the edge, those at one fraction merged (the
+    // touching ones only, where one touches: a plane the edge has left
+    // describes the surface there less well).
     int count = 0;
     for (int s = 0; s < sample_count; ++s) {
       if (contact[sample_plane[s]] != c) continue;
       int at = count;
       while (at > 0 && own[at - 1].fraction > samples[s].fraction) --at;
       if (at > 0 && own[at - 1].fraction == samples[s].fraction) {
-        own[at - 1].normal += samples[s].normal;
-        own[at - 1].touching = own[at - 1].touching || samples[s].touching;
+        Sample& merged = own[at - 1];
+        if (samples[s].touching && !merged.touching) {
+          merged = samples[s];
+        } else if (samples[s].touching == merged.touching) {
+          merged.normal += samples[s].normal;
+        }
         continue;
       }
       std::copy_backward(own.begin() + at, own.begin() + count, own.begin() + count + 1);
