@@ -11,7 +11,8 @@
 //  2. The RigidEdge solves the pose nearest the targets that the walks
 //     verify, then applies friction.
 //  3. Each proxy is seated on its point of that pose; force and torque are
-//     the sums of the points' springs, q_i = x_i(ideal pose).
+//     the sums of the points' springs, q_i = x_i(ideal pose), shaded at the
+//     contacts when the settings ask (RigidEdge::shade_force).
 #include <algorithm>
 #include <cmath>
 
@@ -126,6 +127,10 @@ BladeTick Blade::step_rigid(double dt_s, const RuntimeSettings& settings) {
   }
   tick.force_N = force;
   tick.torque_N_mm = cross(world_lever_, force) + cross(world_span_, weighted_force);
+  if (settings.force_shading && shading_) {
+    rigid_->shade_force(*shading_, device, device_pose_.position_mm, tick.force_N,
+                        tick.torque_N_mm);
+  }
   tick.rigid_rounds = rounds;
   tick.contacts = static_cast<int>(rigid_->contacts().size());
   tick.unresolved = !resolved;

@@ -5,24 +5,30 @@
 
 namespace hapticut {
 
-bool EdgeContactSet::add(double fraction, const Plane& plane, double same_offset_mm) {
+bool EdgeContactSet::add(double fraction, const Plane& plane, double same_offset_mm,
+                         const ContactFeature& feature) {
   for (int j = 0; j < plane_count_; ++j) {
     HeldPlane& held = planes_[j];
     if (squared_norm(held.plane.normal - plane.normal) <= kSameNormal * kSameNormal &&
         std::abs(held.plane.offset - plane.offset) <= same_offset_mm) {
       if (plane_before(plane, held.plane)) held.plane = plane;
-      if (fraction < held.least_fraction) {
+      // An extreme met again keeps what it met last (nearer the pose the
+      // tick ends on); only a wider range changes the constraints.
+      if (fraction <= held.least_fraction) {
+        if (fraction < held.least_fraction) ++changes_;
         held.least_fraction = fraction;
-        ++changes_;
-      } else if (fraction > held.greatest_fraction) {
+        held.least_feature = feature;
+      }
+      if (fraction >= held.greatest_fraction) {
+        if (fraction > held.greatest_fraction) ++changes_;
         held.greatest_fraction = fraction;
-        ++changes_;
+        held.greatest_feature = feature;
       }
       return true;
     }
   }
   if (full()) return false;
-  planes_[plane_count_++] = {plane, fraction, fraction};
+  planes_[plane_count_++] = {plane, fraction, fraction, feature, feature};
   ++changes_;
   return true;
 }

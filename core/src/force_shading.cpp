@@ -44,11 +44,10 @@ Vec3 normalized_or_zero(const Vec3& v) {
 // nearest source triangle's corners). The linear interpolation of the FACE
 // path cannot show detail finer than the facets it spans, so the fit
 // averages out detail of that size and keeps what is larger. Points whose
-// normal is kCreaseDegrees or more off the normal being fitted lie beyond a
-// crease (or on the other side of a thin part) and are left out, so a crease
-// sharper than that stays sharp instead of bending the facets beside it.
+// normal is 45 degrees or more off (ForceShading::kCreaseCosine) the normal being fitted lie beyond
+// a crease (or on the other side of a thin part) and are left out, so a crease sharper than that
+// stays sharp instead of bending the facets beside it.
 constexpr double kSmoothingReach = 1.5;
-constexpr double kCreaseCosine = 0.70710678118654752;  // cos(kCreaseDegrees = 45).
 
 // What the tet mesh itself says about its rigid surface.
 struct OneRing {
@@ -125,7 +124,7 @@ class OrientedPoints {
       tree_.for_each_containing(x, radius, [&](std::int32_t i) {
         const Vec3 r = points_[i] - x;
         const double t = squared_norm(r) / (radius * radius);
-        if (t >= 1.0 || !(dot(normals_[i], facing) > kCreaseCosine)) return;
+        if (t >= 1.0 || !(dot(normals_[i], facing) > ForceShading::kCreaseCosine)) return;
         use(i, r, weights_[i] * (1.0 - t) * (1.0 - t) * (1.0 - t) * (1.0 - t));
       });
     };
@@ -467,6 +466,80 @@ Vec3 ForceShading::touching_normal(const ProxyPlace& place) const {
   return {};
 }
 
+Vec3 ForceShading::contact_normal(const ShadedFace& face, const Vec3& q, const Vec3& p,
+                                  double p_height) const {
+  // The shaded normal at a point x, unnormalised: barycentric weights
+  // from signed sub-triangle areas (linear, so it extrapolates a little
+  // past the face's edges), vertex normals interpolated.
+  auto normal_at = [&face](const Vec3& x) {
+    const Vec3 r = x - face.origin;
+    return face.origin_normal +
+           Vec3{dot(face.rows[0], r), dot(face.rows[1], r), dot(face.rows[2], r)};
+  };
+  // The contact point of the smooth surface the normals describe: where
+  // the line from p along the shaded normal meets the face plane (q is
+  // where the line along the facet normal meets it). A fixed point,
+  // two iterations from q (Morgenbesser and Srinivasan's second pass).
+  // The point does not depend on the normal's length, so only the last
+  // normal is normalised.
+  Vec3 n = normal_at(q);
+  for (int iteration = 0; iteration < kContactIterations; ++iteration) {
+    const double along = dot(n, face.normal);
+    // along / |n| > 0.5: the normal leans less than 60 degrees off the facet.
+    if (!(along > 0.0 && 4.0 * along * along > squared_norm(n))) break;
+    const Vec3 next = normal_at(p - n * (p_height / along));
+    if (next == Vec3{}) break;
+    n = next;
+  }
+  const double length = norm(n);
+  if (!(length > 0.0)) return {};
+  return n * (1.0 / length);
+}
+
+Vec3 ForceShading::edge_contact_normal(std::int32_t e, const Vec3& p) const {
+  // The surface's faces through the edge, each as its non-rigid owner sees it.
+  const TetMesh& mesh = space_->mesh();
+  std::array<const ShadedFace*, kMaxEdgeFaces> faces{};
+  int count = 0;
+  for (const EdgeFanEntry& entry : mesh.edge_fan(e)) {
+    if (space_->tet_is_rigid(entry.tet)) continue;
+    for (const std::int8_t f : entry.faces) {
+      const std::int32_t record =
+          face_record_[4 * static_cast<std::size_t>(entry.tet) + static_cast<std::size_t>(f)];
+      if (record != kNotShaded && count < kMaxEdgeFaces) faces[count++] = &shaded_faces_[record];
+    }
+  }
+  // Each face's contact normal for p; the faces whose line from p lands on
+  // the surface (under every other face's plane: a convex edge's material
+  // lies under both) are the ones p presses on.
+  std::array<Vec3, kMaxEdgeFaces> normals{};
+  std::array<bool, kMaxEdgeFaces> lands{};
+  const double eps = space_->tolerance();
+  for (int k = 0; k < count; ++k) {
+    const ShadedFace& face = *faces[k];
+    const double height = dot(p - face.origin, face.normal);
+    normals[k] = contact_normal(face, p - face.normal * height, p, height);
+    const double along = dot(normals[k], face.normal);
+    if (normals[k] == Vec3{} || !(along > 0.0)) continue;
+    const Vec3 landing = p - normals[k] * (height / along);
+    lands[k] = true;
+    for (int j = 0; j < count; ++j) {
+      if (j != k && dot(landing - faces[j]->origin, faces[j]->normal) > eps) lands[k] = false;
+    }
+  }
+  Vec3 landed;
+  Vec3 all;
+  for (int k = 0; k < count; ++k) {
+    all += normals[k];
+    if (lands[k]) landed += normals[k];
+  }
+  // Neither or each: p presses on the edge itself, between the faces.
+  const Vec3 chosen = landed != Vec3{} ? landed : all;
+  const double length = norm(chosen);
+  if (length > 0.0) return chosen / length;
+  return surface_edge_normal(e, p);
+}
+
 Vec3 ForceShading::shade(const ProxyPlace& place, const Vec3& raw_force_N) const {
   const TetMesh& mesh = space_->mesh();
   const std::int32_t t = place.tet;
@@ -483,36 +556,11 @@ Vec3 ForceShading::shade(const ProxyPlace& place, const Vec3& raw_force_N) const
       const ShadedFace& face = shaded_faces_[record];
       const double normal_part = dot(raw_force_N, face.normal);
       if (normal_part <= 0.0) return raw_force_N;
-      // The shaded normal at a point x, unnormalised: barycentric weights
-      // from signed sub-triangle areas (linear, so it extrapolates a little
-      // past the face's edges), vertex normals interpolated.
-      auto normal_at = [&face](const Vec3& x) {
-        const Vec3 r = x - face.origin;
-        return face.origin_normal +
-               Vec3{dot(face.rows[0], r), dot(face.rows[1], r), dot(face.rows[2], r)};
-      };
-      // The contact point of the smooth surface the normals describe: where
-      // the line from p along the shaded normal meets the face plane (q is
-      // where the line along the facet normal meets it). A fixed point,
-      // two iterations from q (Morgenbesser and Srinivasan's second pass).
-      // The point does not depend on the normal's length, so only the last
-      // normal is normalised. p - q = -raw / k, so p's height over the plane
-      // is -normal_part / k.
+      // p - q = -raw / k, so p's height over the plane is -normal_part / k.
       const double compliance_mm_per_N = 1.0 / space_->settings().stiffness_N_per_mm;
-      const double p_height = -normal_part * compliance_mm_per_N;
-      const Vec3 p = place.q - raw_force_N * compliance_mm_per_N;
-      Vec3 n = normal_at(place.q);
-      for (int iteration = 0; iteration < kContactIterations; ++iteration) {
-        const double along = dot(n, face.normal);
-        // along / |n| > 0.5: the normal leans less than 60 degrees off the facet.
-        if (!(along > 0.0 && 4.0 * along * along > squared_norm(n))) break;
-        const Vec3 next = normal_at(p - n * (p_height / along));
-        if (next == Vec3{}) break;
-        n = next;
-      }
-      const double length = norm(n);
-      if (!(length > 0.0)) return raw_force_N;
-      shaded_normal = n * (1.0 / length);
+      shaded_normal = contact_normal(face, place.q, place.q - raw_force_N * compliance_mm_per_N,
+                                     -normal_part * compliance_mm_per_N);
+      if (shaded_normal == Vec3{}) return raw_force_N;
       return raw_force_N - face.normal * normal_part + shaded_normal * normal_part;
     }
     case ProxyState::Edge: {

@@ -7,7 +7,7 @@ namespace hapticut {
 
 namespace {
 
-constexpr int kRows = kLeastDistanceMaxUnknowns + 1;
+constexpr int kRows = kNonnegativeMaxRows;
 constexpr int kColumns = kLeastDistanceMaxConstraints;
 
 // min |A x - f| over x >= 0 (Lawson and Hanson's NNLS), A of `rows` x
@@ -15,7 +15,7 @@ constexpr int kColumns = kLeastDistanceMaxConstraints;
 struct Nnls {
   int rows = 0;
   int columns = 0;
-  std::array<std::array<double, kRows>, kColumns> column{};
+  std::array<NonnegativeColumn, kColumns> column{};
   std::array<double, kRows> f{};
   std::array<double, kColumns> x{};
 
@@ -147,6 +147,18 @@ struct Nnls {
 };
 
 }  // namespace
+
+bool solve_nonnegative_least_squares(int rows, std::span<const NonnegativeColumn> columns,
+                                     const NonnegativeColumn& f, std::span<double> x) {
+  Nnls nnls;
+  nnls.rows = rows;
+  nnls.columns = static_cast<int>(columns.size());
+  std::copy(columns.begin(), columns.end(), nnls.column.begin());
+  nnls.f = f;
+  const bool finished = nnls.solve();
+  std::copy_n(nnls.x.begin(), columns.size(), x.begin());
+  return finished;
+}
 
 LeastDistanceStatus solve_least_distance(int unknowns, std::span<const LeastDistanceRow> rows,
                                          std::span<const double> bounds,

@@ -164,7 +164,8 @@ void RigidEdge::restart_tick() {
   std::copy(start_tets_.begin(), start_tets_.end(), ideal_tets_.begin());
 }
 
-void RigidEdge::add_contact(double fraction, const Plane& plane, std::int32_t wall_tet) {
+void RigidEdge::add_contact(double fraction, const Plane& plane, std::int32_t wall_tet,
+                            const ContactFeature& feature) {
   if (wall_tet != kNoTet) {
     const Material& material = space_->material_of_tet(wall_tet);
     contact_static_friction_ = std::max(contact_static_friction_, material.static_friction);
@@ -173,7 +174,7 @@ void RigidEdge::add_contact(double fraction, const Plane& plane, std::int32_t wa
   // Planes a tolerance apart are one: coplanar faces of a tet mesh differ by
   // rounding. A plane the full set cannot keep: the walks still refuse every
   // pose that enters the material; the fit only lacks it.
-  contacts_.add(fraction, plane, space_->tolerance());
+  contacts_.add(fraction, plane, space_->tolerance(), feature);
 }
 
 bool RigidEdge::probe_motion(const EdgePose& edge, double& advance, bool add_contacts) {
@@ -207,7 +208,11 @@ bool RigidEdge::probe_motion(const EdgePose& edge, double& advance, bool add_con
           earliest_hit_fraction_ = fractions_[i];
         }
         if (add_contacts && !probe.exhausted) {
-          add_contact(fractions_[i], probe.contact, probe.wall_tet);
+          ContactFeature met;
+          if (probe.owner_tet != kNoTet) {
+            met = {ContactFeature::Kind::Face, probe.owner_tet, probe.owner_face};
+          }
+          add_contact(fractions_[i], probe.contact, probe.wall_tet, met);
         }
       } else {
         trial_tets_[i] = probe.end_tet;
@@ -242,7 +247,7 @@ bool RigidEdge::probe_motion(const EdgePose& edge, double& advance, bool add_con
     if (wedge_contact(ahead.contact, back.contact, direction, trial_points_[i],
                       trial_points_[i + 1], ahead.fraction, 1.0 - back.fraction, contact)) {
       contact.fraction = fractions_[i] + contact.fraction * gap;
-      add_contact(contact.fraction, contact.plane, ahead.wall_tet);
+      add_contact(contact.fraction, contact.plane, ahead.wall_tet, {});
     }
   }
   if (!free) advance = 0.0;  // The points got there; the edge between them did not.

@@ -28,18 +28,26 @@ double RigidEdge::spring_energy() const {
   return energy;
 }
 
+double RigidEdge::touching_distance() const {
+  // The nearest contact, with a margin: the fit leaves contacts a margin
+  // away, the walks' advance a little more, and a sample may rest between two
+  // of the contacts' samples.
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const EdgeContactSet::HeldPlane& held : contacts_.planes()) {
+    for (const double fraction : {held.least_fraction, held.greatest_fraction}) {
+      nearest =
+          std::min(nearest, held.plane.signed_distance(ideal_edge_.point(fraction, length_mm_)));
+    }
+  }
+  return nearest + 8.0 * space_->tolerance() + kSupportTouch * length_mm_;
+}
+
 void RigidEdge::roll_on_support(bool locked) {
   if (locked || fractions_.size() < 2 || !(length_mm_ > 0.0)) {
     return;
   }
-  // The support: the contacts nearest the pose (the fit leaves them a margin
-  // away, the walks' advance a little more; a sample may rest between two
-  // of the contacts' samples).
-  double nearest = std::numeric_limits<double>::infinity();
-  for (const EdgeContact& c : contacts_.constraints()) {
-    nearest = std::min(nearest, c.plane.signed_distance(ideal_edge_.point(c.fraction, length_mm_)));
-  }
-  const double touching = nearest + 8.0 * space_->tolerance() + kSupportTouch * length_mm_;
+  // The support: the contacts touching the pose.
+  const double touching = touching_distance();
   double least = std::numeric_limits<double>::infinity();
   double greatest = -least;
   for (const EdgeContact& c : contacts_.constraints()) {

@@ -23,7 +23,10 @@ void RigidEdge::take_swept_hit(const SweptHit& hit, double f0, double f1, double
     advance = hit.motion;
     earliest_hit_fraction_ = fraction;
   }
-  if (add_contacts) add_contact(fraction, hit.contact, hit.wall_tet);
+  if (add_contacts) {
+    add_contact(fraction, hit.contact, hit.wall_tet,
+                {ContactFeature::Kind::Edge, hit.mesh_edge, 0});
+  }
 }
 
 bool RigidEdge::sweep_stretches_each(const EdgePose& first, const EdgePose& last, double from,

@@ -102,6 +102,8 @@ SegmentProbe probe_segment(const Space& space, std::int32_t start_tet, const Vec
       const Plane& face = planes[exit_face];
       result.contact = Plane{face.normal * -1.0, -face.offset};
       result.wall_tet = u;
+      result.owner_tet = t;
+      result.owner_face = static_cast<std::int8_t>(exit_face);
       return result;
     }
     t = u;

@@ -168,6 +168,7 @@ class StretchSweep {
     best_.along = along;
     best_.contact = plane;
     best_.wall_tet = rigid_tet;
+    best_.mesh_edge = edges_.mesh_edge(k);
   }
 
   SweptHit result(double motion_from, double motion_to) const {

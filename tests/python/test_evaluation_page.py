@@ -53,6 +53,7 @@ def render(tmp_path: Path, share: dict, *, quick: bool) -> str:
         economy_rows=committed("mesh_economy"),
         example_rows=committed("example_economy"),
         shading_rows=committed("example_shading"),
+        blade_shading_rows=committed("rigid_blade_shading"),
         rigid_rows=committed("rigid_blade"),
         penetration_rows=committed("edge_penetration"),
         quick=quick,
@@ -74,6 +75,8 @@ def test_the_page_has_a_figure_for_every_placeholder(tmp_path, share):
             label = first["method"]
         assert f"| {label} |" in page, name
     assert "## The rigid blade against independent points" in page
+    for row in committed("rigid_blade_shading"):
+        assert f"| {row['example']} | {row['points']} |" in page
     for row in committed("edge_penetration"):
         assert f"| {row['scene']} | {row['method']} |" in page
 

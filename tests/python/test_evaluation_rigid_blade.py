@@ -1,5 +1,6 @@
 """The evaluation's rigid blade rows (tools/evaluation/hapticut_evaluation/rigid_blade.py):
-stiffness against the length of edge over bone, and the ideal edge's penetration."""
+stiffness against the length of edge over bone, the ideal edge's penetration, and force
+shading on an example sphere."""
 
 from pathlib import Path
 
@@ -7,7 +8,8 @@ import numpy as np
 import pytest
 from hapticut_evaluation import rigid_blade
 
-FINGER = Path(__file__).resolve().parents[2] / "examples" / "finger.hapticut.msgpack"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+FINGER = EXAMPLES / "finger.hapticut.msgpack"
 
 
 def test_independent_points_grow_with_contact_and_the_rigid_blade_renders_every_spring():
@@ -40,3 +42,17 @@ def test_depth_is_the_distance_to_the_bone_surface():
     depth = rigid_blade.depth_in_bone(np.array([0.0, 0.0, 0.0]), surface)
     assert 3.0 < depth <= 4.0 + 1e-9
     assert rigid_blade.depth_in_bone(np.array([0.0, 0.0, 3.0]), surface) < depth
+
+
+def test_shading_turns_the_rigid_blades_force_to_the_sphere(monkeypatch):
+    from hapticut_evaluation import economy
+
+    monkeypatch.setattr(economy, "EXAMPLES_DIR", EXAMPLES)
+    rows = rigid_blade.run_sphere_shading(("sphere80",), log=lambda _: None)
+    assert [row["points"] for row in rows] == list(rigid_blade.SHADING_POINTS)
+    for row in rows:
+        assert row["contact_updates"] > 1000, row
+        # The facets are felt; shaded, the force follows the sphere.
+        assert row["plain_dir_err_smooth_mean_deg"] > 4.0, row
+        assert row["shaded_dir_err_smooth_mean_deg"] < 0.25 * row["plain_dir_err_smooth_mean_deg"]
+        assert row["shaded_dir_err_smooth_p95_deg"] < row["plain_dir_err_smooth_p95_deg"], row

@@ -29,7 +29,9 @@ namespace hapticut {
 enum class PoseCheck : std::uint8_t { Fine, NotFinite, ZeroRotation, OutOfWorkspace };
 
 struct BladeTick {
-  Vec3 force_N;  // Sum of the points' forces (k (q_i - p_i), shaded when asked).
+  // Sum of the points' forces k (q_i - p_i), shaded when asked: each point's
+  // (independent), or at the contacts (rigid, RigidEdge::shade_force).
+  Vec3 force_N;
   // Sum of (p_i - origin) x f_i, as (a - origin) x F + b x (sum of s_i f_i).
   Vec3 torque_N_mm;
   // Points left unfinished when the work budget ran out: their proxies keep

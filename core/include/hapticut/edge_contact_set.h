@@ -9,14 +9,36 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <span>
 
 #include "hapticut/edge_fit.h"
+#include "hapticut/tet_mesh.h"
 
 namespace hapticut {
 
+// What a contact's sample met, for force shading: a face of the rigid surface
+// as seen from the non-rigid tet the walk left through it, an edge of the
+// rigid surface (the swept test's), or nothing shading can name (a boundary
+// face met from outside the mesh, the plane through a stretch's entry and exit).
+struct ContactFeature {
+  enum class Kind : std::uint8_t { None, Face, Edge };
+  Kind kind = Kind::None;
+  std::int32_t index = kNoTet;  // Face: the owner tet. Edge: the mesh's edge.
+  std::int8_t face = 0;         // Face: the owner's local face.
+};
+
 class EdgeContactSet {
  public:
+  // A plane met along the edge: its extreme samples and what each met.
+  struct HeldPlane {
+    Plane plane;
+    double least_fraction = 0.0;
+    double greatest_fraction = 0.0;
+    ContactFeature least_feature;
+    ContactFeature greatest_feature;
+  };
+
   // Planes kept at most: each gives two constraints of the fit.
   static constexpr int kMaxPlanes = kMaxEdgeContacts / 2;
   // Two planes are one when their unit normals differ by at most this much and
@@ -31,7 +53,8 @@ class EdgeContactSet {
   // range of a plane already kept (within same_offset_mm), or keeps a new
   // one. False when the plane is new and the set is full (the walks still
   // refuse every pose that enters the material; the fit only lacks it).
-  bool add(double fraction, const Plane& plane, double same_offset_mm);
+  bool add(double fraction, const Plane& plane, double same_offset_mm,
+           const ContactFeature& feature = {});
 
   int plane_count() const { return plane_count_; }
   // Grows with every add() that changed the constraints (a new plane, or a
@@ -43,13 +66,11 @@ class EdgeContactSet {
   // extremes) per plane met along a stretch of the edge. Valid until the
   // next add() or clear().
   std::span<const EdgeContact> constraints();
+  std::span<const HeldPlane> planes() const {
+    return {planes_.data(), static_cast<std::size_t>(plane_count_)};
+  }
 
  private:
-  struct HeldPlane {
-    Plane plane;
-    double least_fraction = 0.0;
-    double greatest_fraction = 0.0;
-  };
   std::array<HeldPlane, kMaxPlanes> planes_{};
   int plane_count_ = 0;
   int changes_ = 0;

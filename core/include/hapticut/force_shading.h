@@ -28,6 +28,10 @@ RigidSurface extract_rigid_surface(const Space& space);
 
 class ForceShading {
  public:
+  // Surfaces meeting at a sharper angle than 45 degrees (their normals this
+  // cosine apart) are a crease the shading keeps; gentler turns it smooths.
+  static constexpr double kCreaseCosine = 0.70710678118654752;
+
   // Both constructors smooth the normals they interpolate at the scale of the
   // rigid surface's own facets (docs/decisions.md, "Force shading: nearest
   // source and smoothed normals"): a surface vertex takes the normal of a
@@ -65,11 +69,24 @@ class ForceShading {
   // Anywhere else, or a force pulling into the surface: the raw force.
   Vec3 shade(const ProxyPlace& place, const Vec3& raw_force_N) const;
 
+  // The shaded unit normal for a body whose device point p presses on the
+  // rigid surface's edge e (a rigid blade resting on a ridge): of the surface
+  // faces through e, the FACE path's normal (its contact point found from p)
+  // of those whose line from p along that normal leaves the material through
+  // them; where none or all do, the faces' mean; the EDGE path's normal where
+  // no face through e is shaded.
+  Vec3 edge_contact_normal(std::int32_t e, const Vec3& p) const;
+
   // Smoothed unit normal of a mesh vertex out of the rigid region, zero for a
   // vertex not on the rigid surface.
   const Vec3& vertex_normal(std::int32_t v) const { return vertex_normals_[v]; }
   std::int32_t vertex_count() const { return static_cast<std::int32_t>(vertex_normals_.size()); }
   bool is_surface_edge(std::int32_t e) const { return surface_edge_[e] != 0; }
+  // The EDGE path's unit normal at x on mesh edge e (its ends' normals
+  // interpolated), zero when e is not on the rigid surface.
+  Vec3 surface_edge_normal(std::int32_t e, const Vec3& x) const {
+    return is_surface_edge(e) ? edge_normal(e, x) : Vec3{};
+  }
   // What the FACE path interpolates at the corners of face f of tet t (the
   // tet's vertices other than f, in order): zeros unless t is not rigid and
   // the face is on the rigid surface. For tests and inspection.
@@ -89,6 +106,12 @@ class ForceShading {
     Vec3 normal;               // Unit normal out of the rigid region (into the owner).
   };
 
+  // The FACE path's unit normal on `face` for a proxy at q whose device
+  // point p lies p_height over the face's plane (Morgenbesser and
+  // Srinivasan's contact point); zero when there is none.
+  Vec3 contact_normal(const ShadedFace& face, const Vec3& q, const Vec3& p, double p_height) const;
+  // Faces of the rigid surface through one edge that edge_contact_normal weighs.
+  static constexpr int kMaxEdgeFaces = 8;
   Vec3 edge_normal(std::int32_t e, const Vec3& q) const;
   Vec3 touching_normal(const ProxyPlace& place) const;
   // What the FACE path interpolates at a corner of a face: a function of

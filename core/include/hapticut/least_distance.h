@@ -27,4 +27,14 @@ LeastDistanceStatus solve_least_distance(int unknowns, std::span<const LeastDist
                                          std::span<const double> bounds,
                                          std::array<double, kLeastDistanceMaxUnknowns>& y);
 
+// The solver underneath: min |A x - f| over x >= 0 (Lawson and Hanson's NNLS),
+// A given by its columns, each of kNonnegativeMaxRows entries of which the first
+// `rows` are used, at most kLeastDistanceMaxConstraints of them; x (one entry
+// per column) gets the answer. False when its iterations ran out (x then holds
+// the last iterate, feasible). Columns that repeat others are fine.
+inline constexpr int kNonnegativeMaxRows = kLeastDistanceMaxUnknowns + 1;
+using NonnegativeColumn = std::array<double, kNonnegativeMaxRows>;
+bool solve_nonnegative_least_squares(int rows, std::span<const NonnegativeColumn> columns,
+                                     const NonnegativeColumn& f, std::span<double> x);
+
 }  // namespace hapticut

@@ -20,6 +20,7 @@
 
 #include "hapticut/edge_contact_set.h"
 #include "hapticut/edge_fit.h"
+#include "hapticut/force_shading.h"
 #include "hapticut/proxy_place.h"
 #include "hapticut/segment_probe.h"
 #include "hapticut/space.h"
@@ -67,6 +68,13 @@ class RigidEdge {
   // times their push, else slides as far as leaves the pull at the dynamic
   // coefficient times the push.
   void apply_friction(bool locked);
+  // Force shading at the contacts (rigid_edge_shading.cpp; docs/decisions.md,
+  // "The rigid blade"): the part of the springs' force `force_N` along the
+  // touching contacts' normals takes their shaded normals, its size kept; the
+  // torque about `origin` takes the change at the contacts' samples of the
+  // device's edge `device`.
+  void shade_force(const ForceShading& shading, const EdgePose& device, const Vec3& origin,
+                   Vec3& force_N, Vec3& torque_N_mm) const;
   // Forgets a slide in progress (the static coefficient decides next).
   void clear_sliding() { sliding_ = false; }
 
@@ -101,8 +109,13 @@ class RigidEdge {
                       bool add_contacts);
   ProbeWalls membrane_walls(const ProxyPlace& place, const Vec3& device_point,
                             std::int32_t& start_tet) const;
-  // `wall_tet` is the tet whose material holds the edge there (its friction).
-  void add_contact(double fraction, const Plane& plane, std::int32_t wall_tet);
+  // `wall_tet` is the tet whose material holds the edge there (its friction);
+  // `feature` what the sample met (its force shading).
+  void add_contact(double fraction, const Plane& plane, std::int32_t wall_tet,
+                   const ContactFeature& feature);
+  // How far from the verified edge a contact's sample may lie and still touch
+  // it: the nearest one's distance and a margin.
+  double touching_distance() const;
   // From the verified pose toward `trial`, as far as the walks got
   // (`advance`), halved while the motion still meets rigid material; verified.
   void advance_verified(const EdgePose& trial, double advance);

@@ -26,6 +26,11 @@ struct SegmentProbe {
   // The wall's tet (its material gives the contact's friction), kNoTet when
   // exhausted.
   std::int32_t wall_tet = kNoTet;
+  // The face it hit as seen from the tet the walk left through it (a face of
+  // the rigid surface owned by a non-rigid tet, what force shading reads):
+  // kNoTet when the segment entered from outside the mesh or was exhausted.
+  std::int32_t owner_tet = kNoTet;
+  std::int8_t owner_face = 0;
   // The tet holding b (within the tolerance) when nothing was hit, kNoTet when
   // b lies outside the mesh.
   std::int32_t end_tet = kNoTet;

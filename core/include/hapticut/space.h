@@ -44,7 +44,7 @@ struct RuntimeSettings {
   int max_transitions_per_tick = default_count(setting_range::kMaxTransitions);
   // Per-point force limit on an unfinished tick.
   double capped_tick_force_N = setting_range::kCappedTickForce.default_value;
-  bool force_shading = false;  // Blade: shade each point's force (ForceShading).
+  bool force_shading = false;  // Blade: shade its force (ForceShading).
   // Blade: total transitions over all its points in one tick (docs/decisions.md,
   // "Work budget per tick"); 0 means kDefaultTransitionsPerPoint per point.
   int blade_transition_budget = 0;

@@ -35,6 +35,7 @@ class RigidSurfaceEdges {
 
   std::size_t size() const { return segments_.size(); }
   const std::array<Vec3, 2>& segment(std::int32_t k) const { return segments_[k]; }
+  std::int32_t mesh_edge(std::int32_t k) const { return mesh_edges_[k]; }
   // Which side of the plane through edge k with this normal the rigid tets
   // around the edge lie on: +1 or -1; 0 when they lie on both sides (the
   // plane cuts into the material, so it supports nothing there) or on it.
@@ -60,6 +61,7 @@ struct SweptHit {
   // segment and the solid's edge supports the solid).
   Plane contact;
   std::int32_t wall_tet = kNoTet;  // A rigid tet at the edge.
+  std::int32_t mesh_edge = -1;     // The rigid edge, as the tet mesh numbers it.
 };
 
 // The earliest rigid surface edge crossing the bilinear patch swept by the

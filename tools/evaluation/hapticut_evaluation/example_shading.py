@@ -18,6 +18,9 @@ from hapticut_evaluation import _baselines, accuracy, economy, meshes, surface
 SCENES = ("sphere80", "sphere320", "finger", "mouse")
 DEPTH_MM = {"sphere80": 2.0, "sphere320": 2.0} | economy.EXAMPLE_DEPTH_MM
 
+# Press-and-slide strokes per scene (surface.strokes).
+STROKES = 8
+
 # The variants compared on every scene, by their column prefix.
 PLAIN, OWN, SOURCE = "plain", "own", "source"
 LABELS = {
@@ -55,7 +58,7 @@ def never_worse(row: dict) -> bool:
 def run_example_shading(
     *,
     quick: bool = False,
-    points: int = 8,
+    points: int = STROKES,
     repeats: int = 5,
     min_seconds: float = 3.0,
     scenes=SCENES,

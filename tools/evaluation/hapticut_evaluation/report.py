@@ -357,7 +357,46 @@ def _strokes_values() -> dict:
     }
 
 
-def example_shading_section(b, rows: list[dict]) -> str:
+def rigid_blade_shading(b, rows: list[dict], blade_rows: list[dict]) -> str:
+    """The rigid blade's rows on the example spheres, beside the shaded independent points'."""
+    if not blade_rows:
+        return ""
+    from hapticut_evaluation import rigid_blade
+
+    own = {r["example"]: r for r in rows}
+    table_rows = []
+    for r in blade_rows:
+        points = own.get(r["example"], {})
+        table_rows.append(
+            {
+                **r,
+                "points_own_mean": points.get(f"{example_shading.OWN}_dir_err_smooth_mean_deg", ""),
+                "points_own_p95": points.get(f"{example_shading.OWN}_dir_err_smooth_p95_deg", ""),
+            }
+        )
+    return fill(
+        b,
+        "example_shading_rigid",
+        blade_mm=f"{rigid_blade.SHADING_BLADE_MM:g}",
+        table=markdown_table(
+            table_rows,
+            [
+                ("example", "example"),
+                ("points", "blade points"),
+                ("plain_dir_err_smooth_mean_deg", "plain mean deg"),
+                ("plain_dir_err_smooth_p95_deg", "p95"),
+                ("shaded_dir_err_smooth_mean_deg", "shaded mean deg"),
+                ("shaded_dir_err_smooth_p95_deg", "p95"),
+                ("points_own_mean", "independent points, shaded mean deg"),
+                ("points_own_p95", "p95"),
+                ("contact_updates", "ticks in contact"),
+                ("unresolved_ticks", "unresolved"),
+            ],
+        ),
+    )
+
+
+def example_shading_section(b, rows: list[dict], blade_rows: list[dict] = ()) -> str:
     if not rows:
         return ""
     P, OWN, S = example_shading.PLAIN, example_shading.OWN, example_shading.SOURCE
@@ -391,6 +430,7 @@ def example_shading_section(b, rows: list[dict]) -> str:
         gain_high=f"{max(gains):.2f}",
         cost_low=f"{min(cost):.0f}",
         cost_high=f"{max(cost):.0f}",
+        rigid_blade=rigid_blade_shading(b, rows, list(blade_rows)),
     )
 
 
@@ -655,6 +695,7 @@ FILES = (
     "mesh_economy.csv",
     "example_economy.csv",
     "example_shading.csv",
+    "rigid_blade_shading.csv",
     "valence.csv",
     "speed_vs_error.png",
     "valence.png",
@@ -677,6 +718,7 @@ def write_page(
     economy_rows,
     example_rows=(),
     shading_rows=(),
+    blade_shading_rows=(),
     rigid_rows=(),
     penetration_rows=(),
     quick: bool,
@@ -777,7 +819,7 @@ def write_page(
             ],
         ),
         sphere_sizing=sphere_sizing(b, economy_rows),
-        example_shading=example_shading_section(b, shading_rows),
+        example_shading=example_shading_section(b, shading_rows, list(blade_shading_rows)),
         examples=examples_section(b, example_rows),
         valence=valence_section(b, valence_rows, valence_fit, valence_share),
         rigid_blade=rigid_blade_section(b, list(rigid_rows), list(penetration_rows)),

@@ -6,6 +6,9 @@
 - Penetration of the ideal edge: strokes across the finger example's bones, a cylinder and a
   plate thinner than the point spacing, the ideal edge sampled at ten times the point density
   (independent points: the polyline through them); every sample inside rigid material counts.
+- Force shading on the example spheres: a 1-point and a 50-point rigid blade on the
+  press-and-slide strokes of the shaded independent points' evaluation (example_shading.py),
+  the force's direction error with shading off and on.
 """
 
 from __future__ import annotations
@@ -213,4 +216,112 @@ def run_edge_penetration(finger_path, *, quick: bool = False) -> list[dict]:
         strokes = [_press_and_slide(x, 0.0, 4.0, start_z, -3.0) for x in places]
         for row in _penetration(space, rigid, strokes, 20.0, 20):
             rows.append({"scene": name, **row})
+    return rows
+
+
+# The example spheres' force shading: the strokes of example_shading.py, the blade's
+# middle on each stroke's point, its edge across the slide on the sphere's tangent.
+SHADING_SCENES = ("sphere80", "sphere320")
+SHADING_POINTS = (1, 50)
+SHADING_BLADE_MM = 40.0
+
+
+def _turn_from_x(direction: np.ndarray) -> np.ndarray:
+    """The least turn (w, x, y, z) taking +x onto the unit `direction`."""
+    q = np.array([1.0 + direction[0], 0.0, -direction[2], direction[1]])
+    if q[0] < 1e-9:  # Opposite: half a turn about z.
+        return np.array([0.0, 0.0, 0.0, 1.0])
+    return q / np.linalg.norm(q)
+
+
+def stroke_poses(source, stroke: np.ndarray, slide: np.ndarray) -> np.ndarray:
+    """(ticks, 7) poses of a blade along the tool's x whose middle follows `stroke` (ticks,
+    3), its edge across the slide (the `slide` ticks' steps) and along the surface's
+    tangent; the press before the slide holds the slide's first direction."""
+    _, tri, bary = source.closest(stroke)
+    normal = source.smooth_normal(tri, bary)
+    step = np.diff(stroke, axis=0, append=stroke[-1:])
+    step -= normal * np.einsum("ij,ij->i", step, normal)[:, None]
+    moving = slide & (np.linalg.norm(step, axis=1) > 1e-9)
+    direction = step[int(np.argmax(moving))] if moving.any() else np.cross(normal[0], [0, 0, 1.0])
+    poses = np.zeros((len(stroke), 7))
+    for k in range(len(stroke)):
+        if moving[k]:
+            direction = step[k]
+        edge = np.cross(normal[k], direction)
+        edge /= np.linalg.norm(edge)
+        poses[k, :3] = stroke[k]
+        poses[k, 3:] = _turn_from_x(edge)
+    return poses
+
+
+def _shading_run(space, source, path: np.ndarray, slide: np.ndarray, points: int, shaded: bool):
+    """Every stroke of `path` (ticks, strokes, 3) with a fresh rigid blade: the ideal edge's
+    middle and the force per tick, each (ticks, strokes, 3), and the slide's ticks whose
+    rounds ended short of the constrained optimum (unresolved: the pose lags the device)."""
+    half = SHADING_BLADE_MM / 2 if points > 1 else 0.0
+    middles = np.zeros_like(path)
+    forces = np.zeros_like(path)
+    unresolved = 0
+    for s in range(path.shape[1]):
+        blade = _core.Blade(space, [-half, 0, 0], [half, 0, 0], points, coupling="rigid")
+        settings = blade.settings
+        settings.force_shading = shaded
+        blade.settings = settings
+        poses = stroke_poses(source, path[:, s], slide)
+        blade.reset(poses[0])
+        for k, pose in enumerate(poses):
+            tick = blade.step(pose, 0.001)
+            forces[k, s] = tick["force_N"]
+            unresolved += bool(slide[k] and tick["unresolved"])
+            q = np.asarray(blade.q)
+            middles[k, s] = (q[0] + q[-1]) / 2
+    return middles, forces, unresolved
+
+
+def run_sphere_shading(scenes=SHADING_SCENES, points=SHADING_POINTS, *, log=print) -> list[dict]:
+    """One row per example sphere and blade: the direction error of the rigid blade's force
+    against the source sphere's smooth normal at the closest source point to the ideal edge's
+    middle, plain and shaded (from the scene's own rigid surface, what a servo has), on the
+    strokes of the shaded independent points (example_shading.run_example_shading)."""
+    from hapticut_evaluation import economy, example_shading, surface
+
+    try:
+        module = economy.examples_module()
+    except FileNotFoundError as error:
+        log(f"  skipped: {error}")
+        return []
+    rows = []
+    for name in scenes:
+        file = economy.EXAMPLES_DIR / f"{name}.hapticut.msgpack"
+        if not file.exists():
+            log(f"  skipped {name}: {file} not found")
+            continue
+        source = economy.example_source(module, name)
+        space = example_shading.scene_space(file)
+        path, slide = surface.strokes(
+            source,
+            0.001,
+            points=example_shading.STROKES,
+            depth_mm=example_shading.DEPTH_MM[name],
+            slide_s=economy.EXAMPLE_SLIDE_S,
+        )
+        for count in points:
+            row = {"example": name, "points": count}
+            for kind, shaded in (("plain", False), ("shaded", True)):
+                middles, forces, unresolved = _shading_run(
+                    space, source, path, slide, count, shaded
+                )
+                m = surface.contact_metrics(source, slide, middles, forces)
+                row[f"{kind}_dir_err_smooth_mean_deg"] = m["dir_err_smooth_mean_deg"]
+                row[f"{kind}_dir_err_smooth_p95_deg"] = m["dir_err_smooth_p95_deg"]
+            # Shading changes the force, not the pose: one count for both.
+            row["contact_updates"] = m["contact_updates"]
+            row["unresolved_ticks"] = unresolved
+            rows.append(row)
+            log(
+                f"  {name:9s} rigid blade of {count:2d} points: smooth error plain "
+                f"{row['plain_dir_err_smooth_mean_deg']:.3f}, shaded "
+                f"{row['shaded_dir_err_smooth_mean_deg']:.3f} deg"
+            )
     return rows

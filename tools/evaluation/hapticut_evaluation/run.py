@@ -55,6 +55,8 @@ def run_all(out: Path, *, quick: bool = False, log=print) -> dict:
     example_rows = economy.example_economy(cache, quick=quick, log=log)
     log("force shading on the example scenes")
     shading_rows = example_shading.run_example_shading(quick=quick, log=log)
+    log("force shading of the rigid blade on the example spheres")
+    blade_shading_rows = rigid_blade.run_sphere_shading(log=log)
     log("the rigid blade")
     rigid_rows = rigid_blade.run_stiffness_vs_contact()
     penetration_rows = rigid_blade.run_edge_penetration(
@@ -72,6 +74,7 @@ def run_all(out: Path, *, quick: bool = False, log=print) -> dict:
         ("mesh_economy", economy_rows),
         ("example_economy", example_rows),
         ("example_shading", shading_rows),
+        ("rigid_blade_shading", blade_shading_rows),
     ]:
         report.write_csv(out / f"{name}.csv", rows)
     charts.speed_vs_error(accuracy_rows, out / "speed_vs_error.png")
@@ -87,6 +90,7 @@ def run_all(out: Path, *, quick: bool = False, log=print) -> dict:
         economy_rows=economy_rows,
         example_rows=example_rows,
         shading_rows=shading_rows,
+        blade_shading_rows=blade_shading_rows,
         rigid_rows=rigid_rows,
         penetration_rows=penetration_rows,
         quick=quick,
