@@ -109,8 +109,8 @@ Sample touching_point(std::span<const Sample> samples, const Vec3& along) {
 
 }  // namespace
 
-void RigidEdge::shade_force(const ForceShading& shading, const EdgePose& device,
-                            const Vec3& origin, Vec3& force_N, Vec3& torque_N_mm) const {
+void RigidEdge::shade_force(const ForceShading& shading, const EdgePose& device, const Vec3& origin,
+                            Vec3& force_N, Vec3& torque_N_mm) const {
   const std::span<const EdgeContactSet::HeldPlane> held = contacts_.planes();
   if (held.empty()) return;
   constexpr int kMax = EdgeContactSet::kMaxPlanes;
