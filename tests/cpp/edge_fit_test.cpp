@@ -9,16 +9,12 @@
 #include <cmath>
 #include <vector>
 
+#include "test_support.h"
+
 namespace hapticut {
 namespace {
 
 constexpr double kLength = 40.0;
-
-std::vector<double> fractions(int n) {
-  std::vector<double> f(n);
-  for (int i = 0; i < n; ++i) f[i] = double(i) / (n - 1);
-  return f;
-}
 
 std::vector<Vec3> targets_on(const EdgePose& edge, const std::vector<double>& f) {
   std::vector<Vec3> t;
@@ -33,7 +29,7 @@ void expect_near(const Vec3& a, const Vec3& b, double tolerance) {
 }
 
 TEST(EdgeFit, TargetsOnAnEdgeGiveThatEdgeAndALockKeepsTheDirection) {
-  const std::vector<double> f = fractions(9);
+  const std::vector<double> f = testing::evenly_spaced(9);
   const Vec3 direction = Vec3{1.0, 2.0, -0.5} / norm(Vec3{1.0, 2.0, -0.5});
   const EdgePose truth{{3.0, -1.0, 7.0}, direction};
   const std::vector<Vec3> t = targets_on(truth, f);
@@ -52,7 +48,7 @@ TEST(EdgeFit, TargetsOnAnEdgeGiveThatEdgeAndALockKeepsTheDirection) {
 TEST(EdgeFit, AContactPlaneKeepsItsSampleOnItsFreeSideByTheMargin) {
   // Targets under the plane z = 0 along the whole edge, tilted: the fit
   // with contacts at both ends lays the edge on the plane, a margin above.
-  const std::vector<double> f = fractions(11);
+  const std::vector<double> f = testing::evenly_spaced(11);
   std::vector<Vec3> t;
   for (double s : f) t.push_back({s * kLength, 0.0, -1.0 - 2.0 * s});
   const EdgePose base{{0.0, 0.0, 1.0}, {1.0, 0.0, 0.0}};
@@ -85,7 +81,7 @@ TEST(EdgeFit, AContactPlaneKeepsItsSampleOnItsFreeSideByTheMargin) {
 }
 
 TEST(EdgeFit, TurnedAboutASampleThatSampleStaysAndTheRestFollowTheTargets) {
-  const std::vector<double> f = fractions(7);
+  const std::vector<double> f = testing::evenly_spaced(7);
   const EdgePose base{{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}};
   // Targets on an edge through base's sample at 0.25, tilted up by 10 degrees.
   const double a = 10.0 * M_PI / 180.0;

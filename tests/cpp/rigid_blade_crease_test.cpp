@@ -23,15 +23,7 @@ using testing::axis;
 // cells with every vertex lifted by |y|, bone below the lifted z = 0 (the
 // groove's bottom line is the x axis).
 std::shared_ptr<const Space> v_groove() {
-  MeshData mesh = grid_mesh(axis(-80, 80, 4), axis(-16, 16, 2), axis(-16, 16, 2));
-  std::vector<std::int32_t> labels(mesh.tets.size());
-  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
-    double z = 0.0;
-    for (std::int32_t v : mesh.tets[t]) z += mesh.vertices_mm[v].z * 0.25;
-    labels[t] = z < 0.0 ? 2 : 0;
-  }
-  for (Vec3& v : mesh.vertices_mm) v.z += std::abs(v.y);
-  return testing::make_space(mesh, labels);
+  return testing::v_groove(axis(-80, 80, 4), axis(-16, 16, 2), axis(-16, 16, 2), 1.0);
 }
 
 struct Slide {

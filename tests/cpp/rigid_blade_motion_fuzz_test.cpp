@@ -51,16 +51,8 @@ std::vector<Scenario> scenarios() {
   for (double angle_deg : {30.0, 90.0, 150.0}) {
     // A V-groove along x: vertices lifted by c |y|, c = 1 / tan(angle / 2).
     const double c = 1.0 / std::tan(0.5 * angle_deg * M_PI / 180.0);
-    MeshData mesh = grid_mesh(axis(-24, 24, 4), axis(-12, 12, 2), axis(-12, 12, 2));
-    std::vector<std::int32_t> labels(mesh.tets.size());
-    for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
-      double z = 0.0;
-      for (std::int32_t v : mesh.tets[t]) z += mesh.vertices_mm[v].z * 0.25;
-      labels[t] = z < 0.0 ? 2 : 0;
-    }
-    for (Vec3& v : mesh.vertices_mm) v.z += c * std::abs(v.y);
-    out.push_back(
-        {"crease " + std::to_string(int(angle_deg)) + " deg", testing::make_space(mesh, labels)});
+    out.push_back({"crease " + std::to_string(int(angle_deg)) + " deg",
+                   testing::v_groove(axis(-24, 24, 4), axis(-12, 12, 2), axis(-12, 12, 2), c)});
   }
   // An L-shaped notch of two bones: a floor and a wall.
   const MeshData notch = grid_mesh(axis(-24, 24, 4), axis(-12, 12, 2), axis(-12, 12, 2));

@@ -144,16 +144,8 @@ TEST(RigidBladeShading, OnAFlatBoneShadingChangesNothing) {
 // A V-groove of bone along x, its flanks rising by `slope` x |y| (a Kuhn grid
 // of 4 x 2 x 2 mm cells, every vertex lifted; bone below the lifted z = 0).
 std::shared_ptr<const Space> v_groove(double slope) {
-  MeshData mesh =
-      grid_mesh(testing::axis(-40, 40, 4), testing::axis(-16, 16, 2), testing::axis(-16, 16, 2));
-  std::vector<std::int32_t> labels(mesh.tets.size());
-  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
-    double z = 0.0;
-    for (std::int32_t v : mesh.tets[t]) z += mesh.vertices_mm[v].z * 0.25;
-    labels[t] = z < 0.0 ? 2 : 0;
-  }
-  for (Vec3& v : mesh.vertices_mm) v.z += slope * std::abs(v.y);
-  return testing::make_space(mesh, labels);
+  return testing::v_groove(testing::axis(-40, 40, 4), testing::axis(-16, 16, 2),
+                           testing::axis(-16, 16, 2), slope);
 }
 
 TEST(RigidBladeShading, InAGrooveTheForceStaysAlongItsMiddle) {

@@ -15,12 +15,6 @@ namespace {
 
 constexpr double kLength = 20.0;
 
-std::vector<double> fractions(int n) {
-  std::vector<double> f(n);
-  for (int i = 0; i < n; ++i) f[i] = double(i) / (n - 1);
-  return f;
-}
-
 Material bone(double static_friction, double dynamic_friction) {
   Material m = testing::rigid_material();
   m.static_friction = static_friction;
@@ -46,7 +40,7 @@ void set_targets(RigidEdge& edge, const std::vector<double>& f, const Vec3& star
 TEST(RigidEdge, SeatsOnlyWhereNoSampleAndNoStretchIsInBone) {
   const auto space = floor_of(testing::rigid_material());
   // Two samples: the stretch between them is all that can meet the bone.
-  RigidEdge edge(space, fractions(2), kLength);
+  RigidEdge edge(space, testing::evenly_spaced(2), kLength);
   // (Off the grid's planes: a sample on a face between two bone tets is not
   // in either by more than the tolerance.)
   EXPECT_FALSE(edge.seat({{-10.3, 0.3, -3}, {1, 0, 0}}));
@@ -62,7 +56,7 @@ TEST(RigidEdge, SeatsOnlyWhereNoSampleAndNoStretchIsInBone) {
 
 TEST(RigidEdge, SolvedOntoABoneFloorItRestsOnItWithOnePlanesTwoContacts) {
   const auto space = floor_of(testing::rigid_material());
-  const std::vector<double> f = fractions(21);
+  const std::vector<double> f = testing::evenly_spaced(21);
   for (const bool lock : {false, true}) {
     RigidEdge edge(space, f, kLength);
     ASSERT_TRUE(edge.seat({{-10, 0, 2}, {1, 0, 0}}));
@@ -93,7 +87,7 @@ TEST(RigidEdge, TheMotionIsVerifiedNotOnlyItsEnd) {
                                   testing::axis(-20, 20, 5));
   const auto space =
       testing::labelled_space(mesh, [](const Vec3& c) { return std::abs(c.x) < 0.2 && c.z < 5.0; });
-  const std::vector<double> f = fractions(5);
+  const std::vector<double> f = testing::evenly_spaced(5);
   RigidEdge edge(space, f, kLength);
   // Along y, on the wall's left; the targets on its right.
   ASSERT_TRUE(edge.seat({{-3, -10, 1}, {0, 1, 0}}));
@@ -106,7 +100,7 @@ TEST(RigidEdge, TheMotionIsVerifiedNotOnlyItsEnd) {
 
 TEST(RigidEdge, FrictionHoldsItUntilThePullLeavesTheCone) {
   const auto space = floor_of(bone(0.5, 0.4));
-  const std::vector<double> f = fractions(11);
+  const std::vector<double> f = testing::evenly_spaced(11);
   RigidEdge edge(space, f, kLength);
   ASSERT_TRUE(edge.seat({{-10, 0, 0.5}, {1, 0, 0}}));
   const auto step = [&](double pull_x) {

@@ -73,6 +73,31 @@ inline bool inside_rigid(const Space& space, const Vec3& x, double depth_mm = 1e
   return inside;
 }
 
+// A V-groove of bone running along x: a grid of the given lines with every
+// vertex lifted by slope |y|, bone (material 2 of paper_materials) below the
+// lifted z = 0, the groove's bottom line the x axis. Its angle is
+// 2 atan(1 / slope).
+inline std::shared_ptr<const Space> v_groove(const std::vector<double>& xs,
+                                             const std::vector<double>& ys,
+                                             const std::vector<double>& zs, double slope) {
+  MeshData mesh = grid_mesh(xs, ys, zs);
+  std::vector<std::int32_t> labels(mesh.tets.size());
+  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+    double z = 0.0;
+    for (std::int32_t v : mesh.tets[t]) z += mesh.vertices_mm[v].z * 0.25;
+    labels[t] = z < 0.0 ? 2 : 0;
+  }
+  for (Vec3& v : mesh.vertices_mm) v.z += slope * std::abs(v.y);
+  return make_space(mesh, labels);
+}
+
+// n fractions evenly spaced over [0, 1], both ends included (n >= 2).
+inline std::vector<double> evenly_spaced(int n) {
+  std::vector<double> f(n);
+  for (int i = 0; i < n; ++i) f[i] = double(i) / (n - 1);
+  return f;
+}
+
 // Bone below z = 0 inside a free 40 mm box (material 2 of paper_materials).
 inline std::shared_ptr<const Space> bone_floor(EngineSettings settings = {}) {
   const MeshData mesh = grid_mesh({-20, 0, 20}, {-20, 0, 20}, {-20, 0, 20});

@@ -55,6 +55,27 @@ def never_worse(row: dict) -> bool:
     )
 
 
+def example_strokes(scenes, points: int, log):
+    """(name, space, source surface, path, slide) for each example scene found: its tet mesh
+    with rigid and free only (scene_space), the surface it was built from, and the
+    press-and-slide strokes on it (surface.strokes); nothing when the examples are missing."""
+    try:
+        module = economy.examples_module()
+    except FileNotFoundError as error:
+        log(f"  skipped: {error}")
+        return
+    for name in scenes:
+        file = economy.EXAMPLES_DIR / f"{name}.hapticut.msgpack"
+        if not file.exists():
+            log(f"  skipped {name}: {file} not found")
+            continue
+        source = economy.example_source(module, name)
+        path, slide = surface.strokes(
+            source, 0.001, points=points, depth_mm=DEPTH_MM[name], slide_s=economy.EXAMPLE_SLIDE_S
+        )
+        yield name, scene_space(file), source, path, slide
+
+
 def run_example_shading(
     *,
     quick: bool = False,
@@ -65,22 +86,8 @@ def run_example_shading(
     log=print,
 ) -> list[dict]:
     """One row per example scene; [] when the examples are missing."""
-    try:
-        module = economy.examples_module()
-    except FileNotFoundError as error:
-        log(f"  skipped: {error}")
-        return []
     rows, cases = [], []
-    for name in scenes:
-        file = economy.EXAMPLES_DIR / f"{name}.hapticut.msgpack"
-        if not file.exists():
-            log(f"  skipped {name}: {file} not found")
-            continue
-        source = economy.example_source(module, name)
-        space = scene_space(file)
-        path, slide = surface.strokes(
-            source, 0.001, points=points, depth_mm=DEPTH_MM[name], slide_s=economy.EXAMPLE_SLIDE_S
-        )
+    for name, space, source, path, slide in example_strokes(scenes, points, log):
         shadings = {
             PLAIN: None,
             OWN: _core.ForceShading(space),
@@ -92,6 +99,8 @@ def run_example_shading(
             sets[kind].reset(np.ascontiguousarray(path[0]))
         row = {"example": name, "tets": space.tet_count, "source_triangles": len(source.triangles)}
         cases.append((row, sets, source, path, slide))
+    if not cases:
+        return rows
     # Every scene and variant timed in the same rounds (see accuracy.time_round_robin).
     all_sets = [method for _, sets, *_ in cases for method in sets.values()]
     best_ns = iter(

@@ -284,28 +284,12 @@ def run_sphere_shading(scenes=SHADING_SCENES, points=SHADING_POINTS, *, log=prin
     against the source sphere's smooth normal at the closest source point to the ideal edge's
     middle, plain and shaded (from the scene's own rigid surface, what a servo has), on the
     strokes of the shaded independent points (example_shading.run_example_shading)."""
-    from hapticut_evaluation import economy, example_shading, surface
+    from hapticut_evaluation import example_shading, surface
 
-    try:
-        module = economy.examples_module()
-    except FileNotFoundError as error:
-        log(f"  skipped: {error}")
-        return []
     rows = []
-    for name in scenes:
-        file = economy.EXAMPLES_DIR / f"{name}.hapticut.msgpack"
-        if not file.exists():
-            log(f"  skipped {name}: {file} not found")
-            continue
-        source = economy.example_source(module, name)
-        space = example_shading.scene_space(file)
-        path, slide = surface.strokes(
-            source,
-            0.001,
-            points=example_shading.STROKES,
-            depth_mm=example_shading.DEPTH_MM[name],
-            slide_s=economy.EXAMPLE_SLIDE_S,
-        )
+    for name, space, source, path, slide in example_shading.example_strokes(
+        scenes, example_shading.STROKES, log
+    ):
         for count in points:
             row = {"example": name, "points": count}
             for kind, shaded in (("plain", False), ("shaded", True)):
