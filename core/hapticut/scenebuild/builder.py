@@ -90,6 +90,15 @@ DEFAULT_ACCURACY_RATIO = 0.01
 DEFAULT_FAR_RATIO = 4.0
 # The background grid of the sizing field: at most this many cells along the longest side.
 SIZING_GRID_CELLS = 32
+# fTetWild's edge length where the sizing field does not reach, as a share of the enclosure's
+# largest side at most. fTetWild grows the box it meshes by that length on every side and
+# fills the grown box with points (about 15 along the input's diagonal) that it then
+# coarsens: a length near the enclosure's size (a small scene, whose far edges follow its
+# size) fills many times the enclosure's volume with points coarsened for seconds, and
+# dropped at the end with everything outside the enclosure. Inside the enclosure the sizing
+# field still rules: a quarter leaves about as many tets, the far air's a little finer
+# (docs/decisions.md, "fTetWild's outer edge length").
+OUTER_EDGE_SHARE = 0.25
 # Shares of accuracy_mm: simplifying the input, and fTetWild's envelope. fTetWild keeps its
 # output within the envelope of its input but not the converse, so a fifth is held back.
 SIMPLIFY_SHARE = 0.4
@@ -747,7 +756,8 @@ def _size(
     sizing = _sizing_field(
         enclosure, surfaces, near, far, settings.grading, zones, air_grading, air_far
     )
-    return sizing, max(far, air_far)
+    side = float(np.ptp(enclosure.vertices, axis=0).max())
+    return sizing, min(max(far, air_far), OUTER_EDGE_SHARE * side)
 
 
 def _tetrahedralize(
