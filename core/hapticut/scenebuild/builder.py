@@ -53,10 +53,10 @@ from .repair import (
     read_surface,
     repair_surface,
     self_intersecting_faces,
-    simplify_surface,
     surface_deviation,
 )
 from .report import BuildReport, SurfaceReport
+from .simplify import simplify_surface
 
 __all__ = [
     "BuildCancelled",
