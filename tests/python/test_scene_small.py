@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from build_test_support import bunny_path
-from hapticut.scenebuild import BuildSettings, Region, build, builder, tetwild
+from hapticut.scenebuild import BuildError, BuildSettings, Region, build, builder, tetwild
 from hapticut.scenebuild.geometry import enclosure_surface
 from hapticut.scenebuild.repair import read_surface
 from hapticut.scenefile import Material
@@ -43,8 +43,11 @@ def small_scan(faces: int, length_mm: float) -> Region:
     return Region("bunny", vertices, triangles, SOFT)
 
 
-def fetched_edge_length(monkeypatch, region: Region, settings: BuildSettings) -> float:
-    """The edge length the build hands fTetWild (the build stops there)."""
+def edge_length_handed_to_tetwild(
+    monkeypatch, region: Region, settings: BuildSettings
+) -> tuple[float, float]:
+    """The edge length the build hands fTetWild and the enclosure's largest side (the build
+    stops there)."""
     handed = []
 
     def stop_at_tetwild(vertices, faces, params, sizing=None, *, poll=None):
@@ -52,7 +55,7 @@ def fetched_edge_length(monkeypatch, region: Region, settings: BuildSettings) ->
         raise RuntimeError("stopped before fTetWild")
 
     monkeypatch.setattr(tetwild, "tetrahedralize", stop_at_tetwild)
-    with pytest.raises(Exception, match="stopped before fTetWild"):
+    with pytest.raises(BuildError, match="stopped before fTetWild"):
         build([region], settings=settings)
     return handed[0]
 
@@ -60,11 +63,11 @@ def fetched_edge_length(monkeypatch, region: Region, settings: BuildSettings) ->
 def test_ftetwild_edge_length_stays_within_a_share_of_the_enclosure(monkeypatch):
     # The cube's own edges make its far edges (and the air's, three times them) longer than
     # the enclosure: fTetWild gets the capped length.
-    edge, side = fetched_edge_length(monkeypatch, cube_region(10.0), BuildSettings())
+    edge, side = edge_length_handed_to_tetwild(monkeypatch, cube_region(10.0), BuildSettings())
     assert edge == pytest.approx(builder.OUTER_EDGE_SHARE * side)
     # Far edges well inside the cap reach fTetWild as they are (the air's: 3x edge_far_mm).
     settings = BuildSettings(margin_mm=20.0, edge_near_mm=1.0, edge_far_mm=2.0)
-    edge, side = fetched_edge_length(monkeypatch, cube_region(10.0), settings)
+    edge, side = edge_length_handed_to_tetwild(monkeypatch, cube_region(10.0), settings)
     assert edge == pytest.approx(builder.AIR_FAR_RATIO * 2.0)
     assert edge < builder.OUTER_EDGE_SHARE * side
 
