@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from build_test_support import bunny_path, icosphere
 from hapticut.scenebuild.geometry import signed_volume
-from hapticut.scenebuild.repair import read_obj, read_surface, repair_surface, simplify_surface
+from hapticut.scenebuild.repair import read_obj, read_surface, repair_surface
+from hapticut.scenebuild.simplify import simplify_surface
 
 MAX_HOLE = 100
 

@@ -1,6 +1,6 @@
-"""Building a scene from surface meshes (builder.py; docs/scene-building.md): repair, enclosure,
-sizing, fTetWild (tetwild.py), labels (labels.py), quality (quality.py). The file format is
-hapticut.scenefile."""
+"""Building a scene from surface meshes (builder.py; docs/scene-building.md): repair,
+simplification (simplify.py), enclosure, sizing, fTetWild (tetwild.py), labels (labels.py),
+quality (quality.py). The file format is hapticut.scenefile."""
 
 from .builder import BuildSettings, RefineZone, Region, build, check_layout, units_warning
 from .errors import BuildCancelled, BuildError

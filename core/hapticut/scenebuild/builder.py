@@ -53,10 +53,10 @@ from .repair import (
     read_surface,
     repair_surface,
     self_intersecting_faces,
-    simplify_surface,
     surface_deviation,
 )
 from .report import BuildReport, SurfaceReport
+from .simplify import simplify_surface
 
 __all__ = [
     "BuildCancelled",
@@ -90,6 +90,15 @@ DEFAULT_ACCURACY_RATIO = 0.01
 DEFAULT_FAR_RATIO = 4.0
 # The background grid of the sizing field: at most this many cells along the longest side.
 SIZING_GRID_CELLS = 32
+# fTetWild's edge length where the sizing field does not reach, as a share of the enclosure's
+# largest side at most. fTetWild grows the box it meshes by that length on every side and
+# fills the grown box with points (about 15 along the input's diagonal) that it then
+# coarsens: a length near the enclosure's size (a small scene, whose far edges follow its
+# size) fills many times the enclosure's volume with points coarsened for seconds, and
+# dropped at the end with everything outside the enclosure. Inside the enclosure the sizing
+# field still rules: a quarter leaves about as many tets, the far air's a little finer
+# (docs/decisions.md, "fTetWild's outer edge length").
+OUTER_EDGE_SHARE = 0.25
 # Shares of accuracy_mm: simplifying the input, and fTetWild's envelope. fTetWild keeps its
 # output within the envelope of its input but not the converse, so a fifth is held back.
 SIMPLIFY_SHARE = 0.4
@@ -212,15 +221,16 @@ class _Progress:
     """Maps each step's own 0..1 onto the whole run (the build, or only the given steps of
     it) and turns False into BuildCancelled."""
 
-    # Step name -> share of the whole build (fTetWild dominates).
+    # Step name -> share of the whole build, as the steps' times share a default build of a
+    # scan (fTetWild dominates; Check Scene's steps are simplifying, mostly).
     WEIGHTS = {
-        "repair": 0.06,
-        "simplify": 0.10,
-        "check": 0.04,
-        "sizing": 0.04,
-        "tetrahedralize": 0.50,
-        "label": 0.16,
-        "report": 0.10,
+        "repair": 0.01,
+        "simplify": 0.08,
+        "check": 0.01,
+        "sizing": 0.06,
+        "tetrahedralize": 0.78,
+        "label": 0.04,
+        "report": 0.02,
     }
 
     def __init__(self, callback: ProgressCallback | None, steps: Sequence[str] = ()) -> None:
@@ -747,7 +757,8 @@ def _size(
     sizing = _sizing_field(
         enclosure, surfaces, near, far, settings.grading, zones, air_grading, air_far
     )
-    return sizing, max(far, air_far)
+    side = float(np.ptp(enclosure.vertices, axis=0).max())
+    return sizing, min(max(far, air_far), OUTER_EDGE_SHARE * side)
 
 
 def _tetrahedralize(

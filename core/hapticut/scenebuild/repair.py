@@ -1,4 +1,5 @@
-"""Surface meshes for scene building: reading, checking, repairing (pymeshlab), simplifying.
+"""Surface meshes for scene building: reading, checking, repairing (pymeshlab), measuring
+(simplifying: simplify.py).
 
 Every problem that cannot be repaired raises BuildError naming the region and the problem;
 every repair is counted in the region's report (a dict of counts, zero entries left out).
@@ -7,7 +8,6 @@ every repair is counted in the region's report (a dict of counts, zero entries l
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
 
 import numpy as np
 
@@ -252,68 +252,6 @@ def repair_surface(
         out_faces = out_faces[:, ::-1].copy()
         repairs["inverted_inside_out"] = 1
     return Surface(out_vertices, out_faces), repairs
-
-
-def simplify_surface(
-    surface: Surface,
-    tolerance_mm: float,
-    min_faces: int = 20,
-    on_attempt: Callable[[float], None] | None = None,
-):
-    """The surface with as few faces as keep it within tolerance_mm of itself (Hausdorff).
-
-    Quadric edge collapse (topology kept) to a face count found by bisection, each candidate
-    measured both ways with pymeshlab's Hausdorff distance. Returns (surface, faces before,
-    the measured deviation in mm). on_attempt(fraction of the search done) after each try
-    (a cancel raises from it).
-    """
-    pymeshlab = _meshlab()
-    original = len(surface.faces)
-    if tolerance_mm <= 0 or original <= min_faces:
-        return surface, original, 0.0
-    meshes = pymeshlab.MeshSet()
-    meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=surface.vertices, face_matrix=surface.faces))
-    source = meshes.current_mesh_id()
-
-    def attempt(target: int):
-        meshes.set_current_mesh(source)
-        meshes.add_mesh(meshes.current_mesh(), "candidate")
-        meshes.meshing_decimation_quadric_edge_collapse(
-            targetfacenum=int(target),
-            preservetopology=True,
-            preservenormal=True,
-            optimalplacement=True,
-            planarquadric=True,
-            qualitythr=0.3,
-        )
-        candidate = meshes.current_mesh_id()
-        deviation = hausdorff(meshes, source, candidate)
-        mesh = meshes.current_mesh()
-        result = (mesh.vertex_matrix().copy(), mesh.face_matrix().copy(), deviation)
-        meshes.delete_current_mesh()
-        return result
-
-    low, high = min_faces, original  # high: known to fit (the surface itself).
-    best = (surface.vertices, surface.faces, 0.0)
-    while high - low > max(4, high // 50):
-        middle = (low + high) // 2
-        v, f, deviation = attempt(middle)
-        if on_attempt is not None:
-            on_attempt(1 - (high - low) / max(original - min_faces, 1))
-        if deviation <= tolerance_mm:
-            high, best = len(f), (v, f, deviation)
-            if len(f) > middle:  # Decimation stopped early (topology): no gain below it.
-                break
-        else:
-            low = middle
-    vertices, faces, deviation = best
-    volume = signed_volume(vertices, faces)
-    faces = faces if volume >= 0 else faces[:, ::-1]
-    return (
-        Surface(np.asarray(vertices, np.float64), np.asarray(faces, np.int32)),
-        original,
-        deviation,
-    )
 
 
 def hausdorff(meshes, first: int, second: int, samples: int | None = None) -> float:
