@@ -184,4 +184,21 @@ EdgePose interpolate_edge(const EdgePose& a, const EdgePose& b, double t, double
   return {pivot - direction * (pivot_fraction * length_mm), direction};
 }
 
+double interpolation_bow_mm(const Vec3& from, const Vec3& to, double fraction,
+                            double pivot_fraction, double length_mm, const Vec3& normal) {
+  // The motion moves the pivot's sample straight and turns the edge to u(t),
+  // the normalised mix m(t) = (1 - t) d0 + t d1 of the two unit directions: a
+  // sample lies off its chord by (s - p) L (1 - |m|) u, where
+  // 1 - |m| <= 1 - |m|^2 = t (1 - t) |d1 - d0|^2 and |n . u| = |n . m| / |m|
+  // <= (|n . d0| + |d1 - d0|) / |m|, |m| >= sqrt(1 - |d1 - d0|^2 / 4) (and
+  // |n . u| <= 1). With bow = |s - p| L |d1 - d0|^2 |n . u|max, the distance at
+  // t is at least (1 - t) dist0 + t dist1 - t (1 - t) bow >= t (dist1 - bow)
+  // when dist0 >= 0: never negative when dist1 >= bow.
+  const double change = squared_norm(to - from);
+  const double least_mix = std::sqrt(std::max(1.0 - 0.25 * change, 0.0));
+  const double along = std::abs(dot(normal, from)) + std::sqrt(change);
+  const double across = along < least_mix ? along / least_mix : 1.0;
+  return std::abs(fraction - pivot_fraction) * length_mm * change * across;
+}
+
 }  // namespace hapticut

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace hapticut {
 
@@ -160,9 +161,13 @@ bool solve_nonnegative_least_squares(int rows, std::span<const NonnegativeColumn
   return finished;
 }
 
-LeastDistanceStatus solve_least_distance(int unknowns, std::span<const LeastDistanceRow> rows,
-                                         std::span<const double> bounds,
-                                         std::array<double, kLeastDistanceMaxUnknowns>& y) {
+namespace {
+
+// One pass of Lawson and Hanson's LDP: y gets the NNLS residual's answer, or
+// Infeasible when the residual is zero (no y meets every row).
+LeastDistanceStatus least_distance_pass(int unknowns, std::span<const LeastDistanceRow> rows,
+                                        std::span<const double> bounds,
+                                        std::array<double, kLeastDistanceMaxUnknowns>& y) {
   y.fill(0.0);
   bool any_binding = false;
   for (double b : bounds) any_binding = any_binding || b > 0.0;
@@ -189,8 +194,17 @@ LeastDistanceStatus solve_least_distance(int unknowns, std::span<const LeastDist
     return LeastDistanceStatus::Infeasible;
   }
   for (int i = 0; i < unknowns; ++i) y[i] = -r[i] / r[unknowns];
-  // Rounding can leave a residual short of zero on a problem with no
-  // solution: an answer that misses a row is none.
+  return finished ? LeastDistanceStatus::Solved : LeastDistanceStatus::IterationLimit;
+}
+
+// How far y misses the rows, each against its own scale: the least of
+// (rows[j] . y - bounds[j]) / (1 + sum |rows[j]_i y_i| + |bounds[j]|), and the
+// shortfalls bounds[j] - rows[j] . y in `shortfall`.
+double least_slack(int unknowns, std::span<const LeastDistanceRow> rows,
+                   std::span<const double> bounds,
+                   const std::array<double, kLeastDistanceMaxUnknowns>& y,
+                   std::span<double> shortfall) {
+  double least = std::numeric_limits<double>::infinity();
   for (std::size_t j = 0; j < rows.size(); ++j) {
     double s = 0.0;
     double size = 0.0;
@@ -198,11 +212,39 @@ LeastDistanceStatus solve_least_distance(int unknowns, std::span<const LeastDist
       s += rows[j].a[i] * y[i];
       size += std::abs(rows[j].a[i] * y[i]);
     }
-    if (s < bounds[j] - 1e-9 * (1.0 + size + std::abs(bounds[j]))) {
-      return LeastDistanceStatus::Infeasible;
-    }
+    shortfall[j] = bounds[j] - s;
+    least = std::min(least, (s - bounds[j]) / (1.0 + size + std::abs(bounds[j])));
   }
-  return finished ? LeastDistanceStatus::Solved : LeastDistanceStatus::IterationLimit;
+  return least;
+}
+
+}  // namespace
+
+LeastDistanceStatus solve_least_distance(int unknowns, std::span<const LeastDistanceRow> rows,
+                                         std::span<const double> bounds,
+                                         std::array<double, kLeastDistanceMaxUnknowns>& y) {
+  LeastDistanceStatus status = least_distance_pass(unknowns, rows, bounds, y);
+  if (status == LeastDistanceStatus::Infeasible) return status;
+  // NNLS solves its passive columns through their normal equations, which
+  // square the condition of rows that nearly repeat one another (coplanar
+  // faces a rounding apart): the answer can miss a row by far more than
+  // rounding. Iterative refinement: the least correction that meets what the
+  // answer missed, solved the same way, is small, so its own error is small
+  // against the first one's. An answer that still misses a row is none
+  // (rounding can leave a residual short of zero on a problem with none).
+  constexpr double kMiss = -1e-9;
+  constexpr int kRefinements = 2;
+  std::array<double, kLeastDistanceMaxConstraints> shortfall{};
+  const std::span<double> shortfalls(shortfall.data(), rows.size());
+  for (int refinement = 0;; ++refinement) {
+    if (least_slack(unknowns, rows, bounds, y, shortfalls) >= kMiss) return status;
+    if (refinement == kRefinements) return LeastDistanceStatus::Infeasible;
+    std::array<double, kLeastDistanceMaxUnknowns> correction{};
+    const LeastDistanceStatus pass = least_distance_pass(unknowns, rows, shortfalls, correction);
+    if (pass == LeastDistanceStatus::Infeasible) return pass;
+    if (pass == LeastDistanceStatus::IterationLimit) status = pass;
+    for (int i = 0; i < unknowns; ++i) y[i] += correction[i];
+  }
 }
 
 }  // namespace hapticut

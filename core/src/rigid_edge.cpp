@@ -177,6 +177,18 @@ void RigidEdge::add_contact(double fraction, const Plane& plane, std::int32_t wa
   contacts_.add(fraction, plane, space_->tolerance(), feature);
 }
 
+std::span<const EdgeContact> RigidEdge::bowed_contacts(std::span<const EdgeContact> contacts,
+                                                       const Vec3& direction) {
+  std::size_t count = 0;
+  for (const EdgeContact& c : contacts) {
+    EdgeContact& bowed = bowed_contacts_[count++];
+    bowed = c;
+    bowed.plane.offset += interpolation_bow_mm(ideal_edge_.direction, direction, c.fraction,
+                                               motion_pivot_, length_mm_, c.plane.normal);
+  }
+  return {bowed_contacts_.data(), count};
+}
+
 bool RigidEdge::probe_motion(const EdgePose& edge, double& advance, bool add_contacts) {
   const Space& space = *space_;
   const std::size_t n = fractions_.size();
@@ -312,8 +324,10 @@ bool RigidEdge::solve(bool lock, const Vec3& lock_direction, int& rounds) {
       }
     }
     for (int pass = 0; pass < (lock ? 1 : kFitPasses); ++pass) {
-      if (fit_edge_constrained(base, fractions, targets, length_mm_, lock, contacts, margin,
-                               trial) == EdgeFitStatus::Infeasible) {
+      const std::span<const EdgeContact> kept =
+          lock ? contacts : bowed_contacts(contacts, base.direction);
+      if (fit_edge_constrained(base, fractions, targets, length_mm_, lock, kept, margin, trial) ==
+          EdgeFitStatus::Infeasible) {
         return false;
       }
       const bool settled =

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cmath>
+#include <random>
 #include <vector>
 
 #include "test_support.h"
@@ -110,6 +111,52 @@ TEST(EdgeFit, AMotionMovesItsPivotSampleOnAStraightLine) {
     expect_near(mid.point(pivot, kLength), a + (b - a) * s, 1e-9);
     EXPECT_NEAR(norm(mid.direction), 1.0, 1e-12);
   }
+}
+
+// The bow bound: from a start on a plane to an end that far beyond it, the
+// sample stays on the plane's free side at every step of the motion; an end
+// only just beyond the plane does not, so the bound is what keeps it there.
+TEST(EdgeFit, ASampleBeyondItsBowStaysOffThePlaneAllAlongTheMotion) {
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const auto direction = [&] {
+    Vec3 d{unit(random), unit(random), unit(random)};
+    while (!(norm(d) > 0.1)) d = {unit(random), unit(random), unit(random)};
+    return d / norm(d);
+  };
+  int dipped_without_bow = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const Vec3 d0 = direction();
+    // Turns from a thousandth of a radian to most of a half turn.
+    const double turn = std::pow(10.0, -3.0 + 3.4 * (0.5 + 0.5 * unit(random)));
+    Vec3 across = cross(d0, direction());
+    across = across / norm(across);
+    const Vec3 d1 = d0 * std::cos(turn) + across * std::sin(turn);
+    const double pivot = 0.5 + 0.5 * unit(random);
+    const double fraction = 0.5 + 0.5 * unit(random);
+    const Vec3 normal = direction();
+    const EdgePose from{Vec3{unit(random), unit(random), unit(random)} * 10.0, d0};
+    const EdgePose to_base{from.start_mm + Vec3{unit(random), unit(random), unit(random)}, d1};
+    const double bow = interpolation_bow_mm(d0, d1, fraction, pivot, kLength, normal);
+    // The plane through the start's sample; the end moved along the normal so
+    // that its sample lies `end_distance` beyond the plane.
+    const Plane plane{normal, dot(normal, from.point(fraction, kLength))};
+    for (const double extra : {0.0, bow}) {
+      const double shift = extra - plane.signed_distance(to_base.point(fraction, kLength));
+      const EdgePose to{to_base.start_mm + normal * shift, d1};
+      double least = 0.0;
+      for (int k = 1; k < 200; ++k) {
+        const EdgePose mid = interpolate_edge(from, to, k / 200.0, pivot, kLength);
+        least = std::min(least, plane.signed_distance(mid.point(fraction, kLength)));
+      }
+      if (extra == 0.0) {
+        dipped_without_bow += least < -1e-9 ? 1 : 0;
+      } else {
+        EXPECT_GE(least, -1e-9 * (1.0 + bow)) << "trial " << trial << " bow " << bow;
+      }
+    }
+  }
+  EXPECT_GT(dipped_without_bow, 100);
 }
 
 }  // namespace

@@ -136,5 +136,43 @@ TEST(LeastDistance, AgreesWithEveryActiveSetOnRandomProblems) {
   EXPECT_GT(solved, 200);
 }
 
+// Contacts met twice through faces a rounding apart give rows that nearly
+// repeat one another; the answer still meets every row (lifting along the
+// first unknown always does, so none is infeasible).
+TEST(LeastDistance, RowsThatNearlyRepeatOneAnotherAreStillMet) {
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int trial = 0; trial < 2000; ++trial) {
+    std::vector<LeastDistanceRow> rows;
+    std::vector<double> bounds;
+    for (int i = 0; i < 2 + trial % 4; ++i) {
+      LeastDistanceRow base;
+      for (double& a : base.a) a = unit(random);
+      base.a[0] = 0.5 + 0.5 * std::abs(base.a[0]);
+      const double bound = 10.0 * unit(random);
+      for (int copy = 0; copy < 2; ++copy) {
+        LeastDistanceRow near = base;
+        for (double& a : near.a) a += 1e-7 * unit(random);
+        rows.push_back(near);
+        bounds.push_back(bound + 1e-6 * unit(random));
+      }
+    }
+    Answer y{};
+    ASSERT_EQ(solve_least_distance(kLeastDistanceMaxUnknowns, rows, bounds, y),
+              LeastDistanceStatus::Solved)
+        << "trial " << trial;
+    for (std::size_t j = 0; j < rows.size(); ++j) {
+      // Met to rounding of the row's own terms.
+      double s = 0.0;
+      double size = 0.0;
+      for (int i = 0; i < kLeastDistanceMaxUnknowns; ++i) {
+        s += rows[j].a[i] * y[i];
+        size += std::abs(rows[j].a[i] * y[i]);
+      }
+      EXPECT_GE(s, bounds[j] - 1e-9 * (1.0 + size + std::abs(bounds[j]))) << "trial " << trial;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace hapticut

@@ -66,4 +66,12 @@ EdgePose fit_edge_about(const EdgePose& base, double pivot_fraction,
 EdgePose interpolate_edge(const EdgePose& a, const EdgePose& b, double t, double pivot_fraction,
                           double length_mm);
 
+// How far a sample at `fraction` may lie off its chord, along a plane's unit
+// `normal`, on interpolate_edge's motion from a pose of direction `from` to
+// one of direction `to` about `pivot_fraction`: a sample on the plane's free
+// side at the start and at least this far on it at the end stays on the free
+// side all the way.
+double interpolation_bow_mm(const Vec3& from, const Vec3& to, double fraction,
+                            double pivot_fraction, double length_mm, const Vec3& normal);
+
 }  // namespace hapticut

@@ -13,6 +13,7 @@
 // pose into the points' places and forces. Never allocates after construction.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -119,6 +120,12 @@ class RigidEdge {
   // From the verified pose toward `trial`, as far as the walks got
   // (`advance`), halved while the motion still meets rigid material; verified.
   void advance_verified(const EdgePose& trial, double advance);
+  // The contacts with each plane moved out by as far as the sample bows off its
+  // chord on the motion from the verified pose to a pose of `direction`
+  // (interpolate_edge): a trial that keeps them keeps the samples free of the
+  // planes all along the motion, not only at its end. Valid until the next call.
+  std::span<const EdgeContact> bowed_contacts(std::span<const EdgeContact> contacts,
+                                              const Vec3& direction);
   // Makes the probed edge (trial_*) the verified one.
   void accept_trial(const EdgePose& edge);
   // Sum |x_i - t_i|^2 over the samples of the verified edge.
@@ -141,6 +148,7 @@ class RigidEdge {
   std::vector<Vec3> targets_;
   std::vector<ProbeWalls> walls_;
   EdgeContactSet contacts_;
+  std::array<EdgeContact, kMaxEdgeContacts> bowed_contacts_{};
   // The sample of the edge a motion moves in a straight line (interpolate_edge):
   // the middle, or once there are contacts the one the pose rests on, so a
   // turn does not swing the held sample into its plane.
