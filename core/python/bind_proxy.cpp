@@ -214,6 +214,7 @@ void bind_settings(nb::module_& m) {
       "runtime_settings", [](const Space& space) { return space.runtime_settings(); },
       nb::arg("space"), "The scene's own settings per tick of a Space.");
   m.attr("BLADE_MAX_POINTS") = Blade::kMaxPoints;
+  m.attr("BLADE_MAX_RIGID_ROUNDS") = Blade::kMaxRigidRounds;
   m.attr("WORKSPACE_MARGIN") = Space::kWorkspaceMargin;
 }
 

@@ -32,6 +32,10 @@ constexpr double kLeastAdvance = 1e-9;
 constexpr double kSweptDeviation = 1e-4;
 // Linearised fits per round at most (free orientation).
 constexpr int kFitPasses = 4;
+// The farthest a fit keeps a contact beyond its plane for the motion's bow
+// (bowed_contacts), far below what a hand feels as a gap; a round's turn is cut
+// to one that bows no more (limit_turn).
+constexpr double kMostBow = 0.01;
 
 // The contact for a stretch a -> b of the edge that enters rigid material
 // through plane `in` (at fraction s_in) and leaves it through plane `out` (at
@@ -144,6 +148,7 @@ bool RigidEdge::seat(const EdgePose& edge) {
     }
   }
   accept_trial(edge);
+  contacts_.clear();  // A new start rests on nothing yet.
   return true;
 }
 
@@ -183,8 +188,10 @@ std::span<const EdgeContact> RigidEdge::bowed_contacts(std::span<const EdgeConta
   for (const EdgeContact& c : contacts) {
     EdgeContact& bowed = bowed_contacts_[count++];
     bowed = c;
-    bowed.plane.offset += interpolation_bow_mm(ideal_edge_.direction, direction, c.fraction,
-                                               motion_pivot_, length_mm_, c.plane.normal);
+    bowed.plane.offset +=
+        std::min(interpolation_bow_mm(ideal_edge_.direction, direction, c.fraction, motion_pivot_,
+                                      length_mm_, c.plane.normal),
+                 kMostBow);
   }
   return {bowed_contacts_.data(), count};
 }
@@ -284,59 +291,181 @@ void RigidEdge::advance_verified(const EdgePose& trial, double advance) {
   }
 }
 
-bool RigidEdge::solve(bool lock, const Vec3& lock_direction, int& rounds) {
-  const std::span<const double> fractions(fractions_);
-  const std::span<const Vec3> targets(targets_);
-  EdgePose trial = fit_edge(fractions, targets, length_mm_, lock_direction, lock);
+bool RigidEdge::over_feature(const ContactFeature& feature, const Plane& plane,
+                             const Vec3& x) const {
+  const TetMesh& mesh = space_->mesh();
+  const Vec3 foot = x - plane.normal * plane.signed_distance(x);
+  if (feature.kind == ContactFeature::Kind::Edge) {
+    const std::array<std::int32_t, 2>& ends = mesh.edge_vertices(feature.index);
+    const Vec3 a = mesh.vertex(ends[0]);
+    const Vec3 ab = mesh.vertex(ends[1]) - a;
+    const double t = dot(foot - a, ab);
+    return t >= 0.0 && t <= squared_norm(ab);
+  }
+  if (feature.kind != ContactFeature::Kind::Face) return false;
+  // The face's corners: the owner tet's vertices other than the face's own.
+  std::array<Vec3, 3> corner;
+  int k = 0;
+  for (int v = 0; v < 4; ++v) {
+    if (v != feature.face) corner[k++] = mesh.vertex(mesh.tet(feature.index)[v]);
+  }
+  // Over the face: on the inner side of each of its edges (the sides' signs
+  // agree with the face's own orientation).
+  const Vec3 normal = cross(corner[1] - corner[0], corner[2] - corner[0]);
+  for (int e = 0; e < 3; ++e) {
+    const Vec3& a = corner[e];
+    const Vec3& b = corner[(e + 1) % 3];
+    if (dot(cross(b - a, foot - a), normal) < 0.0) return false;
+  }
+  return true;
+}
+
+void RigidEdge::keep_warm_contacts() {
+  // The last tick's planes where a sample of the verified pose still touches
+  // one and lies over the face or ridge it met there: the pose rests on them
+  // still, and the first fit can hold them instead of the walks finding them
+  // again. One that no longer lies over what it met (slid off a facet) is
+  // left to the walks.
+  const double touching = touching_distance();
+  int count = 0;
+  for (const EdgeContactSet::HeldPlane& held : contacts_.planes()) {
+    for (int end = 0; end < 2; ++end) {
+      const double fraction = end == 0 ? held.least_fraction : held.greatest_fraction;
+      const ContactFeature& feature = end == 0 ? held.least_feature : held.greatest_feature;
+      const Vec3 x = ideal_edge_.point(fraction, length_mm_);
+      if (held.plane.signed_distance(x) <= touching && over_feature(feature, held.plane, x)) {
+        warm_[count++] = {fraction, held.plane, feature};
+      }
+      if (!(held.greatest_fraction > held.least_fraction)) break;
+    }
+  }
   contacts_.clear();
-  motion_pivot_ = 0.5;
+  if (count == 0) {
+    contact_static_friction_ = 0.0;
+    contact_dynamic_friction_ = 0.0;
+  }
+  for (int j = 0; j < count; ++j) {
+    contacts_.add(warm_[j].fraction, warm_[j].plane, space_->tolerance(), warm_[j].feature);
+  }
+}
+
+void RigidEdge::start_cold() {
+  contacts_.clear();
   contact_static_friction_ = 0.0;
   contact_dynamic_friction_ = 0.0;
+  // The first motion moves the middle straight: a turn that swings a
+  // resting sample into its plane is found by the walks.
+  motion_pivot_ = 0.5;
+}
+
+bool RigidEdge::fit_with_contacts(bool lock, const Vec3& lock_direction, double margin,
+                                  EdgePose& trial, bool& cut) {
+  cut = false;
+  const std::span<const double> fractions(fractions_);
+  const std::span<const Vec3> targets(targets_);
+  // Sequential: each fit linearised about the last one's answer, so a
+  // turn's second-order error (the edge keeps its length) is gone before
+  // the walks judge it.
+  EdgePose base = lock ? EdgePose{ideal_edge_.start_mm, lock_direction} : ideal_edge_;
+  const std::span<const EdgeContact> contacts = contacts_.constraints();
+  // The motion turns about the contact the pose is nearest to (the one it
+  // rests on): that sample then moves straight off its plane.
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const EdgeContact& c : contacts) {
+    const double d = c.plane.signed_distance(ideal_edge_.point(c.fraction, length_mm_));
+    if (d < nearest || (d == nearest && c.fraction < motion_pivot_)) {
+      nearest = d;
+      motion_pivot_ = c.fraction;
+    }
+  }
+  for (int pass = 0; pass < (lock ? 1 : kFitPasses); ++pass) {
+    const std::span<const EdgeContact> kept = bowed_contacts(contacts, base.direction);
+    if (fit_edge_constrained(base, fractions, targets, length_mm_, lock, kept, margin, trial) ==
+        EdgeFitStatus::Infeasible) {
+      return false;
+    }
+    const bool settled =
+        squared_norm(trial.start_mm - base.start_mm) +
+            squared_norm(trial.direction - base.direction) * length_mm_ * length_mm_ <=
+        margin * margin;
+    base = trial;
+    if (settled) break;
+  }
+  cut = limit_turn(contacts, margin, trial);
+  return true;
+}
+
+bool RigidEdge::limit_turn(std::span<const EdgeContact> contacts, double margin, EdgePose& trial) {
+  double most = 0.0;
+  for (const EdgeContact& c : contacts) {
+    most = std::max(most, interpolation_bow_mm(ideal_edge_.direction, trial.direction, c.fraction,
+                                               motion_pivot_, length_mm_, c.plane.normal));
+  }
+  if (!(most > kMostBow)) return false;
+  // The bow grows as the square of the directions' difference: half the
+  // largest bow allowed leaves room for the mix's normalisation.
+  const double share = std::sqrt(0.5 * kMostBow / most);
+  const Vec3 mixed = ideal_edge_.direction + (trial.direction - ideal_edge_.direction) * share;
+  const double size = norm(mixed);
+  if (!(size > 1e-9)) return false;
+  const EdgePose base{ideal_edge_.start_mm, mixed / size};
+  EdgePose partial;
+  if (fit_edge_constrained(base, std::span<const double>(fractions_),
+                           std::span<const Vec3>(targets_), length_mm_, true,
+                           bowed_contacts(contacts, base.direction), margin,
+                           partial) == EdgeFitStatus::Infeasible) {
+    return false;
+  }
+  trial = partial;
+  return true;
+}
+
+bool RigidEdge::solve(bool lock, const Vec3& lock_direction, int& rounds) {
+  const EdgePose cold = fit_edge(std::span<const double>(fractions_),
+                                 std::span<const Vec3>(targets_), length_mm_, lock_direction, lock);
+  EdgePose trial = cold;
   // The fit keeps contacts this far on their free side: a rounding error of
   // the pose then never reads as a step into the plane.
   const double margin = 4.0 * space_->tolerance();
+  // Warm start: the first trial already holds the planes the pose rests on.
+  // Where that trial does not verify whole, the tick starts again cold (the
+  // planes kept may have ended beyond their faces): a warm start costs at
+  // most one round.
+  motion_pivot_ = 0.5;
+  keep_warm_contacts();
+  bool cut = false;
+  bool warm =
+      contacts_.plane_count() > 0 && fit_with_contacts(lock, lock_direction, margin, trial, cut);
+  if (!warm) {
+    trial = cold;
+    start_cold();
+  }
   rounds = 0;
-  while (rounds < kMaxRounds) {
+  const int limit = kColdRounds + (warm ? 1 : 0);
+  while (rounds < limit) {
     ++rounds;
     const int known = contacts_.changes();
     double advance = 1.0;
     if (probe_motion(trial, advance, true)) {
       accept_trial(trial);
-      return true;
+      // A turn cut short goes on from there with the same contacts.
+      if (!cut) return true;
+      warm = false;
+      if (!fit_with_contacts(lock, lock_direction, margin, trial, cut)) return false;
+      continue;
+    }
+    if (warm) {
+      warm = false;
+      cut = false;
+      trial = cold;
+      start_cold();
+      continue;
     }
     // As far as every walk got, verified; halved while the edge between the
     // points (or the arc the turn makes of a chord) still meets rigid material.
     advance_verified(trial, advance);
     if (contacts_.changes() == known && advance <= kLeastAdvance) break;  // Nothing new to fit.
-    // Sequential: each fit linearised about the last one's answer, so a
-    // turn's second-order error (the edge keeps its length) is gone before
-    // the walks judge it.
-    EdgePose base = lock ? EdgePose{ideal_edge_.start_mm, lock_direction} : ideal_edge_;
-    const std::span<const EdgeContact> contacts = contacts_.constraints();
-    // The motion turns about the contact the pose is nearest to (the one it
-    // rests on): that sample then moves straight off its plane.
-    double nearest = std::numeric_limits<double>::infinity();
-    for (const EdgeContact& c : contacts) {
-      const double d = c.plane.signed_distance(ideal_edge_.point(c.fraction, length_mm_));
-      if (d < nearest || (d == nearest && c.fraction < motion_pivot_)) {
-        nearest = d;
-        motion_pivot_ = c.fraction;
-      }
-    }
-    for (int pass = 0; pass < (lock ? 1 : kFitPasses); ++pass) {
-      const std::span<const EdgeContact> kept =
-          lock ? contacts : bowed_contacts(contacts, base.direction);
-      if (fit_edge_constrained(base, fractions, targets, length_mm_, lock, kept, margin, trial) ==
-          EdgeFitStatus::Infeasible) {
-        return false;
-      }
-      const bool settled =
-          squared_norm(trial.start_mm - base.start_mm) +
-              squared_norm(trial.direction - base.direction) * length_mm_ * length_mm_ <=
-          margin * margin;
-      base = trial;
-      if (settled) break;
-    }
+    if (!fit_with_contacts(lock, lock_direction, margin, trial, cut)) return false;
   }
   return false;
 }

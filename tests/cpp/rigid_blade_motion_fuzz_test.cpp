@@ -103,15 +103,17 @@ TEST(RigidBladeMotionFuzz, TheSweptEdgeNeverEntersBone) {
         unresolved += tick.unresolved ? 1 : 0;
         const EdgePose now{blade.ideal_point(0),
                            (blade.ideal_point(8) - blade.ideal_point(0)) / 16.0};
-        // Along the motion: 8 poses between the last ideal pose and this one,
-        // where the tick made it in one verified move (one round, resolved);
+        // Along the motion: 8 poses between the last ideal pose and this one
+        // (about the sample the move carried straight), where the tick made it
+        // in one verified move (one round, resolved);
         // a tick of several rounds moves along their chain, and its end pose
         // is checked. The motion is verified in pieces whose chords leave the
         // interpolation by at most 1e-4 of the length: that much depth is
         // allowed between them.
         const bool one_move = tick.rigid_rounds == 1 && !tick.unresolved;
         for (int m = one_move ? 1 : 8; m <= 8 && through == 0; ++m) {
-          const EdgePose pose = interpolate_edge(last, now, m / 8.0, 0.5, 16.0);
+          const EdgePose pose =
+              interpolate_edge(last, now, m / 8.0, blade.rigid_motion_pivot(), 16.0);
           for (int s = 0; s <= 160; ++s) {
             if (inside_rigid(*scenario.space, pose.point(s / 160.0, 16.0), 1e-4 * 16.0 + 1e-6)) {
               ++through;

@@ -135,6 +135,9 @@ class Blade {
   const std::vector<Proxy>& proxies() const { return proxies_; }
   const std::vector<TickResult>& point_ticks() const { return point_ticks_; }
   const BladeTick& last_tick() const { return last_tick_; }
+  // The fraction of the edge whose sample the rigid blade's last move carried
+  // on a straight line (interpolate_edge's pivot); 0.5 for independent points.
+  double rigid_motion_pivot() const { return rigid_ ? rigid_->motion_pivot() : 0.5; }
   const BladeCounters& counters() const { return counters_; }
   void clear_counters();
 

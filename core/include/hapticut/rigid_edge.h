@@ -31,9 +31,11 @@ namespace hapticut {
 
 class RigidEdge {
  public:
-  // Rounds of a tick (walk, fit, walk again), and the halvings of one
+  // Rounds of a tick (walk, fit, walk again) from its unconstrained fit, a
+  // round more for a warm start's trial (solve), and the halvings of one
   // conservative advance: bounded work.
-  static constexpr int kMaxRounds = 8;
+  static constexpr int kColdRounds = 8;
+  static constexpr int kMaxRounds = kColdRounds + 1;
   static constexpr int kMaxAdvanceHalvings = 4;
 
   // Samples at `fractions` (ascending, in [0, 1]) of an edge `length_mm` long.
@@ -80,6 +82,9 @@ class RigidEdge {
   void clear_sliding() { sliding_ = false; }
 
   const EdgePose& edge() const { return ideal_edge_; }
+  // The fraction of the edge whose sample the last motion probed moved
+  // straight (interpolate_edge's pivot).
+  double motion_pivot() const { return motion_pivot_; }
   double length_mm() const { return length_mm_; }
   // The samples on the verified pose, and the tets holding them (kNoTet
   // outside the mesh; never a rigid tet).
@@ -126,6 +131,25 @@ class RigidEdge {
   // planes all along the motion, not only at its end. Valid until the next call.
   std::span<const EdgeContact> bowed_contacts(std::span<const EdgeContact> contacts,
                                               const Vec3& direction);
+  // Whether x, moved onto `plane`, lies over the face or ridge `feature`
+  // names (false for none).
+  bool over_feature(const ContactFeature& feature, const Plane& plane, const Vec3& x) const;
+  // Starts the contact set with the last tick's contacts that still hold the
+  // verified pose (their friction with them), and no others.
+  void keep_warm_contacts();
+  // Starts the contact set empty, with no friction, the motion about the middle.
+  void start_cold();
+  // The constrained fit from the verified pose with the contacts met so far
+  // (up to kFitPasses sequential fits when free), the motion's pivot the
+  // contact the pose rests on; false when infeasible. `cut` says whether its
+  // turn was cut short (limit_turn).
+  bool fit_with_contacts(bool lock, const Vec3& lock_direction, double margin, EdgePose& trial,
+                         bool& cut);
+  // A free trial whose motion would bow a contact's sample farther than the
+  // fit keeps it off its plane (the walks would stop it at once on a plane
+  // already held) is cut to part of its turn, fitted with that direction
+  // locked; true when cut. The rest of the turn is left to later rounds.
+  bool limit_turn(std::span<const EdgeContact> contacts, double margin, EdgePose& trial);
   // Makes the probed edge (trial_*) the verified one.
   void accept_trial(const EdgePose& edge);
   // Sum |x_i - t_i|^2 over the samples of the verified edge.
@@ -149,6 +173,13 @@ class RigidEdge {
   std::vector<ProbeWalls> walls_;
   EdgeContactSet contacts_;
   std::array<EdgeContact, kMaxEdgeContacts> bowed_contacts_{};
+  // The contacts kept from the last tick (keep_warm_contacts' storage).
+  struct WarmContact {
+    double fraction = 0.0;
+    Plane plane;
+    ContactFeature feature;
+  };
+  std::array<WarmContact, 2 * EdgeContactSet::kMaxPlanes> warm_{};
   // The sample of the edge a motion moves in a straight line (interpolate_edge):
   // the middle, or once there are contacts the one the pose rests on, so a
   // turn does not swing the held sample into its plane.
