@@ -146,6 +146,8 @@ void bind_benchmarks(nb::module_& m) {
         auto capped = new_array<std::int32_t>({n});
         auto deferred = new_array<std::int32_t>({n});
         auto rounds = new_array<std::int32_t>({n});
+        auto contacts = new_array<std::int32_t>({n});
+        auto unresolved = new_array<std::int32_t>({n});
         {
           const nb::gil_scoped_release released;
           for (std::size_t k = 0; k < n; ++k) {
@@ -157,6 +159,8 @@ void bind_benchmarks(nb::module_& m) {
             capped.data()[k] = t.capped_points;
             deferred.data()[k] = t.deferred_points;
             rounds.data()[k] = t.rigid_rounds;
+            contacts.data()[k] = t.contacts;
+            unresolved.data()[k] = t.unresolved ? 1 : 0;
           }
         }
         nb::dict d;
@@ -166,6 +170,8 @@ void bind_benchmarks(nb::module_& m) {
         d["capped_points"] = capped;
         d["deferred_points"] = deferred;
         d["rigid_rounds"] = rounds;
+        d["contacts"] = contacts;
+        d["unresolved"] = unresolved;
         d["counters"] = nb::none();
         d["total_transitions"] = blade.counters().total_transitions;
         d["unfinished_ticks"] = blade.counters().unfinished_ticks;

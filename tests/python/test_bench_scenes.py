@@ -55,7 +55,7 @@ def test_every_example_scene_runs_a_rigid_50_point_stroke_within_its_bounds():
         result = blade.time_ticks(space, 50, poses, repeats=1)
         assert int(result["tick_transitions"].max()) <= int(result["budget"]), label
         rounds = result["rigid_rounds"]
-        assert 0 < int(rounds.max()) <= 8, label
+        assert 0 < int(rounds.max()) <= _core.BLADE_MAX_RIGID_ROUNDS, label
 
 
 def test_the_blade_table_has_a_row_per_scene_and_coupling(tmp_path):
@@ -69,9 +69,27 @@ def test_the_blade_table_has_a_row_per_scene_and_coupling(tmp_path):
     couplings = [(row[0].split(",")[0], row[1]) for row in rows]
     assert couplings == [
         (scene, coupling)
-        for scene in ("one", "one", "grid ~12k tets")
+        for scene in ("one", "one", "grid ~12k tets", blade.CREASE_LABEL)
         for coupling in ("rigid", "independent")
     ]
+    # In contact: none where the bodies are cut, some where they are rigid; the same
+    # ticks for both couplings, and the rigid row gives the ratio.
+    headers = [cell.strip() for cell in lines[0].split("|")[1:-1]]
+    column = {name: i for i, name in enumerate(headers)}
+    contact = [row[column["contact ticks"]] for row in rows]
+    assert contact[0] == contact[1] == "0"
+    assert contact[2] == contact[3] and int(contact[2].replace(",", "")) > 0
+    assert contact[6] == contact[7] and int(contact[6].replace(",", "")) > 0
+    assert rows[6][column["rigid / independent in contact"]].endswith("x")
+
+
+def test_the_crease_stroke_rests_the_blade_in_the_groove():
+    """Pressed 1 mm into the generated groove and slid along it, the rigid blade rests on
+    both flanks with every tick resolved."""
+    result = blade.time_ticks(blade.crease_space(), 50, blade.crease_poses(), repeats=1)
+    slide = slice(len(blade.crease_poses()) - 200, None)
+    assert (result["contacts"][slide] >= 2).all()
+    assert int(result["unresolved"].sum()) == 0
 
 
 def test_the_points_search_stops_at_the_most_a_blade_takes():
