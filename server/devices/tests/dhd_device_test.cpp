@@ -2,7 +2,6 @@
 // the real library would be: through $HAPTICUT_DHD_LIB and dlopen.
 #include "devices/dhd_device.h"
 
-#include <dlfcn.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -13,58 +12,22 @@
 
 #include "devices/arm_pose_mapping.h"
 #include "dhd_standin.h"
+#include "standin_test_support.h"
 
 namespace hapticut::servo {
 namespace {
 
-using Configure = void (*)(const char*);
-using Calls = int (*)(DhdStandinCall*, int);
-
-class DhdDeviceTest : public ::testing::Test {
+class DhdDeviceTest : public StandinTest<DhdStandinCall> {
  protected:
-  void SetUp() override {
-    setenv(kDhdLibraryVariable, HAPTICUT_DHD_STANDIN, 1);
-    // The same file the device loads: dlopen gives both the same instance.
-    handle_ = dlopen(HAPTICUT_DHD_STANDIN, RTLD_NOW | RTLD_LOCAL);
-    ASSERT_NE(handle_, nullptr) << dlerror();
-    configure_ = reinterpret_cast<Configure>(dlsym(handle_, "hapticut_dhd_standin_configure"));
-    calls_ = reinterpret_cast<Calls>(dlsym(handle_, "hapticut_dhd_standin_calls"));
-    ASSERT_NE(configure_, nullptr);
-    ASSERT_NE(calls_, nullptr);
-    configure_("");
-  }
-  void TearDown() override {
-    unsetenv(kDhdLibraryVariable);
-    if (handle_ != nullptr) dlclose(handle_);
-  }
+  DhdDeviceTest()
+      : StandinTest(kDhdLibraryVariable, HAPTICUT_DHD_STANDIN, "hapticut_dhd_standin") {}
 
-  std::vector<DhdStandinCall> calls() const {
-    std::vector<DhdStandinCall> out(static_cast<std::size_t>(calls_(nullptr, 0)));
-    calls_(out.data(), static_cast<int>(out.size()));
-    return out;
-  }
-  // Index of the first call named `name` at or after `from`; -1 when none.
-  long first(const std::string& name, long from = 0) const {
-    const std::vector<DhdStandinCall> all = calls();
-    for (long i = from; i < static_cast<long>(all.size()); ++i) {
-      if (name == all[static_cast<std::size_t>(i)].name) return i;
-    }
-    return -1;
-  }
   std::unique_ptr<Device> make(const std::string& script, const DeviceOptions& options = {},
                                const std::string& id = "") {
-    configure_(script.c_str());
+    configure(script);
     return make_dhd_device(id, options);
   }
-
-  void* handle_ = nullptr;
-  Configure configure_ = nullptr;
-  Calls calls_ = nullptr;
 };
-
-bool is_zero_force(const DhdStandinCall& call) {
-  return call.a == 0.0 && call.b == 0.0 && call.c == 0.0;
-}
 
 TEST(DhdLibrary, AMissingFileNamesTheVariableAndTheLoadersReason) {
   setenv(kDhdLibraryVariable, "/nonexistent/libdhd.so.3", 1);
@@ -226,7 +189,7 @@ TEST_F(DhdDeviceTest, AReconnectionThatFailsKeepsTheFaultAndTheReason) {
   device->start();
   DeviceSample sample;
   EXPECT_EQ(device->read(0.0, sample), DeviceStatus::Lost);
-  configure_("devices=0");  // Unplugged.
+  configure("devices=0");  // Unplugged.
   device->maintain();
   const std::string error = device->last_error();
   EXPECT_NE(error.find("dhdGetPosition failed: communication error (stand-in) (DHD error 2)"),
@@ -267,7 +230,7 @@ TEST_F(DhdDeviceTest, StopLeavesTheArmWithoutForceAndClosed) {
 }
 
 TEST_F(DhdDeviceTest, TheListingNamesTheLibraryAndEachDeviceWithItsLimits) {
-  configure_("devices=2,type=60");
+  configure("devices=2,type=60");
   const DhdListing listing = list_dhd_devices();
   EXPECT_TRUE(listing.library_found);
   EXPECT_NE(listing.library.find("hapticut-dhd-standin"), std::string::npos);

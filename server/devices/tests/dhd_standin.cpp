@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "standin_script.h"
+
 namespace {
 
 constexpr int kErrorCom = 2;                // DHD_ERROR_COM
@@ -53,34 +55,21 @@ void set_error(int code, const char* text) {
   std::snprintf(last_error_text, sizeof last_error_text, "%s", text);
 }
 
-bool parse_xyz(const std::string& text, double out[3]) {
-  return std::sscanf(text.c_str(), "%lf:%lf:%lf", &out[0], &out[1], &out[2]) == 3;
-}
-
 void apply(Script& script, const std::string& text) {
-  std::size_t start = 0;
-  while (start < text.size()) {
-    std::size_t end = text.find(',', start);
-    if (end == std::string::npos) end = text.size();
-    const std::string pair = text.substr(start, end - start);
-    start = end + 1;
-    const std::size_t eq = pair.find('=');
-    if (eq == std::string::npos) continue;
-    const std::string key = pair.substr(0, eq);
-    const std::string value = pair.substr(eq + 1);
-    const double number = std::atof(value.c_str());
-    if (key == "devices") script.devices = static_cast<int>(number);
-    if (key == "type") script.type = static_cast<int>(number);
-    if (key == "max_force") script.max_force = number;
-    if (key == "buttons") script.buttons = static_cast<unsigned int>(number);
-    if (key == "from") parse_xyz(value, script.from);
-    if (key == "to") parse_xyz(value, script.to);
-    if (key == "reads") script.reads = std::max(1L, static_cast<long>(number));
-    if (key == "open_error") script.open_error = static_cast<int>(number);
-    if (key == "fail_position_at") script.fail_position_at = static_cast<long>(number);
-    if (key == "fail_count") script.fail_count = static_cast<long>(number);
-    if (key == "fail_force_at") script.fail_force_at = static_cast<long>(number);
-  }
+  hapticut_standin::for_each_pair(
+      text, [&](const std::string& key, const std::string& value, double number) {
+        if (key == "devices") script.devices = static_cast<int>(number);
+        if (key == "type") script.type = static_cast<int>(number);
+        if (key == "max_force") script.max_force = number;
+        if (key == "buttons") script.buttons = static_cast<unsigned int>(number);
+        if (key == "from") hapticut_standin::parse_xyz(value, script.from);
+        if (key == "to") hapticut_standin::parse_xyz(value, script.to);
+        if (key == "reads") script.reads = std::max(1L, static_cast<long>(number));
+        if (key == "open_error") script.open_error = static_cast<int>(number);
+        if (key == "fail_position_at") script.fail_position_at = static_cast<long>(number);
+        if (key == "fail_count") script.fail_count = static_cast<long>(number);
+        if (key == "fail_force_at") script.fail_force_at = static_cast<long>(number);
+      });
 }
 
 // Locks the state, applying $HAPTICUT_DHD_STANDIN at the first call.
