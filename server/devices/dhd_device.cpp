@@ -26,6 +26,19 @@ bool finite(const Vec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
 
+// "" when the device is initialised, else why not and what to do. A device
+// in RESET mode (after power-up, until its calibration position is reached
+// by hand) reports positions in no known frame: the servo refuses it.
+std::string initialisation_problem(const DhdLibrary& dhd, char id) {
+  int status[dhd::kStatusArraySize] = {};
+  if (dhd.get_status(status, id) < 0) return dhd.last_error("dhdGetStatus");
+  if (status[dhd::kStatusReset] == 0) return "";
+  return "not initialised (dhdGetStatus: RESET mode, its LED blinking): put the handle in its "
+         "calibration position (omega, delta, sigma, lambda: the calibration pole in its pit; "
+         "Falcon: the grip pulled fully out, then pushed in) until the LED stops blinking, or "
+         "initialise it with the SDK's own tools, then start again (docs/devices.md)";
+}
+
 }  // namespace
 
 DhdDevice::DhdDevice(std::shared_ptr<DhdLibrary> library, DhdDeviceOptions options)
@@ -77,6 +90,12 @@ void DhdDevice::open() {
     stop();
     throw std::runtime_error("forcedimension: device " + std::to_string(options_.index) + ": " +
                              error);
+  }
+  const std::string problem = initialisation_problem(dhd, id_);
+  if (!problem.empty()) {
+    stop();
+    throw std::runtime_error("forcedimension: device " + std::to_string(options_.index) + ": " +
+                             problem);
   }
   model_ = dhd_model(type);
   if (model_.system_type == 0) model_.system_type = type;
@@ -202,6 +221,12 @@ void DhdDevice::maintain() {
   if (type != model_.system_type) {
     set_error(error + "; reopening: device " + std::to_string(options_.index) + " is now of type " +
               std::to_string(type) + ", not " + model_.name + ": restart the servo");
+    return;
+  }
+  // Powered off and on again, it waits in RESET mode until initialised by hand.
+  const std::string problem = initialisation_problem(dhd, id_);
+  if (!problem.empty()) {
+    set_error(error + "; reopening: " + problem);
     return;
   }
   // Limits first (as at the start), then the force, at zero.

@@ -6,9 +6,11 @@
 // calls are short USB transfers, at several kHz), so this backend has no I/O
 // thread: read() calls dhdGetPosition, dhdGetOrientationFrame (models with a
 // wrist) and dhdGetButtonMask, write() calls dhdSetForce, both on the tick;
-// neither allocates, locks or logs. The factory opens the device and reads
-// its type and force limit (limits() holds them before start()); start()
-// only then enables the force, at zero.
+// neither allocates, locks or logs. The force is dhdSetForce's alone: the
+// blade renders no torque to the hand, and the gripper is neither read nor
+// pushed. The factory opens the device, refuses one still in RESET mode (not
+// initialised), and reads its type and force limit (limits() holds them
+// before start()); start() only then enables the force, at zero.
 //
 // Faults. Any failed call on the tick is a fault: the same call site sets a
 // zero force (best effort) and marks the device Lost, so read() says Lost in

@@ -3,7 +3,7 @@
 Dimension's library through $HAPTICUT_DHD_LIB: a session clamped, recorded and replayed;
 an error mid-session (force zero in that tick,
 the device reopened, the force ramped back); a client's `load` binding an arm; the errors of
-a missing library, no device and a device in use; `--list-devices`."""
+a missing library, no device, a device in use and one not initialised; `--list-devices`."""
 
 from __future__ import annotations
 
@@ -67,7 +67,7 @@ def test_a_session_is_clamped_recorded_and_written_to_the_arm(standin, tmp_path)
 
     calls = standin.calls()
     limits, enable = index_of(calls, "dhdGetMaxForce"), index_of(calls, "dhdEnableForce")
-    assert index_of(calls, "dhdOpenID") < limits < enable
+    assert index_of(calls, "dhdOpenID") < index_of(calls, "dhdGetStatus") < limits < enable
     assert calls[enable].args[0] == 1.0  # DHD_ON
     forces = [c for c in calls if c.name == "dhdSetForce"]
     before = [c for c in calls[:enable] if c.name == "dhdSetForce"]
@@ -128,9 +128,10 @@ def test_a_clients_load_binds_an_arm_and_names_one_that_is_not_there(standin):
         (None, "/nonexistent/libdhd.so.3", "HAPTICUT_DHD_LIB=/nonexistent/libdhd.so.3"),
         ("devices=0", None, "no Force Dimension device found"),
         ("open_error=20", None, "another program holds the device"),
+        ("reset=1", None, "not initialised (dhdGetStatus: RESET mode"),
     ],
 )
-def test_no_library_no_device_or_a_device_in_use_is_a_clear_device_error(
+def test_no_library_no_device_in_use_or_not_initialised_is_a_clear_device_error(
     standin, script, library, message
 ):
     if script is not None:

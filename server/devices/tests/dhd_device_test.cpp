@@ -138,12 +138,49 @@ TEST_F(DhdDeviceTest, PoseIsMappedFromMetresInTheSdkAxesAndForceGoesBack) {
 }
 
 TEST_F(DhdDeviceTest, AWristedModelReadsItsOrientationFrame) {
-  std::unique_ptr<Device> device = make("type=35");  // omega.7, right hand
+  std::unique_ptr<Device> device = make("type=35,yaw_deg=90");  // omega.7, right hand
   device->start();
   DeviceSample sample;
   ASSERT_EQ(device->read(0.0, sample), DeviceStatus::Fresh);
   EXPECT_GT(first("dhdGetOrientationFrame"), first("dhdGetPosition"));
-  EXPECT_NEAR(sample.pose.rotation.w, 1.0, 1e-12);
+  // 90 degrees about the SDK's z is 90 degrees about the scene's z (both up).
+  EXPECT_NEAR(sample.pose.rotation.w, std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(sample.pose.rotation.z, std::sqrt(0.5), 1e-12);
+  // Without a wrist the handle's rotation is the identity, whatever the SDK would say.
+  std::unique_ptr<Device> omega3 = make("type=33,yaw_deg=90");
+  omega3->start();
+  ASSERT_EQ(omega3->read(0.0, sample), DeviceStatus::Fresh);
+  EXPECT_EQ(sample.pose.rotation.w, 1.0);
+  EXPECT_EQ(first("dhdGetOrientationFrame"), -1);
+}
+
+TEST_F(DhdDeviceTest, AnUninitialisedDeviceIsRefusedSayingWhatToDo) {
+  try {
+    make("reset=1");
+    FAIL() << "opened a device in RESET mode";
+  } catch (const std::runtime_error& e) {
+    const std::string text = e.what();
+    EXPECT_NE(text.find("not initialised (dhdGetStatus: RESET mode"), std::string::npos) << text;
+    EXPECT_NE(text.find("calibration position"), std::string::npos) << text;
+  }
+  EXPECT_EQ(first("dhdEnableForce"), -1);
+  EXPECT_GT(first("dhdClose"), first("dhdGetStatus")) << "the refused device was not closed";
+
+  // Powered off and on while lost: reopened only once initialised again.
+  std::unique_ptr<Device> device = make("fail_position_at=1");
+  device->start();
+  DeviceSample sample;
+  ASSERT_EQ(device->read(0.0, sample), DeviceStatus::Lost);
+  configure("reset=1");
+  device->maintain();
+  EXPECT_NE(device->last_error().find("reopening: not initialised"), std::string::npos)
+      << device->last_error();
+  EXPECT_EQ(first("dhdEnableForce"), -1);
+  EXPECT_EQ(device->read(0.001, sample), DeviceStatus::Lost);
+  configure("");
+  device->maintain();
+  EXPECT_EQ(device->last_error(), "");
+  EXPECT_EQ(device->read(0.002, sample), DeviceStatus::Fresh);
 }
 
 TEST_F(DhdDeviceTest, AnErrorMidSessionZeroesTheForceInTheSameTickThenReconnects) {

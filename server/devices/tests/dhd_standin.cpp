@@ -3,6 +3,7 @@
 #include "dhd_standin.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -20,11 +21,13 @@ constexpr std::size_t kMaxCalls = 1 << 18;  // About a minute of ticks.
 struct Script {
   int devices = 1;
   int type = 33;
+  bool reset = false;  // In RESET mode: not initialised.
   double max_force = -1.0;
   unsigned int buttons = 0;
   double from[3] = {0, 0, 0};
   double to[3] = {0, 0, 0};
   long reads = 1;
+  double yaw_deg = 0.0;  // The wrist's rotation about the SDK's z.
   int open_error = 0;
   long fail_position_at = 0;
   long fail_count = 1;
@@ -60,11 +63,13 @@ void apply(Script& script, const std::string& text) {
       text, [&](const std::string& key, const std::string& value, double number) {
         if (key == "devices") script.devices = static_cast<int>(number);
         if (key == "type") script.type = static_cast<int>(number);
+        if (key == "reset") script.reset = number != 0.0;
         if (key == "max_force") script.max_force = number;
         if (key == "buttons") script.buttons = static_cast<unsigned int>(number);
         if (key == "from") hapticut_standin::parse_xyz(value, script.from);
         if (key == "to") hapticut_standin::parse_xyz(value, script.to);
         if (key == "reads") script.reads = std::max(1L, static_cast<long>(number));
+        if (key == "yaw_deg") script.yaw_deg = number;
         if (key == "open_error") script.open_error = static_cast<int>(number);
         if (key == "fail_position_at") script.fail_position_at = static_cast<long>(number);
         if (key == "fail_count") script.fail_count = static_cast<long>(number);
@@ -191,10 +196,28 @@ __attribute__((visibility("default"))) int dhdGetPosition(double* x, double* y, 
 __attribute__((visibility("default"))) int dhdGetOrientationFrame(double matrix[3][3],
                                                                   char /*id*/) {
   auto lock = lock_state();
+  const double yaw = state().script.yaw_deg * std::acos(-1.0) / 180.0;
+  const double c = std::cos(yaw);
+  const double s = std::sin(yaw);
+  const double about_z[3][3] = {{c, -s, 0}, {s, c, 0}, {0, 0, 1}};
   for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) matrix[i][j] = i == j ? 1.0 : 0.0;
+    for (int j = 0; j < 3; ++j) matrix[i][j] = about_z[i][j];
   }
-  return record("dhdGetOrientationFrame", 0, 0, 0, 0);
+  return record("dhdGetOrientationFrame", state().script.yaw_deg, 0, 0, 0);
+}
+
+__attribute__((visibility("default"))) int dhdGetStatus(int status[32], char id) {
+  auto lock = lock_state();
+  // Only DHD_MAX_STATUS entries, as the SDK writes: the servo's larger array keeps the rest.
+  constexpr int kMaxStatus = 17;
+  constexpr int kStatusPower = 0;
+  constexpr int kStatusConnected = 1;
+  constexpr int kStatusReset = 3;
+  for (int i = 0; i < kMaxStatus; ++i) status[i] = 0;
+  status[kStatusPower] = 1;
+  status[kStatusConnected] = 1;
+  status[kStatusReset] = state().script.reset ? 1 : 0;
+  return record("dhdGetStatus", id, status[kStatusReset], 0, 0);
 }
 
 __attribute__((visibility("default"))) unsigned int dhdGetButtonMask(char /*id*/) {

@@ -5,10 +5,12 @@
 // from hapticut_dhd_standin_configure: comma-separated key=value pairs,
 //   devices=1          what dhdGetDeviceCount returns (0: none connected)
 //   type=33            dhdGetSystemType (DHD_DEVICE_OMEGA3; 35 an omega.7, with a wrist)
+//   reset=0            1: dhdGetStatus says RESET mode (powered up, not initialised)
 //   max_force=-1       dhdGetMaxForce (N; negative: no limit set in the device)
 //   buttons=0          dhdGetButtonMask
 //   from=X:Y:Z, to=X:Y:Z, reads=N   the position (m, the SDK's frame) goes from
 //                      `from` to `to` over the first N dhdGetPosition calls, then holds
+//   yaw_deg=0          dhdGetOrientationFrame: a rotation about the SDK's z (degrees)
 //   open_error=CODE    dhdOpenID fails with this DHD error (20: device in use)
 //   fail_position_at=N dhdGetPosition call N (from 1) fails with a COM error ...
 //   fail_count=1       ... and as many calls after it
