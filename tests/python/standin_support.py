@@ -40,25 +40,26 @@ def built_standin(file_name: str) -> Path:
 @dataclass(frozen=True)
 class Call:
     """One line of a stand-in's record: the call, its arguments (a force, a position, a
-    parameter) and its result; OpenHaptics's also the scheduler's frame and whether the call
-    was inside it."""
+    parameter), its result and CLOCK_MONOTONIC at the call; OpenHaptics's also the
+    scheduler's frame and whether the call was inside it."""
 
     name: str
     args: tuple[float, float, float]
     result: int
+    time_s: float
     frame: int = 0
     in_frame: bool = False
 
 
 def parse_call(line: str) -> Call:
-    """A record line: "name a b c result" (DHD) or "name a b c frame in_frame result"
-    (OpenHaptics)."""
+    """A record line: "name a b c result time_s" (DHD) or "name a b c frame in_frame result
+    time_s" (OpenHaptics)."""
     fields = line.split()
     name, args = fields[0], (float(fields[1]), float(fields[2]), float(fields[3]))
-    if len(fields) == 5:
-        return Call(name, args, int(fields[4]))
-    frame, in_frame, result = fields[4:]
-    return Call(name, args, int(result), int(frame), in_frame == "1")
+    if len(fields) == 6:
+        return Call(name, args, int(fields[4]), float(fields[5]))
+    frame, in_frame, result, time_s = fields[4:]
+    return Call(name, args, int(result), float(time_s), int(frame), in_frame == "1")
 
 
 @dataclass

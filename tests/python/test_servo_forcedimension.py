@@ -99,6 +99,10 @@ def test_an_error_mid_session_zeroes_the_force_in_that_tick_and_ramps_back(stand
     failed = next(i for i, c in enumerate(calls) if c.name == "dhdGetPosition" and c.result < 0)
     zero = calls[failed + 1]
     assert zero.name == "dhdSetForce" and zero.args == (0.0, 0.0, 0.0)
+    print(
+        "\ntime to zero force after a failed dhdGetPosition in the servo: 0 ticks, "
+        f"{(zero.time_s - calls[failed].time_s) * 1e6:.1f} us"
+    )
     closed, reopened = index_of(calls, "dhdClose", failed), index_of(calls, "dhdOpenID", failed)
     limits, enabled = (
         index_of(calls, name, failed) for name in ("dhdGetMaxForce", "dhdEnableForce")

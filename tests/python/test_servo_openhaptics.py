@@ -40,6 +40,7 @@ DESCENT = "from=0:10:0,to=0:-10:0,frames=1000"
 FORCE = "hdSetDoublev(FORCE)"
 TRANSFORM = "hdGetDoublev(TRANSFORM)"
 CONTINUOUS_FORCE = float(0x2604)  # HD_NOMINAL_MAX_CONTINUOUS_FORCE, as the record holds it
+FRESH = 0  # DeviceStatus::Fresh, as the recording holds a tick's device status
 
 
 @pytest.fixture
@@ -111,6 +112,10 @@ def test_an_hd_error_mid_session_zeroes_the_force_in_that_frame_and_ramps_back(s
     failed = next(i for i, c in enumerate(calls) if c.name == TRANSFORM and c.result != 0)
     zero = index_of(calls, FORCE, failed)
     assert calls[zero].frame == calls[failed].frame and calls[zero].args == (0.0, 0.0, 0.0)
+    print(
+        "\ntime to zero force after an HD error in the callback in the servo: 0 frames, "
+        f"{(calls[zero].time_s - calls[failed].time_s) * 1e6:.1f} us"
+    )
     pushing = [c for c in calls[:failed] if c.name == FORCE][-1]
     assert np.linalg.norm(pushing.args) > 0.05, "not pushing at the fault: proves nothing"
     stopped = index_of(calls, "hdStopScheduler", zero)
@@ -141,6 +146,16 @@ def test_a_stalled_scheduler_trips_the_servos_watchdog_and_the_force_ramps_back(
     calls = standin.calls()
     stalled = [c for c in calls if c.name == FORCE and c.frame == 1500]
     assert stalled and all(c.in_frame for c in stalled)
+    # No frame runs while the scheduler stalls: the arm holds the last frame's force
+    # through it; the first frame after it sets the loop's newest force.
+    held = next(c for c in calls if c.name == FORCE and c.frame == 1499)
+    last_fresh = int(np.nonzero(block["device_status"][:k] == FRESH)[0][-1])
+    print(
+        f"\nscheduler stalled {(stalled[0].time_s - held.time_s) * 1e3:.0f} ms, the arm holding "
+        f"{np.linalg.norm(held.args):.3f} N; the servo's watchdog zeroed its force "
+        f"{k - last_fresh} ticks after the last sample; the first frame after the stall set "
+        f"{np.linalg.norm(stalled[0].args):.3f} N"
+    )
 
 
 def test_a_clients_load_binds_the_device(standin):

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
@@ -28,6 +29,23 @@ class DhdDeviceTest : public StandinTest<DhdStandinCall> {
     return make_dhd_device(id, options);
   }
 };
+
+// How long after `fault` (a failed call) the arm got a zero force: the
+// record's ticks (dhdGetPosition calls start one) and its time.
+void print_time_to_zero(const char* what, const std::vector<DhdStandinCall>& all,
+                        std::size_t fault) {
+  int ticks = 0;
+  for (std::size_t i = fault + 1; i < all.size(); ++i) {
+    const DhdStandinCall& call = all[i];
+    if (std::string(call.name) == "dhdGetPosition") ++ticks;
+    if (std::string(call.name) == "dhdSetForce" && is_zero_force(call)) {
+      std::printf("time to zero force after %s: %d ticks, %.1f us\n", what, ticks,
+                  (call.time_s - all[fault].time_s) * 1e6);
+      return;
+    }
+  }
+  ADD_FAILURE() << "no zero force after " << what;
+}
 
 TEST(DhdLibrary, AMissingFileNamesTheVariableAndTheLoadersReason) {
   setenv(kDhdLibraryVariable, "/nonexistent/libdhd.so.3", 1);
@@ -200,6 +218,7 @@ TEST_F(DhdDeviceTest, AnErrorMidSessionZeroesTheForceInTheSameTickThenReconnects
   EXPECT_EQ(fault[static_cast<std::size_t>(before)].result, -1);
   EXPECT_STREQ(fault[static_cast<std::size_t>(before) + 1].name, "dhdSetForce");
   EXPECT_TRUE(is_zero_force(fault[static_cast<std::size_t>(before) + 1]));
+  print_time_to_zero("a failed dhdGetPosition", fault, static_cast<std::size_t>(before));
   // While lost the tick does not touch the library.
   device->write({0.5, 0.0, 0.0}, {0, 0, 0});
   EXPECT_EQ(device->read(0.003, sample), DeviceStatus::Lost);
@@ -251,6 +270,7 @@ TEST_F(DhdDeviceTest, AFailedForceWriteIsAFaultZeroedAtOnce) {
   EXPECT_EQ(all[all.size() - 2].result, -1);
   EXPECT_STREQ(all.back().name, "dhdSetForce");
   EXPECT_TRUE(is_zero_force(all.back()));
+  print_time_to_zero("a failed dhdSetForce", all, all.size() - 2);
   EXPECT_EQ(device->read(0.002, sample), DeviceStatus::Lost);
 }
 

@@ -99,6 +99,7 @@ int record(const char* name, double a, double b, double c, int result) {
     call.b = b;
     call.c = c;
     call.result = result;
+    call.time_s = hapticut_standin::now_s();
     s.calls.push_back(call);
   }
   return result;
@@ -110,7 +111,8 @@ void write_log() {
   std::FILE* file = std::fopen(path, "w");
   if (file == nullptr) return;
   for (const DhdStandinCall& call : state().calls) {
-    std::fprintf(file, "%s %.17g %.17g %.17g %d\n", call.name, call.a, call.b, call.c, call.result);
+    std::fprintf(file, "%s %.17g %.17g %.17g %d %.9f\n", call.name, call.a, call.b, call.c,
+                 call.result, call.time_s);
   }
   std::fclose(file);
 }

@@ -16,7 +16,8 @@
 //   fail_count=1       ... and as many calls after it
 //   fail_force_at=N    dhdSetForce call N (from 1) fails with a COM error
 // and records every call, which $HAPTICUT_DHD_STANDIN_LOG (if set) receives
-// at each dhdClose, one line per call: "name a b c result".
+// at each dhdClose, one line per call: "name a b c result time_s" (time_s:
+// CLOCK_MONOTONIC at the call, the servo's clock).
 #pragma once
 
 extern "C" {
@@ -27,6 +28,7 @@ struct DhdStandinCall {
   double b;
   double c;
   int result;
+  double time_s;  // CLOCK_MONOTONIC when the call was made.
 };
 
 // Resets the record and the counters and applies `script`.

@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
@@ -52,6 +53,13 @@ class HdDeviceTest : public StandinTest<HdStandinCall> {
     return statuses;
   }
 };
+
+// How long after `from` (a call in the record) the first zero force `zero`
+// was set: the scheduler's frames and the record's time.
+void print_time_to_zero(const char* what, const HdStandinCall& from, const HdStandinCall& zero) {
+  std::printf("time to zero force after %s: %ld frames, %.3f ms\n", what, zero.frame - from.frame,
+              (zero.time_s - from.time_s) * 1e3);
+}
 
 TEST(HdLibrary, AMissingFileNamesTheVariableTheLoadersReasonAndOldNcurses) {
   setenv(kHdLibraryVariable, "/nonexistent/libHD.so.3.4", 1);
@@ -204,6 +212,7 @@ TEST_F(HdDeviceTest, TheCallbackZeroesALoopForceOlderThanTheWatchdog) {
   std::unique_ptr<Device> device = make("", {}, 0.02);
   device->start();
   loop(*device, 0.05, {0.3, 0.0, 0.0});
+  const double stalled_s = monotonic_now_s();
   const long written = static_cast<long>(forces().size());
   // The loop stalls: it neither reads nor writes.
   std::this_thread::sleep_for(std::chrono::milliseconds(80));
@@ -220,9 +229,11 @@ TEST_F(HdDeviceTest, TheCallbackZeroesALoopForceOlderThanTheWatchdog) {
     }
   }
   ASSERT_GE(first_zero, 0);
-  EXPECT_LE(after[static_cast<std::size_t>(first_zero)].frame -
-                after[static_cast<std::size_t>(written) - 1].frame,
-            23);
+  const HdStandinCall& last_pushed = after[static_cast<std::size_t>(written) - 1];
+  const HdStandinCall& zero = after[static_cast<std::size_t>(first_zero)];
+  EXPECT_LE(zero.frame - last_pushed.frame, 23);
+  std::printf("time to zero force after the loop stalled (watchdog 20 ms): %ld frames, %.2f ms\n",
+              zero.frame - last_pushed.frame, (zero.time_s - stalled_s) * 1e3);
   for (long i = first_zero; i < static_cast<long>(after.size()); ++i) {
     EXPECT_TRUE(is_zero_force(after[static_cast<std::size_t>(i)]));
   }
@@ -247,6 +258,8 @@ TEST_F(HdDeviceTest, AnErrorInAFrameZeroesTheForceInThatFrameThenMaintainReopens
   ASSERT_GT(zero, failed);
   EXPECT_EQ(all[static_cast<std::size_t>(zero)].frame, all[static_cast<std::size_t>(failed)].frame);
   EXPECT_TRUE(is_zero_force(all[static_cast<std::size_t>(zero)]));
+  print_time_to_zero("an HD error in the callback", all[static_cast<std::size_t>(failed)],
+                     all[static_cast<std::size_t>(zero)]);
   // The frame before pushed: the zero is the fault's doing.
   const std::vector<HdStandinCall> set = forces();
   std::size_t k = 0;
@@ -286,6 +299,16 @@ TEST_F(HdDeviceTest, AFailedEndOfFrameIsZeroedInTheNextFrame) {
   EXPECT_EQ(set.back().frame, 31);
   EXPECT_TRUE(is_zero_force(set.back()));
   EXPECT_FALSE(is_zero_force(set[set.size() - 2]));
+  const std::vector<HdStandinCall> all = calls();
+  long failed = -1;
+  for (long i = 0; i < static_cast<long>(all.size()) && failed < 0; ++i) {
+    if (std::string(all[static_cast<std::size_t>(i)].name) == "hdEndFrame" &&
+        all[static_cast<std::size_t>(i)].result != 0) {
+      failed = i;
+    }
+  }
+  ASSERT_GE(failed, 0);
+  print_time_to_zero("a failed hdEndFrame", all[static_cast<std::size_t>(failed)], set.back());
   EXPECT_FALSE(static_cast<HdDevice&>(*device).connected());
   device->maintain();
   EXPECT_TRUE(static_cast<HdDevice&>(*device).connected());

@@ -153,6 +153,7 @@ int record(const char* name, double a, double b, double c, int result) {
     call.frame = s.frame;
     call.in_frame = s.in_frame ? 1 : 0;
     call.result = result;
+    call.time_s = hapticut_standin::now_s();
     s.calls.push_back(call);
   }
   if (result != 0) push_error(static_cast<unsigned int>(result));
@@ -165,8 +166,8 @@ void write_log() {
   std::FILE* file = std::fopen(path, "w");
   if (file == nullptr) return;
   for (const HdStandinCall& call : state().calls) {
-    std::fprintf(file, "%s %.17g %.17g %.17g %ld %d %d\n", call.name, call.a, call.b, call.c,
-                 call.frame, call.in_frame, call.result);
+    std::fprintf(file, "%s %.17g %.17g %.17g %ld %d %d %.9f\n", call.name, call.a, call.b, call.c,
+                 call.frame, call.in_frame, call.result, call.time_s);
   }
   std::fclose(file);
 }

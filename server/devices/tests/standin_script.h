@@ -1,8 +1,10 @@
 // What the vendor stand-ins (dhd_standin.cpp, hd_standin.cpp) share: their
-// scripts' text ("key=value,key=value") and a point in it ("X:Y:Z").
-// Header-only: each stand-in is a shared library of its own, built from one
-// source file.
+// scripts' text ("key=value,key=value"), a point in it ("X:Y:Z"), and the
+// clock their call records are stamped with. Header-only: each stand-in is a
+// shared library of its own, built from one source file.
 #pragma once
+
+#include <time.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -30,6 +32,14 @@ void for_each_pair(const std::string& text, Apply apply) {
 
 inline bool parse_xyz(const std::string& text, double out[3]) {
   return std::sscanf(text.c_str(), "%lf:%lf:%lf", &out[0], &out[1], &out[2]) == 3;
+}
+
+// CLOCK_MONOTONIC in seconds, the servo's clock (rt/clock.h), so that a
+// record's times compare with the servo's own.
+inline double now_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
 }
 
 }  // namespace hapticut_standin
