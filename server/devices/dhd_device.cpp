@@ -6,6 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "rt/clock.h"
+
 namespace hapticut::servo {
 namespace {
 
@@ -159,6 +161,7 @@ DeviceStatus DhdDevice::read(double now_s, DeviceSample& sample) {
     sample = last_sample_;
     return fault("dhdGetPosition");
   }
+  const double position_read_s = monotonic_now_s();
   Matrix3 rotation{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
   if (model_.has_wrist) {
     double frame[3][3];
@@ -171,6 +174,8 @@ DeviceStatus DhdDevice::read(double now_s, DeviceSample& sample) {
     }
   }
   const unsigned int buttons = dhd.get_button_mask(id_);
+  sample_read_s_ = position_read_s;
+  sample_unwritten_ = true;
   last_sample_.pose.position_mm = mapping_.position_mm(position_m);
   last_sample_.pose.rotation = mapping_.rotation(rotation);
   last_sample_.buttons = buttons & 0xffffU;  // Bits 16 and up are the servo's (device.h).
@@ -185,6 +190,10 @@ void DhdDevice::write(const Vec3& force_N, const Vec3& /*torque_N_mm*/) {
   if (!connected()) return;
   // The safety layer clamps and checks; a non-finite force never reaches the arm regardless.
   const Vec3 device = finite(force_N) ? mapping_.device_force_N(force_N) : Vec3{};
+  if (sample_unwritten_) {
+    sample_to_force_.add((monotonic_now_s() - sample_read_s_) * 1e6);
+    sample_unwritten_ = false;
+  }
   const int result = library_->set_force(device.x, device.y, device.z, id_);
   if (result < 0) {
     fault("dhdSetForce");
@@ -259,7 +268,9 @@ std::vector<std::pair<std::string, std::uint64_t>> DhdDevice::status_counters() 
           {"motor_saturated", load(counters_.motor_saturated)},
           {"faults", load(counters_.faults)},
           {"reconnects", load(counters_.reconnects)},
-          {"reconnect_attempts", load(counters_.reconnect_attempts)}};
+          {"reconnect_attempts", load(counters_.reconnect_attempts)},
+          {"sample_to_force_ns_p50", sample_to_force_.percentile_ns(0.5)},
+          {"sample_to_force_ns_p99", sample_to_force_.percentile_ns(0.99)}};
 }
 
 DhdListing list_dhd_devices() {

@@ -34,6 +34,7 @@
 #include "devices/device_options.h"
 #include "devices/dhd_library.h"
 #include "devices/dhd_models.h"
+#include "rt/histogram.h"
 
 namespace hapticut::servo {
 
@@ -74,13 +75,17 @@ class DhdDevice final : public Device {
   DeviceStatus read(double now_s, DeviceSample& sample) override;
   void write(const Vec3& force_N, const Vec3& torque_N_mm) override;
   void maintain() override;
-  // samples, forces_written, motor_saturated, faults, reconnects, reconnect_attempts.
+  // samples, forces_written, motor_saturated, faults, reconnects, reconnect_attempts,
+  // sample_to_force_ns_p50, sample_to_force_ns_p99.
   std::vector<std::pair<std::string, std::uint64_t>> status_counters() const override;
   std::string last_error() const override;
 
   bool connected() const { return connection_.load(std::memory_order_acquire) == kConnected; }
   const DhdModel& model() const { return model_; }
   const DhdDeviceCounters& counters() const { return counters_; }
+  // From dhdGetPosition's return to the dhdSetForce of the force the tick
+  // computed from that sample: the tick's own compute between read and write.
+  const LatencyHistogram& sample_to_force() const { return sample_to_force_; }
 
  private:
   enum : std::uint32_t { kConnected = 0, kLost = 1 };
@@ -106,6 +111,9 @@ class DhdDevice final : public Device {
   char fault_text_[160] = {};
 
   DeviceSample last_sample_;
+  double sample_read_s_ = 0.0;     // Tick: when dhdGetPosition returned the last sample.
+  bool sample_unwritten_ = false;  // Tick: no force written since that sample.
+  LatencyHistogram sample_to_force_;
   DhdDeviceCounters counters_;
   mutable std::mutex error_mutex_;  // Not real-time: open, maintain() and status lines.
   std::string last_error_;

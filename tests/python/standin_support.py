@@ -150,8 +150,8 @@ def print_sample_to_force(kind: str, found: dict) -> None:
     """The latency the device measured, as its status counters give it (not asserted)."""
     print(
         f"\nsample to force through the {kind} stand-in at 1 kHz: "
-        f"median {found['sample_to_force_ns_p50'] / 1e3:.0f} us, "
-        f"p99 {found['sample_to_force_ns_p99'] / 1e3:.0f} us ({found['samples']} samples)"
+        f"median {found['sample_to_force_ns_p50'] / 1e3:.1f} us, "
+        f"p99 {found['sample_to_force_ns_p99'] / 1e3:.1f} us ({found['samples']} samples)"
     )
 
 

@@ -1,7 +1,7 @@
 """The forcedimension device kind through the real servo binary, with the DHD stand-in
 (server/devices/tests/dhd_standin.h, built with the C++ tests) loaded in place of Force
-Dimension's library through $HAPTICUT_DHD_LIB: a session clamped, recorded and replayed;
-an error mid-session (force zero in that tick,
+Dimension's library through $HAPTICUT_DHD_LIB: a session clamped, recorded and replayed,
+with the sample-to-force latency measured; an error mid-session (force zero in that tick,
 the device reopened, the force ramped back); a client's `load` binding an arm; the errors of
 a missing library, no device, a device in use and one not initialised; `--list-devices`."""
 
@@ -22,6 +22,7 @@ from standin_support import (
     counters,
     index_of,
     load_and_run,
+    print_sample_to_force,
     run_session,
     use_standin,
 )
@@ -54,7 +55,8 @@ def test_a_session_is_clamped_recorded_and_written_to_the_arm(standin, tmp_path)
     """The arm's position drives the blade, the force it gets is the recorded one in its own
     axes and within the clamp, force is enabled only after the limits are read and at zero,
     the recorded proxies equal an offline engine run of the recorded poses, and a replay of
-    the recording gives them again bit for bit."""
+    the recording gives them again bit for bit. Prints the sample-to-force latency the
+    device measured: dhdGetPosition to the dhdSetForce of the same tick (not asserted)."""
     standin.script(f"type=33,{DESCENT}")
     scene = independent_scene(tmp_path / "sphere.hapticut.json")
     record = tmp_path / "dhd.rec"
@@ -64,6 +66,7 @@ def test_a_session_is_clamped_recorded_and_written_to_the_arm(standin, tmp_path)
     assert blade["device_error"] == ""
     found = counters(status)
     assert found["faults"] == 0 and found["forces_written"] > 2000
+    print_sample_to_force("DHD", found)
 
     calls = standin.calls()
     limits, enable = index_of(calls, "dhdGetMaxForce"), index_of(calls, "dhdEnableForce")

@@ -13,6 +13,7 @@
 
 #include "devices/arm_pose_mapping.h"
 #include "dhd_standin.h"
+#include "rt/clock.h"
 #include "standin_test_support.h"
 
 namespace hapticut::servo {
@@ -29,6 +30,19 @@ class DhdDeviceTest : public StandinTest<DhdStandinCall> {
     return make_dhd_device(id, options);
   }
 };
+
+// The servo's loop for `ticks` ticks at 1 kHz, as tick_blade calls a device:
+// read, then write `force` (scene frame).
+void loop(Device& device, int ticks, const Vec3& force) {
+  double next = monotonic_now_s();
+  for (int tick = 0; tick < ticks; ++tick) {
+    DeviceSample sample;
+    device.read(monotonic_now_s(), sample);
+    device.write(force, {0, 0, 0});
+    next += 0.001;
+    sleep_until(next);
+  }
+}
 
 // How long after `fault` (a failed call) the arm got a zero force: the
 // record's ticks (dhdGetPosition calls start one) and its time.
@@ -284,6 +298,27 @@ TEST_F(DhdDeviceTest, StopLeavesTheArmWithoutForceAndClosed) {
   EXPECT_TRUE(is_zero_force(all[all.size() - 3]));
   EXPECT_STREQ(all[all.size() - 2].name, "dhdStop");
   EXPECT_STREQ(all.back().name, "dhdClose");
+}
+
+TEST_F(DhdDeviceTest, EachForceIsWrittenInTheTickOfItsSampleItsLatencyMeasured) {
+  std::unique_ptr<Device> device = make("from=0:0:0,to=0:0:-0.02,reads=300");
+  device->start();
+  loop(*device, 300, {0.2, 0.0, 0.0});
+  const auto& dhd = static_cast<DhdDevice&>(*device);
+  const LatencyHistogram& latency = dhd.sample_to_force();
+  // One measure a tick: each write follows its own tick's read.
+  EXPECT_EQ(latency.count(), dhd.counters().samples.load());
+  ASSERT_GT(latency.count(), 0U);
+  std::printf(
+      "sample to force through the DHD stand-in at 1 kHz (no engine between): "
+      "median %.2f us, p99 %.2f us\n",
+      latency.percentile_us(0.5), latency.percentile_us(0.99));
+  // A write with no new sample since the last (a lost tick's) adds nothing.
+  device->write({0.2, 0.0, 0.0}, {0, 0, 0});
+  EXPECT_EQ(latency.count(), dhd.counters().samples.load());
+  const auto counters = device->status_counters();
+  EXPECT_EQ(counters[counters.size() - 2].first, "sample_to_force_ns_p50");
+  EXPECT_EQ(counters.back().first, "sample_to_force_ns_p99");
 }
 
 TEST_F(DhdDeviceTest, TheListingNamesTheLibraryAndEachDeviceWithItsLimits) {
