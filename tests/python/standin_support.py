@@ -6,6 +6,7 @@ test_servo_openhaptics.py) check alike of a session through one."""
 
 from __future__ import annotations
 
+import json
 import os
 import time
 from dataclasses import dataclass
@@ -67,11 +68,16 @@ class Standin:
     """A stand-in loaded into the servos a test starts: its script and its record."""
 
     log: Path
+    library_variable: str
     script_variable: str
     monkeypatch: pytest.MonkeyPatch
 
     def script(self, text: str) -> None:
         self.monkeypatch.setenv(self.script_variable, text)
+
+    def name_library(self, path: str) -> None:
+        """The servo loads `path` in the stand-in's place."""
+        self.monkeypatch.setenv(self.library_variable, path)
 
     def calls(self) -> list[Call]:
         """The record the stand-in wrote when the servo closed the device."""
@@ -87,7 +93,7 @@ def use_standin(
     monkeypatch.setenv(library_variable, str(built_standin(file_name)))
     monkeypatch.setenv(f"{prefix}_LOG", str(log))
     monkeypatch.delenv(prefix, raising=False)
-    return Standin(log, prefix, monkeypatch)
+    return Standin(log, library_variable, prefix, monkeypatch)
 
 
 def index_of(calls: list[Call], name: str, start: int = 0, a: float | None = None) -> int:
@@ -144,6 +150,45 @@ def load_and_run(binding: str, before=None, samples: int = 100) -> dict:
         client.close()
         assert servo.stop() == 0
     return status
+
+
+EXIT_DEVICE = 4  # docs/servo.md
+
+
+def check_refused_at_start(
+    standin: Standin, kind: str, script: str | None, library: str | None, message: str
+) -> None:
+    """The servo bound to `kind` with the stand-in scripted by `script` (or with `library`
+    named in its place) ends at the start as a device error, naming the binding and saying
+    `message`."""
+    from servo_test_support import SPHERE, run_servo
+
+    if script is not None:
+        standin.script(script)
+    if library is not None:
+        standin.name_library(library)
+    result = run_servo(str(SPHERE), "--device", f"scalpel={kind}", "--duration", "0.5")
+    assert result.returncode == EXIT_DEVICE, result.stderr
+    assert message in result.stderr
+    assert "scalpel" in result.stderr  # The binding is named.
+
+
+def listing(kind: str) -> dict:
+    """`--list-devices --json` at 500 Hz: the object of `kind`."""
+    from servo_test_support import run_servo
+
+    result = run_servo("--list-devices", "--json", "--rate", "500")
+    assert result.returncode == 0, result.stderr
+    return json.loads(result.stdout)[kind]
+
+
+def check_listed_without_library(standin: Standin, kind: str, missing: str) -> None:
+    """With `missing` named as the library, the listing says the library was not found and
+    why (dlerror()'s words), and lists no devices."""
+    standin.name_library(missing)
+    found = listing(kind)
+    assert found["library_found"] is False and found["devices"] == []
+    assert "No such file" in found["error"]
 
 
 def print_sample_to_force(kind: str, found: dict) -> None:

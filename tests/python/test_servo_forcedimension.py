@@ -7,8 +7,6 @@ a missing library, no device, a device in use and one not initialised; `--list-d
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 import pytest
 from hapticut.servo_client import ServoError
@@ -17,10 +15,13 @@ from standin_support import (
     DHD_STANDIN,
     Call,
     Standin,
+    check_listed_without_library,
     check_lost_then_ramped_back,
+    check_refused_at_start,
     check_session_recorded_and_replayed,
     counters,
     index_of,
+    listing,
     load_and_run,
     print_sample_to_force,
     run_session,
@@ -30,7 +31,6 @@ from standin_support import (
 # Times a real servo's clock-paced threads: runs alone, never beside other tests.
 pytestmark = pytest.mark.serial
 
-EXIT_DEVICE = 4  # docs/servo.md
 MAX_FORCE_N = 0.5
 BINDING = f"forcedimension:0,max_force={MAX_FORCE_N}"
 # Down from 10 mm above the sphere's centre to 10 mm below it over 1000 reads (the SDK's
@@ -141,21 +141,12 @@ def test_a_clients_load_binds_an_arm_and_names_one_that_is_not_there(standin):
 def test_no_library_no_device_in_use_or_not_initialised_is_a_clear_device_error(
     standin, script, library, message
 ):
-    if script is not None:
-        standin.script(script)
-    if library is not None:
-        standin.monkeypatch.setenv("HAPTICUT_DHD_LIB", library)
-    result = run_servo(str(SPHERE), "--device", "scalpel=forcedimension", "--duration", "0.5")
-    assert result.returncode == EXIT_DEVICE, result.stderr
-    assert message in result.stderr
-    assert "scalpel" in result.stderr  # The binding is named.
+    check_refused_at_start(standin, "forcedimension", script, library, message)
 
 
 def test_list_devices_says_where_the_library_is_and_what_it_sees(standin):
     standin.script("devices=2,type=60")
-    result = run_servo("--list-devices", "--json", "--rate", "500")
-    assert result.returncode == 0, result.stderr
-    dhd = json.loads(result.stdout)["forcedimension"]
+    dhd = listing("forcedimension")
     assert dhd["library_found"] is True and dhd["library"].endswith(DHD_STANDIN)
     assert [d["binding"] for d in dhd["devices"]] == ["forcedimension:0", "forcedimension:1"]
     limits = dhd["devices"][1]["limits"]
@@ -164,9 +155,4 @@ def test_list_devices_says_where_the_library_is_and_what_it_sees(standin):
     text = run_servo("--list-devices").stdout
     assert DHD_STANDIN in text and "forcedimension:1" in text and "Novint Falcon" in text
 
-    standin.monkeypatch.setenv("HAPTICUT_DHD_LIB", "/nonexistent/libdhd.so.3")
-    missing = run_servo("--list-devices", "--json")
-    assert missing.returncode == 0, missing.stderr
-    dhd = json.loads(missing.stdout)["forcedimension"]
-    assert dhd["library_found"] is False and dhd["devices"] == []
-    assert "No such file" in dhd["error"]  # dlerror()'s words
+    check_listed_without_library(standin, "forcedimension", "/nonexistent/libdhd.so.3")

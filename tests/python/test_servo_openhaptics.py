@@ -8,20 +8,21 @@ library, no device, an uncalibrated device and one in use; `--list-devices`."""
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 import pytest
 from hapticut.servo_layout import flag_bit
-from servo_test_support import SPHERE, independent_scene, read_recording, run_servo
+from servo_test_support import independent_scene, read_recording, run_servo
 from standin_support import (
     HD_STANDIN,
     Call,
     Standin,
+    check_listed_without_library,
     check_lost_then_ramped_back,
+    check_refused_at_start,
     check_session_recorded_and_replayed,
     counters,
     index_of,
+    listing,
     load_and_run,
     print_sample_to_force,
     run_session,
@@ -31,7 +32,6 @@ from standin_support import (
 # Times a real servo's clock-paced threads: runs alone, never beside other tests.
 pytestmark = pytest.mark.serial
 
-EXIT_DEVICE = 4  # docs/servo.md
 MAX_FORCE_N = 0.5
 BINDING = f"openhaptics:max_force={MAX_FORCE_N}"
 # Down from 10 mm above the sphere's centre to 10 mm below it over 1000 frames (OpenHaptics's
@@ -176,21 +176,12 @@ def test_a_clients_load_binds_the_device(standin):
 def test_no_library_no_device_uncalibrated_or_in_use_is_a_clear_device_error(
     standin, script, library, message
 ):
-    if script is not None:
-        standin.script(script)
-    if library is not None:
-        standin.monkeypatch.setenv("HAPTICUT_OPENHAPTICS_LIB", library)
-    result = run_servo(str(SPHERE), "--device", "scalpel=openhaptics", "--duration", "0.5")
-    assert result.returncode == EXIT_DEVICE, result.stderr
-    assert message in result.stderr
-    assert "scalpel" in result.stderr  # The binding is named.
+    check_refused_at_start(standin, "openhaptics", script, library, message)
 
 
 def test_list_devices_says_where_the_library_is_and_the_devices_limits(standin):
     standin.script("continuous=0.88,stiffness=1.2")
-    result = run_servo("--list-devices", "--json", "--rate", "500")
-    assert result.returncode == 0, result.stderr
-    hd = json.loads(result.stdout)["openhaptics"]
+    hd = listing("openhaptics")
     assert hd["library_found"] is True and hd["library"].endswith(HD_STANDIN)
     assert [d["binding"] for d in hd["devices"]] == ["openhaptics"]
     limits = hd["devices"][0]["limits"]
@@ -199,9 +190,4 @@ def test_list_devices_says_where_the_library_is_and_the_devices_limits(standin):
     text = run_servo("--list-devices").stdout
     assert HD_STANDIN in text and "max continuous force 0.88 N" in text
 
-    standin.monkeypatch.setenv("HAPTICUT_OPENHAPTICS_LIB", "/nonexistent/libHD.so")
-    missing = run_servo("--list-devices", "--json")
-    assert missing.returncode == 0, missing.stderr
-    hd = json.loads(missing.stdout)["openhaptics"]
-    assert hd["library_found"] is False and hd["devices"] == []
-    assert "No such file" in hd["error"]  # dlerror()'s words
+    check_listed_without_library(standin, "openhaptics", "/nonexistent/libHD.so")
