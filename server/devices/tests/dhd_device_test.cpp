@@ -288,6 +288,21 @@ TEST_F(DhdDeviceTest, AFailedForceWriteIsAFaultZeroedAtOnce) {
   EXPECT_EQ(device->read(0.002, sample), DeviceStatus::Lost);
 }
 
+TEST_F(DhdDeviceTest, TimeGuardAndMotorSaturatedAreSuccessesTheSecondCounted) {
+  std::unique_ptr<Device> device = make("position_result=1,force_result=2");
+  device->start();
+  DeviceSample sample;
+  for (int tick = 0; tick < 3; ++tick) {
+    ASSERT_EQ(device->read(tick * 0.001, sample), DeviceStatus::Fresh);
+    device->write({0.5, 0.0, 0.0}, {0, 0, 0});
+  }
+  const DhdDeviceCounters& counters = static_cast<DhdDevice&>(*device).counters();
+  EXPECT_EQ(counters.faults.load(), 0U);
+  EXPECT_EQ(counters.forces_written.load(), 3U);
+  EXPECT_EQ(counters.motor_saturated.load(), 3U);
+  EXPECT_TRUE(static_cast<DhdDevice&>(*device).connected());
+}
+
 TEST_F(DhdDeviceTest, StopLeavesTheArmWithoutForceAndClosed) {
   std::unique_ptr<Device> device = make("");
   device->start();

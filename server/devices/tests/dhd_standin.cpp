@@ -32,6 +32,8 @@ struct Script {
   long fail_position_at = 0;
   long fail_count = 1;
   long fail_force_at = 0;
+  int position_result = 0;  // What a dhdGetPosition that succeeds returns (1: DHD_TIMEGUARD).
+  int force_result = 0;     // What a dhdSetForce that succeeds returns (2: DHD_MOTOR_SATURATED).
 };
 
 struct State {
@@ -74,6 +76,8 @@ void apply(Script& script, const std::string& text) {
         if (key == "fail_position_at") script.fail_position_at = static_cast<long>(number);
         if (key == "fail_count") script.fail_count = static_cast<long>(number);
         if (key == "fail_force_at") script.fail_force_at = static_cast<long>(number);
+        if (key == "position_result") script.position_result = static_cast<int>(number);
+        if (key == "force_result") script.force_result = static_cast<int>(number);
       });
 }
 
@@ -192,7 +196,7 @@ __attribute__((visibility("default"))) int dhdGetPosition(double* x, double* y, 
   *x = p.from[0] + t * (p.to[0] - p.from[0]);
   *y = p.from[1] + t * (p.to[1] - p.from[1]);
   *z = p.from[2] + t * (p.to[2] - p.from[2]);
-  return record("dhdGetPosition", *x, *y, *z, 0);
+  return record("dhdGetPosition", *x, *y, *z, p.position_result);
 }
 
 __attribute__((visibility("default"))) int dhdGetOrientationFrame(double matrix[3][3],
@@ -237,7 +241,7 @@ __attribute__((visibility("default"))) int dhdSetForce(double fx, double fy, dou
     set_error(kErrorCom, "communication error (stand-in)");
     return record("dhdSetForce", fx, fy, fz, -1);
   }
-  return record("dhdSetForce", fx, fy, fz, 0);
+  return record("dhdSetForce", fx, fy, fz, s.script.force_result);
 }
 
 __attribute__((visibility("default"))) int dhdErrorGetLast() { return last_error; }

@@ -15,6 +15,8 @@
 //   fail_position_at=N dhdGetPosition call N (from 1) fails with a COM error ...
 //   fail_count=1       ... and as many calls after it
 //   fail_force_at=N    dhdSetForce call N (from 1) fails with a COM error
+//   position_result=0, force_result=0   what dhdGetPosition and dhdSetForce return when
+//                      they succeed (1: DHD_TIMEGUARD, 2: DHD_MOTOR_SATURATED)
 // and records every call, which $HAPTICUT_DHD_STANDIN_LOG (if set) receives
 // at each dhdClose, one line per call: "name a b c result time_s" (time_s:
 // CLOCK_MONOTONIC at the call, the servo's clock).
