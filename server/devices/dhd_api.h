@@ -7,7 +7,7 @@
 // Source: "DHD - Haptic SDK Documentation", Force Dimension, shipped as the
 // SDK's doc/ pages (https://forcedimension.com/downloads/sdk/, e.g.
 // sdk-3.17.1-linux-x86_64-gcc.tar.gz), sections "Device Types", "Axis
-// Convention", "Error Management" and the function reference; the same
+// Convention", "Device Modes", "Error Management" and the function reference; the same
 // reference adapted function by function, with the constants' values, in
 // forcedimension_core's "DHD Reference"
 // (https://forcedimension-core-python-docs.readthedocs.io/en/latest/forcedimension_core.dhd-doc.html).
@@ -55,6 +55,12 @@ inline constexpr int kErrorTimeout = 7;
 inline constexpr int kErrorDeviceNotReady = 12;
 inline constexpr int kErrorDeviceInUse = 20;
 
+// dhdGetStatus's array: DHD_MAX_STATUS entries (16 before SDK 3.14, 17 since), so the
+// servo passes a larger one; DHD_STATUS_RESET is 1 while the device waits in RESET mode
+// for its initialisation (the calibration position reached by hand).
+inline constexpr int kStatusArraySize = 32;
+inline constexpr int kStatusReset = 3;  // DHD_STATUS_RESET
+
 // The signatures, as pointers to the library's C functions.
 using GetDeviceCount = int (*)();                           // dhdGetDeviceCount: devices, -1 error
 using OpenId = int (*)(char index);                         // dhdOpenID: the device ID, -1 error
@@ -63,6 +69,7 @@ using EnableForce = int (*)(unsigned char value, char id);  // dhdEnableForce(DH
 using GetPosition = int (*)(double* x_m, double* y_m, double* z_m, char id);  // dhdGetPosition
 using GetOrientationFrame = int (*)(double matrix[3][3], char id);         // dhdGetOrientationFrame
 using GetButtonMask = unsigned int (*)(char id);                           // dhdGetButtonMask
+using GetStatus = int (*)(int status[kStatusArraySize], char id);          // dhdGetStatus
 using SetForce = int (*)(double fx_N, double fy_N, double fz_N, char id);  // dhdSetForce
 using GetMaxForce = double (*)(char id);    // dhdGetMaxForce: the set limit (N); < 0: none set
 using ErrorGetLast = int (*)();             // dhdErrorGetLast: this thread's last DHD_ERROR_*

@@ -6,6 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "rt/clock.h"
+
 namespace hapticut::servo {
 namespace {
 
@@ -24,6 +26,19 @@ std::string open_hint(int code) {
 
 bool finite(const Vec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+// "" when the device is initialised, else why not and what to do. A device
+// in RESET mode (after power-up, until its calibration position is reached
+// by hand) reports positions in no known frame: the servo refuses it.
+std::string initialisation_problem(const DhdLibrary& dhd, char id) {
+  int status[dhd::kStatusArraySize] = {};
+  if (dhd.get_status(status, id) < 0) return dhd.last_error("dhdGetStatus");
+  if (status[dhd::kStatusReset] == 0) return "";
+  return "not initialised (dhdGetStatus: RESET mode, its LED blinking): put the handle in its "
+         "calibration position (omega, delta, sigma, lambda: the calibration pole in its pit; "
+         "Falcon: the grip pulled fully out, then pushed in) until the LED stops blinking, or "
+         "initialise it with the SDK's own tools, then start again (docs/devices.md)";
 }
 
 }  // namespace
@@ -77,6 +92,12 @@ void DhdDevice::open() {
     stop();
     throw std::runtime_error("forcedimension: device " + std::to_string(options_.index) + ": " +
                              error);
+  }
+  const std::string problem = initialisation_problem(dhd, id_);
+  if (!problem.empty()) {
+    stop();
+    throw std::runtime_error("forcedimension: device " + std::to_string(options_.index) + ": " +
+                             problem);
   }
   model_ = dhd_model(type);
   if (model_.system_type == 0) model_.system_type = type;
@@ -140,6 +161,7 @@ DeviceStatus DhdDevice::read(double now_s, DeviceSample& sample) {
     sample = last_sample_;
     return fault("dhdGetPosition");
   }
+  const double position_read_s = monotonic_now_s();
   Matrix3 rotation{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
   if (model_.has_wrist) {
     double frame[3][3];
@@ -152,6 +174,8 @@ DeviceStatus DhdDevice::read(double now_s, DeviceSample& sample) {
     }
   }
   const unsigned int buttons = dhd.get_button_mask(id_);
+  sample_read_s_ = position_read_s;
+  sample_unwritten_ = true;
   last_sample_.pose.position_mm = mapping_.position_mm(position_m);
   last_sample_.pose.rotation = mapping_.rotation(rotation);
   last_sample_.buttons = buttons & 0xffffU;  // Bits 16 and up are the servo's (device.h).
@@ -166,6 +190,10 @@ void DhdDevice::write(const Vec3& force_N, const Vec3& /*torque_N_mm*/) {
   if (!connected()) return;
   // The safety layer clamps and checks; a non-finite force never reaches the arm regardless.
   const Vec3 device = finite(force_N) ? mapping_.device_force_N(force_N) : Vec3{};
+  if (sample_unwritten_) {
+    sample_to_force_.add((monotonic_now_s() - sample_read_s_) * 1e6);
+    sample_unwritten_ = false;
+  }
   const int result = library_->set_force(device.x, device.y, device.z, id_);
   if (result < 0) {
     fault("dhdSetForce");
@@ -204,6 +232,12 @@ void DhdDevice::maintain() {
               std::to_string(type) + ", not " + model_.name + ": restart the servo");
     return;
   }
+  // Powered off and on again, it waits in RESET mode until initialised by hand.
+  const std::string problem = initialisation_problem(dhd, id_);
+  if (!problem.empty()) {
+    set_error(error + "; reopening: " + problem);
+    return;
+  }
   // Limits first (as at the start), then the force, at zero.
   const double device_limit_N = dhd.get_max_force(id_);
   if (device_limit_N > 0.0 && device_limit_N < limits_.max_force_N) {
@@ -234,7 +268,9 @@ std::vector<std::pair<std::string, std::uint64_t>> DhdDevice::status_counters() 
           {"motor_saturated", load(counters_.motor_saturated)},
           {"faults", load(counters_.faults)},
           {"reconnects", load(counters_.reconnects)},
-          {"reconnect_attempts", load(counters_.reconnect_attempts)}};
+          {"reconnect_attempts", load(counters_.reconnect_attempts)},
+          {"sample_to_force_ns_p50", sample_to_force_.percentile_ns(0.5)},
+          {"sample_to_force_ns_p99", sample_to_force_.percentile_ns(0.99)}};
 }
 
 DhdListing list_dhd_devices() {

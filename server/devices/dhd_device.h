@@ -6,9 +6,11 @@
 // calls are short USB transfers, at several kHz), so this backend has no I/O
 // thread: read() calls dhdGetPosition, dhdGetOrientationFrame (models with a
 // wrist) and dhdGetButtonMask, write() calls dhdSetForce, both on the tick;
-// neither allocates, locks or logs. The factory opens the device and reads
-// its type and force limit (limits() holds them before start()); start()
-// only then enables the force, at zero.
+// neither allocates, locks or logs. The force is dhdSetForce's alone: the
+// blade renders no torque to the hand, and the gripper is neither read nor
+// pushed. The factory opens the device, refuses one still in RESET mode (not
+// initialised), and reads its type and force limit (limits() holds them
+// before start()); start() only then enables the force, at zero.
 //
 // Faults. Any failed call on the tick is a fault: the same call site sets a
 // zero force (best effort) and marks the device Lost, so read() says Lost in
@@ -32,6 +34,7 @@
 #include "devices/device_options.h"
 #include "devices/dhd_library.h"
 #include "devices/dhd_models.h"
+#include "rt/histogram.h"
 
 namespace hapticut::servo {
 
@@ -72,13 +75,17 @@ class DhdDevice final : public Device {
   DeviceStatus read(double now_s, DeviceSample& sample) override;
   void write(const Vec3& force_N, const Vec3& torque_N_mm) override;
   void maintain() override;
-  // samples, forces_written, motor_saturated, faults, reconnects, reconnect_attempts.
+  // samples, forces_written, motor_saturated, faults, reconnects, reconnect_attempts,
+  // sample_to_force_ns_p50, sample_to_force_ns_p99.
   std::vector<std::pair<std::string, std::uint64_t>> status_counters() const override;
   std::string last_error() const override;
 
   bool connected() const { return connection_.load(std::memory_order_acquire) == kConnected; }
   const DhdModel& model() const { return model_; }
   const DhdDeviceCounters& counters() const { return counters_; }
+  // From dhdGetPosition's return to the dhdSetForce of the force the tick
+  // computed from that sample: the tick's own compute between read and write.
+  const LatencyHistogram& sample_to_force() const { return sample_to_force_; }
 
  private:
   enum : std::uint32_t { kConnected = 0, kLost = 1 };
@@ -104,6 +111,9 @@ class DhdDevice final : public Device {
   char fault_text_[160] = {};
 
   DeviceSample last_sample_;
+  double sample_read_s_ = 0.0;     // Tick: when dhdGetPosition returned the last sample.
+  bool sample_unwritten_ = false;  // Tick: no force written since that sample.
+  LatencyHistogram sample_to_force_;
   DhdDeviceCounters counters_;
   mutable std::mutex error_mutex_;  // Not real-time: open, maintain() and status lines.
   std::string last_error_;

@@ -28,6 +28,7 @@ struct DhdLibrary {
   dhd::GetPosition get_position = nullptr;
   dhd::GetOrientationFrame get_orientation_frame = nullptr;
   dhd::GetButtonMask get_button_mask = nullptr;
+  dhd::GetStatus get_status = nullptr;
   dhd::SetForce set_force = nullptr;
   dhd::GetMaxForce get_max_force = nullptr;
   dhd::ErrorGetLast error_get_last = nullptr;

@@ -2,10 +2,10 @@
 // the real library would be: through $HAPTICUT_DHD_LIB and dlopen.
 #include "devices/dhd_device.h"
 
-#include <dlfcn.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
@@ -13,57 +13,52 @@
 
 #include "devices/arm_pose_mapping.h"
 #include "dhd_standin.h"
+#include "rt/clock.h"
+#include "standin_test_support.h"
 
 namespace hapticut::servo {
 namespace {
 
-using Configure = void (*)(const char*);
-using Calls = int (*)(DhdStandinCall*, int);
-
-class DhdDeviceTest : public ::testing::Test {
+class DhdDeviceTest : public StandinTest<DhdStandinCall> {
  protected:
-  void SetUp() override {
-    setenv(kDhdLibraryVariable, HAPTICUT_DHD_STANDIN, 1);
-    // The same file the device loads: dlopen gives both the same instance.
-    handle_ = dlopen(HAPTICUT_DHD_STANDIN, RTLD_NOW | RTLD_LOCAL);
-    ASSERT_NE(handle_, nullptr) << dlerror();
-    configure_ = reinterpret_cast<Configure>(dlsym(handle_, "hapticut_dhd_standin_configure"));
-    calls_ = reinterpret_cast<Calls>(dlsym(handle_, "hapticut_dhd_standin_calls"));
-    ASSERT_NE(configure_, nullptr);
-    ASSERT_NE(calls_, nullptr);
-    configure_("");
-  }
-  void TearDown() override {
-    unsetenv(kDhdLibraryVariable);
-    if (handle_ != nullptr) dlclose(handle_);
-  }
+  DhdDeviceTest()
+      : StandinTest(kDhdLibraryVariable, HAPTICUT_DHD_STANDIN, "hapticut_dhd_standin") {}
 
-  std::vector<DhdStandinCall> calls() const {
-    std::vector<DhdStandinCall> out(static_cast<std::size_t>(calls_(nullptr, 0)));
-    calls_(out.data(), static_cast<int>(out.size()));
-    return out;
-  }
-  // Index of the first call named `name` at or after `from`; -1 when none.
-  long first(const std::string& name, long from = 0) const {
-    const std::vector<DhdStandinCall> all = calls();
-    for (long i = from; i < static_cast<long>(all.size()); ++i) {
-      if (name == all[static_cast<std::size_t>(i)].name) return i;
-    }
-    return -1;
-  }
   std::unique_ptr<Device> make(const std::string& script, const DeviceOptions& options = {},
                                const std::string& id = "") {
-    configure_(script.c_str());
+    configure(script);
     return make_dhd_device(id, options);
   }
-
-  void* handle_ = nullptr;
-  Configure configure_ = nullptr;
-  Calls calls_ = nullptr;
 };
 
-bool is_zero_force(const DhdStandinCall& call) {
-  return call.a == 0.0 && call.b == 0.0 && call.c == 0.0;
+// The servo's loop for `ticks` ticks at 1 kHz, as tick_blade calls a device:
+// read, then write `force` (scene frame).
+void loop(Device& device, int ticks, const Vec3& force) {
+  double next = monotonic_now_s();
+  for (int tick = 0; tick < ticks; ++tick) {
+    DeviceSample sample;
+    device.read(monotonic_now_s(), sample);
+    device.write(force, {0, 0, 0});
+    next += 0.001;
+    sleep_until(next);
+  }
+}
+
+// How long after `fault` (a failed call) the arm got a zero force: the
+// record's ticks (dhdGetPosition calls start one) and its time.
+void print_time_to_zero(const char* what, const std::vector<DhdStandinCall>& all,
+                        std::size_t fault) {
+  int ticks = 0;
+  for (std::size_t i = fault + 1; i < all.size(); ++i) {
+    const DhdStandinCall& call = all[i];
+    if (std::string(call.name) == "dhdGetPosition") ++ticks;
+    if (std::string(call.name) == "dhdSetForce" && is_zero_force(call)) {
+      std::printf("time to zero force after %s: %d ticks, %.1f us\n", what, ticks,
+                  (call.time_s - all[fault].time_s) * 1e6);
+      return;
+    }
+  }
+  ADD_FAILURE() << "no zero force after " << what;
 }
 
 TEST(DhdLibrary, AMissingFileNamesTheVariableAndTheLoadersReason) {
@@ -175,12 +170,49 @@ TEST_F(DhdDeviceTest, PoseIsMappedFromMetresInTheSdkAxesAndForceGoesBack) {
 }
 
 TEST_F(DhdDeviceTest, AWristedModelReadsItsOrientationFrame) {
-  std::unique_ptr<Device> device = make("type=35");  // omega.7, right hand
+  std::unique_ptr<Device> device = make("type=35,yaw_deg=90");  // omega.7, right hand
   device->start();
   DeviceSample sample;
   ASSERT_EQ(device->read(0.0, sample), DeviceStatus::Fresh);
   EXPECT_GT(first("dhdGetOrientationFrame"), first("dhdGetPosition"));
-  EXPECT_NEAR(sample.pose.rotation.w, 1.0, 1e-12);
+  // 90 degrees about the SDK's z is 90 degrees about the scene's z (both up).
+  EXPECT_NEAR(sample.pose.rotation.w, std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(sample.pose.rotation.z, std::sqrt(0.5), 1e-12);
+  // Without a wrist the handle's rotation is the identity, whatever the SDK would say.
+  std::unique_ptr<Device> omega3 = make("type=33,yaw_deg=90");
+  omega3->start();
+  ASSERT_EQ(omega3->read(0.0, sample), DeviceStatus::Fresh);
+  EXPECT_EQ(sample.pose.rotation.w, 1.0);
+  EXPECT_EQ(first("dhdGetOrientationFrame"), -1);
+}
+
+TEST_F(DhdDeviceTest, AnUninitialisedDeviceIsRefusedSayingWhatToDo) {
+  try {
+    make("reset=1");
+    FAIL() << "opened a device in RESET mode";
+  } catch (const std::runtime_error& e) {
+    const std::string text = e.what();
+    EXPECT_NE(text.find("not initialised (dhdGetStatus: RESET mode"), std::string::npos) << text;
+    EXPECT_NE(text.find("calibration position"), std::string::npos) << text;
+  }
+  EXPECT_EQ(first("dhdEnableForce"), -1);
+  EXPECT_GT(first("dhdClose"), first("dhdGetStatus")) << "the refused device was not closed";
+
+  // Powered off and on while lost: reopened only once initialised again.
+  std::unique_ptr<Device> device = make("fail_position_at=1");
+  device->start();
+  DeviceSample sample;
+  ASSERT_EQ(device->read(0.0, sample), DeviceStatus::Lost);
+  configure("reset=1");
+  device->maintain();
+  EXPECT_NE(device->last_error().find("reopening: not initialised"), std::string::npos)
+      << device->last_error();
+  EXPECT_EQ(first("dhdEnableForce"), -1);
+  EXPECT_EQ(device->read(0.001, sample), DeviceStatus::Lost);
+  configure("");
+  device->maintain();
+  EXPECT_EQ(device->last_error(), "");
+  EXPECT_EQ(device->read(0.002, sample), DeviceStatus::Fresh);
 }
 
 TEST_F(DhdDeviceTest, AnErrorMidSessionZeroesTheForceInTheSameTickThenReconnects) {
@@ -200,6 +232,7 @@ TEST_F(DhdDeviceTest, AnErrorMidSessionZeroesTheForceInTheSameTickThenReconnects
   EXPECT_EQ(fault[static_cast<std::size_t>(before)].result, -1);
   EXPECT_STREQ(fault[static_cast<std::size_t>(before) + 1].name, "dhdSetForce");
   EXPECT_TRUE(is_zero_force(fault[static_cast<std::size_t>(before) + 1]));
+  print_time_to_zero("a failed dhdGetPosition", fault, static_cast<std::size_t>(before));
   // While lost the tick does not touch the library.
   device->write({0.5, 0.0, 0.0}, {0, 0, 0});
   EXPECT_EQ(device->read(0.003, sample), DeviceStatus::Lost);
@@ -226,7 +259,7 @@ TEST_F(DhdDeviceTest, AReconnectionThatFailsKeepsTheFaultAndTheReason) {
   device->start();
   DeviceSample sample;
   EXPECT_EQ(device->read(0.0, sample), DeviceStatus::Lost);
-  configure_("devices=0");  // Unplugged.
+  configure("devices=0");  // Unplugged.
   device->maintain();
   const std::string error = device->last_error();
   EXPECT_NE(error.find("dhdGetPosition failed: communication error (stand-in) (DHD error 2)"),
@@ -251,7 +284,23 @@ TEST_F(DhdDeviceTest, AFailedForceWriteIsAFaultZeroedAtOnce) {
   EXPECT_EQ(all[all.size() - 2].result, -1);
   EXPECT_STREQ(all.back().name, "dhdSetForce");
   EXPECT_TRUE(is_zero_force(all.back()));
+  print_time_to_zero("a failed dhdSetForce", all, all.size() - 2);
   EXPECT_EQ(device->read(0.002, sample), DeviceStatus::Lost);
+}
+
+TEST_F(DhdDeviceTest, TimeGuardAndMotorSaturatedAreSuccessesTheSecondCounted) {
+  std::unique_ptr<Device> device = make("position_result=1,force_result=2");
+  device->start();
+  DeviceSample sample;
+  for (int tick = 0; tick < 3; ++tick) {
+    ASSERT_EQ(device->read(tick * 0.001, sample), DeviceStatus::Fresh);
+    device->write({0.5, 0.0, 0.0}, {0, 0, 0});
+  }
+  const DhdDeviceCounters& counters = static_cast<DhdDevice&>(*device).counters();
+  EXPECT_EQ(counters.faults.load(), 0U);
+  EXPECT_EQ(counters.forces_written.load(), 3U);
+  EXPECT_EQ(counters.motor_saturated.load(), 3U);
+  EXPECT_TRUE(static_cast<DhdDevice&>(*device).connected());
 }
 
 TEST_F(DhdDeviceTest, StopLeavesTheArmWithoutForceAndClosed) {
@@ -266,8 +315,29 @@ TEST_F(DhdDeviceTest, StopLeavesTheArmWithoutForceAndClosed) {
   EXPECT_STREQ(all.back().name, "dhdClose");
 }
 
+TEST_F(DhdDeviceTest, EachForceIsWrittenInTheTickOfItsSampleItsLatencyMeasured) {
+  std::unique_ptr<Device> device = make("from=0:0:0,to=0:0:-0.02,reads=300");
+  device->start();
+  loop(*device, 300, {0.2, 0.0, 0.0});
+  const auto& dhd = static_cast<DhdDevice&>(*device);
+  const LatencyHistogram& latency = dhd.sample_to_force();
+  // One measure a tick: each write follows its own tick's read.
+  EXPECT_EQ(latency.count(), dhd.counters().samples.load());
+  ASSERT_GT(latency.count(), 0U);
+  std::printf(
+      "sample to force through the DHD stand-in at 1 kHz (no engine between): "
+      "median %.2f us, p99 %.2f us\n",
+      latency.percentile_us(0.5), latency.percentile_us(0.99));
+  // A write with no new sample since the last (a lost tick's) adds nothing.
+  device->write({0.2, 0.0, 0.0}, {0, 0, 0});
+  EXPECT_EQ(latency.count(), dhd.counters().samples.load());
+  const auto counters = device->status_counters();
+  EXPECT_EQ(counters[counters.size() - 2].first, "sample_to_force_ns_p50");
+  EXPECT_EQ(counters.back().first, "sample_to_force_ns_p99");
+}
+
 TEST_F(DhdDeviceTest, TheListingNamesTheLibraryAndEachDeviceWithItsLimits) {
-  configure_("devices=2,type=60");
+  configure("devices=2,type=60");
   const DhdListing listing = list_dhd_devices();
   EXPECT_TRUE(listing.library_found);
   EXPECT_NE(listing.library.find("hapticut-dhd-standin"), std::string::npos);

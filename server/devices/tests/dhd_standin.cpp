@@ -3,12 +3,15 @@
 #include "dhd_standin.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
 #include <string>
 #include <vector>
+
+#include "standin_script.h"
 
 namespace {
 
@@ -18,15 +21,19 @@ constexpr std::size_t kMaxCalls = 1 << 18;  // About a minute of ticks.
 struct Script {
   int devices = 1;
   int type = 33;
+  bool reset = false;  // In RESET mode: not initialised.
   double max_force = -1.0;
   unsigned int buttons = 0;
   double from[3] = {0, 0, 0};
   double to[3] = {0, 0, 0};
   long reads = 1;
+  double yaw_deg = 0.0;  // The wrist's rotation about the SDK's z.
   int open_error = 0;
   long fail_position_at = 0;
   long fail_count = 1;
   long fail_force_at = 0;
+  int position_result = 0;  // What a dhdGetPosition that succeeds returns (1: DHD_TIMEGUARD).
+  int force_result = 0;     // What a dhdSetForce that succeeds returns (2: DHD_MOTOR_SATURATED).
 };
 
 struct State {
@@ -53,34 +60,25 @@ void set_error(int code, const char* text) {
   std::snprintf(last_error_text, sizeof last_error_text, "%s", text);
 }
 
-bool parse_xyz(const std::string& text, double out[3]) {
-  return std::sscanf(text.c_str(), "%lf:%lf:%lf", &out[0], &out[1], &out[2]) == 3;
-}
-
 void apply(Script& script, const std::string& text) {
-  std::size_t start = 0;
-  while (start < text.size()) {
-    std::size_t end = text.find(',', start);
-    if (end == std::string::npos) end = text.size();
-    const std::string pair = text.substr(start, end - start);
-    start = end + 1;
-    const std::size_t eq = pair.find('=');
-    if (eq == std::string::npos) continue;
-    const std::string key = pair.substr(0, eq);
-    const std::string value = pair.substr(eq + 1);
-    const double number = std::atof(value.c_str());
-    if (key == "devices") script.devices = static_cast<int>(number);
-    if (key == "type") script.type = static_cast<int>(number);
-    if (key == "max_force") script.max_force = number;
-    if (key == "buttons") script.buttons = static_cast<unsigned int>(number);
-    if (key == "from") parse_xyz(value, script.from);
-    if (key == "to") parse_xyz(value, script.to);
-    if (key == "reads") script.reads = std::max(1L, static_cast<long>(number));
-    if (key == "open_error") script.open_error = static_cast<int>(number);
-    if (key == "fail_position_at") script.fail_position_at = static_cast<long>(number);
-    if (key == "fail_count") script.fail_count = static_cast<long>(number);
-    if (key == "fail_force_at") script.fail_force_at = static_cast<long>(number);
-  }
+  hapticut_standin::for_each_pair(
+      text, [&](const std::string& key, const std::string& value, double number) {
+        if (key == "devices") script.devices = static_cast<int>(number);
+        if (key == "type") script.type = static_cast<int>(number);
+        if (key == "reset") script.reset = number != 0.0;
+        if (key == "max_force") script.max_force = number;
+        if (key == "buttons") script.buttons = static_cast<unsigned int>(number);
+        if (key == "from") hapticut_standin::parse_xyz(value, script.from);
+        if (key == "to") hapticut_standin::parse_xyz(value, script.to);
+        if (key == "reads") script.reads = std::max(1L, static_cast<long>(number));
+        if (key == "yaw_deg") script.yaw_deg = number;
+        if (key == "open_error") script.open_error = static_cast<int>(number);
+        if (key == "fail_position_at") script.fail_position_at = static_cast<long>(number);
+        if (key == "fail_count") script.fail_count = static_cast<long>(number);
+        if (key == "fail_force_at") script.fail_force_at = static_cast<long>(number);
+        if (key == "position_result") script.position_result = static_cast<int>(number);
+        if (key == "force_result") script.force_result = static_cast<int>(number);
+      });
 }
 
 // Locks the state, applying $HAPTICUT_DHD_STANDIN at the first call.
@@ -105,6 +103,7 @@ int record(const char* name, double a, double b, double c, int result) {
     call.b = b;
     call.c = c;
     call.result = result;
+    call.time_s = hapticut_standin::now_s();
     s.calls.push_back(call);
   }
   return result;
@@ -116,7 +115,8 @@ void write_log() {
   std::FILE* file = std::fopen(path, "w");
   if (file == nullptr) return;
   for (const DhdStandinCall& call : state().calls) {
-    std::fprintf(file, "%s %.17g %.17g %.17g %d\n", call.name, call.a, call.b, call.c, call.result);
+    std::fprintf(file, "%s %.17g %.17g %.17g %d %.9f\n", call.name, call.a, call.b, call.c,
+                 call.result, call.time_s);
   }
   std::fclose(file);
 }
@@ -196,16 +196,34 @@ __attribute__((visibility("default"))) int dhdGetPosition(double* x, double* y, 
   *x = p.from[0] + t * (p.to[0] - p.from[0]);
   *y = p.from[1] + t * (p.to[1] - p.from[1]);
   *z = p.from[2] + t * (p.to[2] - p.from[2]);
-  return record("dhdGetPosition", *x, *y, *z, 0);
+  return record("dhdGetPosition", *x, *y, *z, p.position_result);
 }
 
 __attribute__((visibility("default"))) int dhdGetOrientationFrame(double matrix[3][3],
                                                                   char /*id*/) {
   auto lock = lock_state();
+  const double yaw = state().script.yaw_deg * std::acos(-1.0) / 180.0;
+  const double c = std::cos(yaw);
+  const double s = std::sin(yaw);
+  const double about_z[3][3] = {{c, -s, 0}, {s, c, 0}, {0, 0, 1}};
   for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) matrix[i][j] = i == j ? 1.0 : 0.0;
+    for (int j = 0; j < 3; ++j) matrix[i][j] = about_z[i][j];
   }
-  return record("dhdGetOrientationFrame", 0, 0, 0, 0);
+  return record("dhdGetOrientationFrame", state().script.yaw_deg, 0, 0, 0);
+}
+
+__attribute__((visibility("default"))) int dhdGetStatus(int status[32], char id) {
+  auto lock = lock_state();
+  // Only DHD_MAX_STATUS entries, as the SDK writes: the servo's larger array keeps the rest.
+  constexpr int kMaxStatus = 17;
+  constexpr int kStatusPower = 0;
+  constexpr int kStatusConnected = 1;
+  constexpr int kStatusReset = 3;
+  for (int i = 0; i < kMaxStatus; ++i) status[i] = 0;
+  status[kStatusPower] = 1;
+  status[kStatusConnected] = 1;
+  status[kStatusReset] = state().script.reset ? 1 : 0;
+  return record("dhdGetStatus", id, status[kStatusReset], 0, 0);
 }
 
 __attribute__((visibility("default"))) unsigned int dhdGetButtonMask(char /*id*/) {
@@ -223,7 +241,7 @@ __attribute__((visibility("default"))) int dhdSetForce(double fx, double fy, dou
     set_error(kErrorCom, "communication error (stand-in)");
     return record("dhdSetForce", fx, fy, fz, -1);
   }
-  return record("dhdSetForce", fx, fy, fz, 0);
+  return record("dhdSetForce", fx, fy, fz, s.script.force_result);
 }
 
 __attribute__((visibility("default"))) int dhdErrorGetLast() { return last_error; }

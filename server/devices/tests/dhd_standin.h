@@ -5,16 +5,21 @@
 // from hapticut_dhd_standin_configure: comma-separated key=value pairs,
 //   devices=1          what dhdGetDeviceCount returns (0: none connected)
 //   type=33            dhdGetSystemType (DHD_DEVICE_OMEGA3; 35 an omega.7, with a wrist)
+//   reset=0            1: dhdGetStatus says RESET mode (powered up, not initialised)
 //   max_force=-1       dhdGetMaxForce (N; negative: no limit set in the device)
 //   buttons=0          dhdGetButtonMask
 //   from=X:Y:Z, to=X:Y:Z, reads=N   the position (m, the SDK's frame) goes from
 //                      `from` to `to` over the first N dhdGetPosition calls, then holds
+//   yaw_deg=0          dhdGetOrientationFrame: a rotation about the SDK's z (degrees)
 //   open_error=CODE    dhdOpenID fails with this DHD error (20: device in use)
 //   fail_position_at=N dhdGetPosition call N (from 1) fails with a COM error ...
 //   fail_count=1       ... and as many calls after it
 //   fail_force_at=N    dhdSetForce call N (from 1) fails with a COM error
+//   position_result=0, force_result=0   what dhdGetPosition and dhdSetForce return when
+//                      they succeed (1: DHD_TIMEGUARD, 2: DHD_MOTOR_SATURATED)
 // and records every call, which $HAPTICUT_DHD_STANDIN_LOG (if set) receives
-// at each dhdClose, one line per call: "name a b c result".
+// at each dhdClose, one line per call: "name a b c result time_s" (time_s:
+// CLOCK_MONOTONIC at the call, the servo's clock).
 #pragma once
 
 extern "C" {
@@ -25,6 +30,7 @@ struct DhdStandinCall {
   double b;
   double c;
   int result;
+  double time_s;  // CLOCK_MONOTONIC when the call was made.
 };
 
 // Resets the record and the counters and applies `script`.
