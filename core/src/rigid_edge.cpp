@@ -148,7 +148,6 @@ bool RigidEdge::seat(const EdgePose& edge) {
     }
   }
   accept_trial(edge);
-  contacts_.clear();  // A new start rests on nothing yet.
   return true;
 }
 
@@ -291,64 +290,6 @@ void RigidEdge::advance_verified(const EdgePose& trial, double advance) {
   }
 }
 
-bool RigidEdge::over_feature(const ContactFeature& feature, const Plane& plane,
-                             const Vec3& x) const {
-  const TetMesh& mesh = space_->mesh();
-  const Vec3 foot = x - plane.normal * plane.signed_distance(x);
-  if (feature.kind == ContactFeature::Kind::Edge) {
-    const std::array<std::int32_t, 2>& ends = mesh.edge_vertices(feature.index);
-    const Vec3 a = mesh.vertex(ends[0]);
-    const Vec3 ab = mesh.vertex(ends[1]) - a;
-    const double t = dot(foot - a, ab);
-    return t >= 0.0 && t <= squared_norm(ab);
-  }
-  if (feature.kind != ContactFeature::Kind::Face) return false;
-  // The face's corners: the owner tet's vertices other than the face's own.
-  std::array<Vec3, 3> corner;
-  int k = 0;
-  for (int v = 0; v < 4; ++v) {
-    if (v != feature.face) corner[k++] = mesh.vertex(mesh.tet(feature.index)[v]);
-  }
-  // Over the face: on the inner side of each of its edges (the sides' signs
-  // agree with the face's own orientation).
-  const Vec3 normal = cross(corner[1] - corner[0], corner[2] - corner[0]);
-  for (int e = 0; e < 3; ++e) {
-    const Vec3& a = corner[e];
-    const Vec3& b = corner[(e + 1) % 3];
-    if (dot(cross(b - a, foot - a), normal) < 0.0) return false;
-  }
-  return true;
-}
-
-void RigidEdge::keep_warm_contacts() {
-  // The last tick's planes where a sample of the verified pose still touches
-  // one and lies over the face or ridge it met there: the pose rests on them
-  // still, and the first fit can hold them instead of the walks finding them
-  // again. One that no longer lies over what it met (slid off a facet) is
-  // left to the walks.
-  const double touching = touching_distance();
-  int count = 0;
-  for (const EdgeContactSet::HeldPlane& held : contacts_.planes()) {
-    for (int end = 0; end < 2; ++end) {
-      const double fraction = end == 0 ? held.least_fraction : held.greatest_fraction;
-      const ContactFeature& feature = end == 0 ? held.least_feature : held.greatest_feature;
-      const Vec3 x = ideal_edge_.point(fraction, length_mm_);
-      if (held.plane.signed_distance(x) <= touching && over_feature(feature, held.plane, x)) {
-        warm_[count++] = {fraction, held.plane, feature};
-      }
-      if (!(held.greatest_fraction > held.least_fraction)) break;
-    }
-  }
-  contacts_.clear();
-  if (count == 0) {
-    contact_static_friction_ = 0.0;
-    contact_dynamic_friction_ = 0.0;
-  }
-  for (int j = 0; j < count; ++j) {
-    contacts_.add(warm_[j].fraction, warm_[j].plane, space_->tolerance(), warm_[j].feature);
-  }
-}
-
 void RigidEdge::start_cold() {
   contacts_.clear();
   contact_static_friction_ = 0.0;
@@ -421,28 +362,15 @@ bool RigidEdge::limit_turn(std::span<const EdgeContact> contacts, double margin,
 }
 
 bool RigidEdge::solve(bool lock, const Vec3& lock_direction, int& rounds) {
-  const EdgePose cold = fit_edge(std::span<const double>(fractions_),
-                                 std::span<const Vec3>(targets_), length_mm_, lock_direction, lock);
-  EdgePose trial = cold;
+  EdgePose trial = fit_edge(std::span<const double>(fractions_), std::span<const Vec3>(targets_),
+                            length_mm_, lock_direction, lock);
+  start_cold();
   // The fit keeps contacts this far on their free side: a rounding error of
   // the pose then never reads as a step into the plane.
   const double margin = 4.0 * space_->tolerance();
-  // Warm start: the first trial already holds the planes the pose rests on.
-  // Where that trial does not verify whole, the tick starts again cold (the
-  // planes kept may have ended beyond their faces): a warm start costs at
-  // most one round.
-  motion_pivot_ = 0.5;
-  keep_warm_contacts();
   bool cut = false;
-  bool warm =
-      contacts_.plane_count() > 0 && fit_with_contacts(lock, lock_direction, margin, trial, cut);
-  if (!warm) {
-    trial = cold;
-    start_cold();
-  }
   rounds = 0;
-  const int limit = kColdRounds + (warm ? 1 : 0);
-  while (rounds < limit) {
+  while (rounds < kMaxRounds) {
     ++rounds;
     const int known = contacts_.changes();
     double advance = 1.0;
@@ -450,15 +378,7 @@ bool RigidEdge::solve(bool lock, const Vec3& lock_direction, int& rounds) {
       accept_trial(trial);
       // A turn cut short goes on from there with the same contacts.
       if (!cut) return true;
-      warm = false;
       if (!fit_with_contacts(lock, lock_direction, margin, trial, cut)) return false;
-      continue;
-    }
-    if (warm) {
-      warm = false;
-      cut = false;
-      trial = cold;
-      start_cold();
       continue;
     }
     // As far as every walk got, verified; halved while the edge between the
