@@ -108,8 +108,8 @@ class DhdDevice final : public Device {
   const DhdModel& model() const { return model_; }
   char sdk_id() const { return id_; }  // The SDK's ID while open.
   const DhdDeviceCounters& counters() const { return counters_; }
-  // "" when the firmware's watchdog is set (or, before start(), can be); else why
-  // not and what a stalled loop then leaves on the arm. Not real-time.
+  // "" before start() and while the firmware's watchdog is set; else why it is not
+  // and what a stalled loop then leaves on the arm. Not real-time.
   std::string firmware_watchdog_warning() const;
   // From dhdGetPosition's return to the dhdSetForce of the force the tick
   // computed from that sample: the tick's own compute between read and write.
