@@ -44,6 +44,7 @@ std::shared_ptr<DhdLibrary> load_dhd_library(std::string& error) {
   bind_symbol(handle, "dhdGetPosition", library->get_position, missing);
   bind_symbol(handle, "dhdGetOrientationFrame", library->get_orientation_frame, missing);
   bind_symbol(handle, "dhdGetButtonMask", library->get_button_mask, missing);
+  bind_symbol(handle, "dhdGetStatus", library->get_status, missing);
   bind_symbol(handle, "dhdSetForce", library->set_force, missing);
   bind_symbol(handle, "dhdGetMaxForce", library->get_max_force, missing);
   bind_symbol(handle, "dhdErrorGetLast", library->error_get_last, missing);
@@ -56,6 +57,9 @@ std::shared_ptr<DhdLibrary> load_dhd_library(std::string& error) {
             "one)";
     return nullptr;
   }
+  std::string optional;
+  bind_symbol(handle, "dhdSetWatchdog", library->set_watchdog, optional);
+  bind_symbol(handle, "dhdGetWatchdog", library->get_watchdog, optional);
   return library;
 }
 

@@ -315,7 +315,6 @@ std::vector<std::pair<std::string, std::uint64_t>> HdDevice::status_counters() c
   const auto load = [](const std::atomic<std::uint64_t>& count) {
     return count.load(std::memory_order_relaxed);
   };
-  const auto ns = [](double us) { return static_cast<std::uint64_t>(std::llround(us * 1e3)); };
   return {{"frames", load(counters_.frames)},
           {"samples", load(counters_.samples)},
           {"forces_written", load(counters_.forces_written)},
@@ -323,8 +322,8 @@ std::vector<std::pair<std::string, std::uint64_t>> HdDevice::status_counters() c
           {"faults", load(counters_.faults)},
           {"reconnects", load(counters_.reconnects)},
           {"reconnect_attempts", load(counters_.reconnect_attempts)},
-          {"sample_to_force_ns_p50", ns(sample_to_force_.percentile_us(0.5))},
-          {"sample_to_force_ns_p99", ns(sample_to_force_.percentile_us(0.99))}};
+          {"sample_to_force_ns_p50", sample_to_force_.percentile_ns(0.5)},
+          {"sample_to_force_ns_p99", sample_to_force_.percentile_ns(0.99)}};
 }
 
 HdListing list_hd_devices() {

@@ -55,6 +55,11 @@ class LatencyHistogram {
     return max_us();
   }
 
+  // The same in whole nanoseconds, as the devices' status counters give it.
+  std::uint64_t percentile_ns(double quantile) const {
+    return static_cast<std::uint64_t>(std::llround(percentile_us(quantile) * 1e3));
+  }
+
   static int bin_of(double value_us) {
     if (!(value_us > kLowest_us)) return 0;
     const int bin = static_cast<int>(std::log(value_us / kLowest_us) / std::log(kGrowth)) + 1;

@@ -8,80 +8,45 @@ library, no device, an uncalibrated device and one in use; `--list-devices`."""
 
 from __future__ import annotations
 
-import json
-import time
-from dataclasses import dataclass
-from pathlib import Path
-
 import numpy as np
 import pytest
 from hapticut.servo_layout import flag_bit
-from hd_standin_support import STANDIN_NAME, standin_library
-from servo_test_support import (
-    REPLAYED_BLOCK_FIELDS,
-    SPHERE,
-    ServoProcess,
-    bake,
-    connect,
-    independent_scene,
-    offline_check,
-    read_recording,
-    run_servo,
+from servo_test_support import independent_scene, read_recording, run_servo
+from standin_support import (
+    HD_STANDIN,
+    Call,
+    Standin,
+    check_listed_without_library,
+    check_lost_then_ramped_back,
+    check_refused_at_start,
+    check_session_recorded_and_replayed,
+    counters,
+    index_of,
+    listing,
+    load_and_run,
+    print_sample_to_force,
+    run_session,
+    use_standin,
 )
 
 # Times a real servo's clock-paced threads: runs alone, never beside other tests.
 pytestmark = pytest.mark.serial
 
-EXIT_DEVICE = 4  # docs/servo.md
 MAX_FORCE_N = 0.5
+BINDING = f"openhaptics:max_force={MAX_FORCE_N}"
 # Down from 10 mm above the sphere's centre to 10 mm below it over 1000 frames (OpenHaptics's
 # frame, mm: y is up), then held there, pushing.
 DESCENT = "from=0:10:0,to=0:-10:0,frames=1000"
 FORCE = "hdSetDoublev(FORCE)"
 TRANSFORM = "hdGetDoublev(TRANSFORM)"
 CONTINUOUS_FORCE = float(0x2604)  # HD_NOMINAL_MAX_CONTINUOUS_FORCE, as the record holds it
-
-
-@dataclass(frozen=True)
-class Call:
-    name: str
-    args: tuple[float, float, float]
-    frame: int
-    in_frame: bool
-    result: int
-
-
-@dataclass
-class Standin:
-    log: Path
-    monkeypatch: pytest.MonkeyPatch
-
-    def script(self, text: str) -> None:
-        self.monkeypatch.setenv("HAPTICUT_HD_STANDIN", text)
-
-    def calls(self) -> list[Call]:
-        out = []
-        for line in self.log.read_text().splitlines():
-            name, a, b, c, frame, in_frame, result = line.split()
-            args = (float(a), float(b), float(c))
-            out.append(Call(name, args, int(frame), in_frame == "1", int(result)))
-        return out
+FRESH = 0  # DeviceStatus::Fresh, as the recording holds a tick's device status
 
 
 @pytest.fixture
 def standin(monkeypatch, tmp_path) -> Standin:
-    log = tmp_path / "hd_calls.txt"
-    monkeypatch.setenv("HAPTICUT_OPENHAPTICS_LIB", str(standin_library()))
-    monkeypatch.setenv("HAPTICUT_HD_STANDIN_LOG", str(log))
-    monkeypatch.delenv("HAPTICUT_HD_STANDIN", raising=False)
-    return Standin(log, monkeypatch)
-
-
-def index_of(calls: list[Call], name: str, start: int = 0, a: float | None = None) -> int:
-    return next(
-        i
-        for i in range(start, len(calls))
-        if calls[i].name == name and (a is None or calls[i].args[0] == a)
+    return use_standin(
+        monkeypatch, tmp_path, HD_STANDIN, "HAPTICUT_OPENHAPTICS_LIB", "HAPTICUT_HD_STANDIN"
     )
 
 
@@ -89,26 +54,6 @@ def scene_force(call: Call) -> tuple[float, float, float]:
     """A force set in OpenHaptics's axes, in the scene's: scene = (x, -z, y)."""
     x, y, z = call.args
     return (x + 0.0, -z + 0.0, y + 0.0)  # + 0.0: -0.0 compares as 0.0 in a set of tuples
-
-
-def run_session(scene: Path, record: Path, until, timeout_s: float = 20.0) -> dict:
-    """The servo on openhaptics until `until(status)` holds; its last status."""
-    args = [str(scene), "--device", f"scalpel=openhaptics:max_force={MAX_FORCE_N}"]
-    args += ["--engage", "--ramp", "0.05", "--record", str(record)]
-    with ServoProcess(args) as servo:
-        client = connect(servo, ["scalpel"])
-        deadline = time.monotonic() + timeout_s
-        status = client.status()
-        while not until(status) and time.monotonic() < deadline:
-            time.sleep(0.05)
-            status = client.status()
-        client.close()
-        assert servo.stop() == 0
-    return status
-
-
-def counters(status: dict) -> dict:
-    return status["blades"][0]["device_counters"]
 
 
 def test_a_session_is_clamped_recorded_replayed_and_its_latency_measured(standin, tmp_path):
@@ -120,18 +65,13 @@ def test_a_session_is_clamped_recorded_replayed_and_its_latency_measured(standin
     standin.script(DESCENT)
     scene = independent_scene(tmp_path / "sphere.hapticut.json")
     record = tmp_path / "hd.rec"
-    status = run_session(scene, record, lambda s: counters(s).get("samples", 0) > 2000)
+    status = run_session(scene, record, BINDING, lambda s: counters(s).get("samples", 0) > 2000)
     blade = status["blades"][0]
     assert blade["kind"] == "openhaptics" and blade["passivity"] is True
     assert blade["device_error"] == ""
     found = counters(status)
     assert found["faults"] == 0 and found["forces_written"] > 2000
-    print(
-        "\nsample to force through the OpenHaptics stand-in at 1 kHz: "
-        f"median {found['sample_to_force_ns_p50'] / 1e3:.0f} us, "
-        f"p99 {found['sample_to_force_ns_p99'] / 1e3:.0f} us "
-        f"({found['frames']} frames, {found['stale_force_frames']} zeroed as stale)"
-    )
+    print_sample_to_force("OpenHaptics", found)
 
     calls = standin.calls()
     limits = index_of(calls, "hdGetDoublev", a=CONTINUOUS_FORCE)
@@ -147,29 +87,10 @@ def test_a_session_is_clamped_recorded_replayed_and_its_latency_measured(standin
     magnitudes = np.array([np.linalg.norm(c.args) for c in forces])
     assert 0.1 < magnitudes.max() <= MAX_FORCE_N + 1e-9
 
-    recording = read_recording(record)
-    block = recording.blade("scalpel")["block"]
-    recorded = {tuple(float(v) + 0.0 for v in f) for f in block["force_N"]}
-    pushed = [scene_force(c) for c in forces if any(c.args)]
-    assert len(pushed) > 500
-    assert all(f in recorded for f in pushed), "a force reached the arm that was not recorded"
+    block = read_recording(record).blade("scalpel")["block"]
     assert block["ramp"][np.argmax(np.linalg.norm(block["force_N"], axis=1) > 0)] < 1.0
-    z = block["pose"][:, 2]
-    assert z.max() > 9.0 and z.min() < -9.0  # The descent, in mm.
-    engine = np.linalg.norm(block["engine_force_N"], axis=1)
-    assert engine.max() > MAX_FORCE_N, "the engine never asked for more than the clamp"
-    assert np.any(block["safety_flags"] & flag_bit("force_clamped"))
-    assert offline_check(scene, recording, "scalpel") > 500
-
-    replayed = tmp_path / "replayed.rec"
-    bake(scene, replayed, f"scalpel=replay:{record}")
-    again = read_recording(replayed).blade("scalpel")
-    n = len(recording)
-    original = recording.blade("scalpel")
-    for name in ("q", "p", "state"):
-        assert np.array_equal(original[name], again[name][:n]), name
-    for name in REPLAYED_BLOCK_FIELDS:
-        assert np.array_equal(original["block"][name], again["block"][name][:n]), name
+    pushed = [scene_force(c) for c in forces if any(c.args)]
+    check_session_recorded_and_replayed(scene, record, pushed, MAX_FORCE_N)
 
 
 def test_an_hd_error_mid_session_zeroes_the_force_in_that_frame_and_ramps_back(standin, tmp_path):
@@ -183,7 +104,7 @@ def test_an_hd_error_mid_session_zeroes_the_force_in_that_frame_and_ramps_back(s
     def reopened_and_pushing(status: dict) -> bool:
         return counters(status).get("reconnects", 0) >= 1 and counters(status)["samples"] > 2500
 
-    status = run_session(scene, record, reopened_and_pushing)
+    status = run_session(scene, record, BINDING, reopened_and_pushing)
     assert counters(status)["faults"] == 1 and counters(status)["reconnects"] == 1
     assert status["blades"][0]["events"]["device_lost"] >= 1
 
@@ -191,6 +112,10 @@ def test_an_hd_error_mid_session_zeroes_the_force_in_that_frame_and_ramps_back(s
     failed = next(i for i, c in enumerate(calls) if c.name == TRANSFORM and c.result != 0)
     zero = index_of(calls, FORCE, failed)
     assert calls[zero].frame == calls[failed].frame and calls[zero].args == (0.0, 0.0, 0.0)
+    print(
+        "\ntime to zero force after an HD error in the callback in the servo: 0 frames, "
+        f"{(calls[zero].time_s - calls[failed].time_s) * 1e6:.1f} us"
+    )
     pushing = [c for c in calls[:failed] if c.name == FORCE][-1]
     assert np.linalg.norm(pushing.args) > 0.05, "not pushing at the fault: proves nothing"
     stopped = index_of(calls, "hdStopScheduler", zero)
@@ -200,17 +125,7 @@ def test_an_hd_error_mid_session_zeroes_the_force_in_that_frame_and_ramps_back(s
     assert stopped < index_of(calls, "hdDisableDevice", stopped) < reopened < limits < enabled
     between = [c for c in calls[zero + 1 : enabled] if c.name == FORCE]
     assert between == [], "the ended callback still set forces"
-
-    block = read_recording(record).blade("scalpel")["block"]
-    force = np.linalg.norm(block["force_N"], axis=1)
-    lost = np.nonzero(block["events"] & flag_bit("device_lost"))[0]
-    assert len(lost) == 1
-    k = int(lost[0])
-    assert force[k - 1] > 0.05 and force[k] == 0.0
-    back = k + int(np.argmax(block["device_status"][k:] != 2))
-    assert back > k and np.all(force[k:back] == 0.0)
-    assert block["ramp"][back] < 0.2
-    assert force[back:].max() > 0.05
+    check_lost_then_ramped_back(record)
 
 
 def test_a_stalled_scheduler_trips_the_servos_watchdog_and_the_force_ramps_back(standin, tmp_path):
@@ -219,7 +134,7 @@ def test_a_stalled_scheduler_trips_the_servos_watchdog_and_the_force_ramps_back(
     standin.script(f"{DESCENT},stall_at=1500,stall_ms=300")
     scene = independent_scene(tmp_path / "sphere.hapticut.json")
     record = tmp_path / "stall.rec"
-    status = run_session(scene, record, lambda s: counters(s).get("frames", 0) > 2500)
+    status = run_session(scene, record, BINDING, lambda s: counters(s).get("frames", 0) > 2500)
     assert counters(status)["faults"] == 0
     block = read_recording(record).blade("scalpel")["block"]
     force = np.linalg.norm(block["force_N"], axis=1)
@@ -231,21 +146,21 @@ def test_a_stalled_scheduler_trips_the_servos_watchdog_and_the_force_ramps_back(
     calls = standin.calls()
     stalled = [c for c in calls if c.name == FORCE and c.frame == 1500]
     assert stalled and all(c.in_frame for c in stalled)
+    # No frame runs while the scheduler stalls: the arm holds the last frame's force
+    # through it; the first frame after it sets the loop's newest force.
+    held = next(c for c in calls if c.name == FORCE and c.frame == 1499)
+    last_fresh = int(np.nonzero(block["device_status"][:k] == FRESH)[0][-1])
+    print(
+        f"\nscheduler stalled {(stalled[0].time_s - held.time_s) * 1e3:.0f} ms, the arm holding "
+        f"{np.linalg.norm(held.args):.3f} N; the servo's watchdog zeroed its force "
+        f"{k - last_fresh} ticks after the last sample; the first frame after the stall set "
+        f"{np.linalg.norm(stalled[0].args):.3f} N"
+    )
 
 
 def test_a_clients_load_binds_the_device(standin):
     standin.script(DESCENT)
-    with ServoProcess(["--device", "sim"]) as servo:
-        client = connect(servo)
-        loaded = client.load(SPHERE, devices=["openhaptics:max_force=0.5"])
-        assert loaded["blades"][0]["kind"] == "openhaptics"
-        client.start()
-        deadline = time.monotonic() + 20.0
-        while counters(client.status()).get("samples", 0) < 100 and time.monotonic() < deadline:
-            time.sleep(0.05)
-        status = client.status()
-        client.close()
-        assert servo.stop() == 0
+    status = load_and_run("openhaptics:max_force=0.5")
     assert counters(status)["samples"] >= 100 and counters(status)["faults"] == 0
 
 
@@ -261,32 +176,18 @@ def test_a_clients_load_binds_the_device(standin):
 def test_no_library_no_device_uncalibrated_or_in_use_is_a_clear_device_error(
     standin, script, library, message
 ):
-    if script is not None:
-        standin.script(script)
-    if library is not None:
-        standin.monkeypatch.setenv("HAPTICUT_OPENHAPTICS_LIB", library)
-    result = run_servo(str(SPHERE), "--device", "scalpel=openhaptics", "--duration", "0.5")
-    assert result.returncode == EXIT_DEVICE, result.stderr
-    assert message in result.stderr
-    assert "scalpel" in result.stderr  # The binding is named.
+    check_refused_at_start(standin, "openhaptics", script, library, message)
 
 
 def test_list_devices_says_where_the_library_is_and_the_devices_limits(standin):
     standin.script("continuous=0.88,stiffness=1.2")
-    result = run_servo("--list-devices", "--json", "--rate", "500")
-    assert result.returncode == 0, result.stderr
-    hd = json.loads(result.stdout)["openhaptics"]
-    assert hd["library_found"] is True and hd["library"].endswith(STANDIN_NAME)
+    hd = listing("openhaptics")
+    assert hd["library_found"] is True and hd["library"].endswith(HD_STANDIN)
     assert [d["binding"] for d in hd["devices"]] == ["openhaptics"]
     limits = hd["devices"][0]["limits"]
     assert limits["has_force_output"] is True and limits["max_force_N"] == 0.88
     assert limits["max_stiffness_N_per_mm_at_rate"] == 0.6
     text = run_servo("--list-devices").stdout
-    assert STANDIN_NAME in text and "max continuous force 0.88 N" in text
+    assert HD_STANDIN in text and "max continuous force 0.88 N" in text
 
-    standin.monkeypatch.setenv("HAPTICUT_OPENHAPTICS_LIB", "/nonexistent/libHD.so")
-    missing = run_servo("--list-devices", "--json")
-    assert missing.returncode == 0, missing.stderr
-    hd = json.loads(missing.stdout)["openhaptics"]
-    assert hd["library_found"] is False and hd["devices"] == []
-    assert "No such file" in hd["error"]  # dlerror()'s words
+    check_listed_without_library(standin, "openhaptics", "/nonexistent/libHD.so")

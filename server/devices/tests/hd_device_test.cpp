@@ -4,11 +4,11 @@
 // test thread plays the servo's loop.
 #include "devices/hd_device.h"
 
-#include <dlfcn.h>
 #include <gtest/gtest.h>
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
@@ -17,47 +17,15 @@
 
 #include "hd_standin.h"
 #include "rt/clock.h"
+#include "standin_test_support.h"
 
 namespace hapticut::servo {
 namespace {
 
-using Configure = void (*)(const char*);
-using Calls = int (*)(HdStandinCall*, int);
-
-constexpr double kForceParameter = 0x2700;  // HD_CURRENT_FORCE, as the record holds it.
-
-class HdDeviceTest : public ::testing::Test {
+class HdDeviceTest : public StandinTest<HdStandinCall> {
  protected:
-  void SetUp() override {
-    setenv(kHdLibraryVariable, HAPTICUT_HD_STANDIN, 1);
-    // The same file the device loads: dlopen gives both the same instance.
-    handle_ = dlopen(HAPTICUT_HD_STANDIN, RTLD_NOW | RTLD_LOCAL);
-    ASSERT_NE(handle_, nullptr) << dlerror();
-    configure_ = reinterpret_cast<Configure>(dlsym(handle_, "hapticut_hd_standin_configure"));
-    calls_ = reinterpret_cast<Calls>(dlsym(handle_, "hapticut_hd_standin_calls"));
-    ASSERT_NE(configure_, nullptr);
-    ASSERT_NE(calls_, nullptr);
-    configure_("");
-  }
-  void TearDown() override {
-    unsetenv(kHdLibraryVariable);
-    if (handle_ != nullptr) dlclose(handle_);
-  }
+  HdDeviceTest() : StandinTest(kHdLibraryVariable, HAPTICUT_HD_STANDIN, "hapticut_hd_standin") {}
 
-  std::vector<HdStandinCall> calls() const {
-    std::vector<HdStandinCall> out(static_cast<std::size_t>(calls_(nullptr, 0)) + 64);
-    out.resize(static_cast<std::size_t>(calls_(out.data(), static_cast<int>(out.size()))));
-    return out;
-  }
-  // Index of the first call named `name` (and parameter `a`, when given) at or after `from`.
-  long first(const std::string& name, long from = 0, double a = -1.0) const {
-    const std::vector<HdStandinCall> all = calls();
-    for (long i = from; i < static_cast<long>(all.size()); ++i) {
-      const HdStandinCall& call = all[static_cast<std::size_t>(i)];
-      if (name == call.name && (a < 0.0 || call.a == a)) return i;
-    }
-    return -1;
-  }
   std::vector<HdStandinCall> forces() const {
     std::vector<HdStandinCall> out;
     for (const HdStandinCall& call : calls()) {
@@ -67,7 +35,7 @@ class HdDeviceTest : public ::testing::Test {
   }
   std::unique_ptr<Device> make(const std::string& script, const DeviceOptions& options = {},
                                double watchdog_s = 0.1) {
-    configure_(script.c_str());
+    configure(script);
     return make_hd_device("", options, watchdog_s);
   }
   // The servo's loop for `seconds` at 1 kHz: read, then write `force` (scene frame).
@@ -84,13 +52,14 @@ class HdDeviceTest : public ::testing::Test {
     }
     return statuses;
   }
-
-  void* handle_ = nullptr;
-  Configure configure_ = nullptr;
-  Calls calls_ = nullptr;
 };
 
-bool is_zero(const HdStandinCall& call) { return call.a == 0.0 && call.b == 0.0 && call.c == 0.0; }
+// How long after `from` (a call in the record) the first zero force `zero`
+// was set: the scheduler's frames and the record's time.
+void print_time_to_zero(const char* what, const HdStandinCall& from, const HdStandinCall& zero) {
+  std::printf("time to zero force after %s: %ld frames, %.3f ms\n", what, zero.frame - from.frame,
+              (zero.time_s - from.time_s) * 1e3);
+}
 
 TEST(HdLibrary, AMissingFileNamesTheVariableTheLoadersReasonAndOldNcurses) {
   setenv(kHdLibraryVariable, "/nonexistent/libHD.so.3.4", 1);
@@ -159,10 +128,10 @@ TEST_F(HdDeviceTest, BadOptionsAreRefusedBeforeTheLibraryIsTouched) {
 }
 
 TEST_F(HdDeviceTest, ANamedDeviceIsOpenedByItsNameTheDefaultByNone) {
-  configure_("");
+  configure("");
   make_hd_device("", {}, 0.1).reset();
   EXPECT_EQ(calls()[static_cast<std::size_t>(first("hdInitDevice"))].a, 0.0);  // HD_DEFAULT_DEVICE
-  configure_("");
+  configure("");
   make_hd_device("", {{"device", "Right"}}, 0.1).reset();
   EXPECT_EQ(calls()[static_cast<std::size_t>(first("hdInitDevice"))].a, 1.0);
   EXPECT_THROW(make_hd_device("Left", {{"device", "Right"}}, 0.1), std::invalid_argument);
@@ -230,7 +199,7 @@ TEST_F(HdDeviceTest, PoseIsMappedFromTheDevicesFrameAndForceGoesBack) {
   // The device's frame: (x, z, -y) of the scene's force.
   bool pushed = false;
   for (const HdStandinCall& call : forces()) {
-    if (is_zero(call)) continue;
+    if (is_zero_force(call)) continue;
     pushed = true;
     EXPECT_EQ(call.a, 1.0);
     EXPECT_EQ(call.b, 3.0);
@@ -243,27 +212,30 @@ TEST_F(HdDeviceTest, TheCallbackZeroesALoopForceOlderThanTheWatchdog) {
   std::unique_ptr<Device> device = make("", {}, 0.02);
   device->start();
   loop(*device, 0.05, {0.3, 0.0, 0.0});
+  const double stalled_s = monotonic_now_s();
   const long written = static_cast<long>(forces().size());
   // The loop stalls: it neither reads nor writes.
   std::this_thread::sleep_for(std::chrono::milliseconds(80));
   const std::vector<HdStandinCall> after = forces();
   device->stop();
   ASSERT_GT(static_cast<long>(after.size()), written + 50);
-  ASSERT_FALSE(is_zero(after[static_cast<std::size_t>(written) - 1]));
+  ASSERT_FALSE(is_zero_force(after[static_cast<std::size_t>(written) - 1]));
   // Pushing until the watchdog's 20 ms are up (a frame or two of slack), then zero.
   long first_zero = -1;
   for (long i = written; i < static_cast<long>(after.size()); ++i) {
-    if (is_zero(after[static_cast<std::size_t>(i)])) {
+    if (is_zero_force(after[static_cast<std::size_t>(i)])) {
       first_zero = i;
       break;
     }
   }
   ASSERT_GE(first_zero, 0);
-  EXPECT_LE(after[static_cast<std::size_t>(first_zero)].frame -
-                after[static_cast<std::size_t>(written) - 1].frame,
-            23);
+  const HdStandinCall& last_pushed = after[static_cast<std::size_t>(written) - 1];
+  const HdStandinCall& zero = after[static_cast<std::size_t>(first_zero)];
+  EXPECT_LE(zero.frame - last_pushed.frame, 23);
+  std::printf("time to zero force after the loop stalled (watchdog 20 ms): %ld frames, %.2f ms\n",
+              zero.frame - last_pushed.frame, (zero.time_s - stalled_s) * 1e3);
   for (long i = first_zero; i < static_cast<long>(after.size()); ++i) {
-    EXPECT_TRUE(is_zero(after[static_cast<std::size_t>(i)]));
+    EXPECT_TRUE(is_zero_force(after[static_cast<std::size_t>(i)]));
   }
   const auto counters = device->status_counters();
   EXPECT_EQ(counters[3].first, "stale_force_frames");
@@ -285,13 +257,15 @@ TEST_F(HdDeviceTest, AnErrorInAFrameZeroesTheForceInThatFrameThenMaintainReopens
   const long zero = first("hdSetDoublev(FORCE)", failed);
   ASSERT_GT(zero, failed);
   EXPECT_EQ(all[static_cast<std::size_t>(zero)].frame, all[static_cast<std::size_t>(failed)].frame);
-  EXPECT_TRUE(is_zero(all[static_cast<std::size_t>(zero)]));
+  EXPECT_TRUE(is_zero_force(all[static_cast<std::size_t>(zero)]));
+  print_time_to_zero("an HD error in the callback", all[static_cast<std::size_t>(failed)],
+                     all[static_cast<std::size_t>(zero)]);
   // The frame before pushed: the zero is the fault's doing.
   const std::vector<HdStandinCall> set = forces();
   std::size_t k = 0;
   while (k < set.size() && set[k].frame < all[static_cast<std::size_t>(failed)].frame) ++k;
   ASSERT_GT(k, 0U);
-  EXPECT_FALSE(is_zero(set[k - 1]));
+  EXPECT_FALSE(is_zero_force(set[k - 1]));
   EXPECT_EQ(set.size(), k + 1) << "the callback set forces after the fault's frame";
 
   device->maintain();
@@ -323,8 +297,18 @@ TEST_F(HdDeviceTest, AFailedEndOfFrameIsZeroedInTheNextFrame) {
   const std::vector<HdStandinCall> set = forces();
   ASSERT_FALSE(set.empty());
   EXPECT_EQ(set.back().frame, 31);
-  EXPECT_TRUE(is_zero(set.back()));
-  EXPECT_FALSE(is_zero(set[set.size() - 2]));
+  EXPECT_TRUE(is_zero_force(set.back()));
+  EXPECT_FALSE(is_zero_force(set[set.size() - 2]));
+  const std::vector<HdStandinCall> all = calls();
+  long failed = -1;
+  for (long i = 0; i < static_cast<long>(all.size()) && failed < 0; ++i) {
+    if (std::string(all[static_cast<std::size_t>(i)].name) == "hdEndFrame" &&
+        all[static_cast<std::size_t>(i)].result != 0) {
+      failed = i;
+    }
+  }
+  ASSERT_GE(failed, 0);
+  print_time_to_zero("a failed hdEndFrame", all[static_cast<std::size_t>(failed)], set.back());
   EXPECT_FALSE(static_cast<HdDevice&>(*device).connected());
   device->maintain();
   EXPECT_TRUE(static_cast<HdDevice&>(*device).connected());
@@ -335,7 +319,7 @@ TEST_F(HdDeviceTest, AReconnectionThatFailsKeepsTheFaultAndTheReason) {
   std::unique_ptr<Device> device = make("fail_frame_at=5");
   device->start();
   loop(*device, 0.03, {0.0, 0.0, 0.0});
-  configure_("devices=0");  // Unplugged.
+  configure("devices=0");  // Unplugged.
   device->maintain();
   const std::string error = device->last_error();
   EXPECT_NE(error.find("hdGetDoublev(HD_CURRENT_TRANSFORM) failed: Communication error"),
@@ -345,7 +329,7 @@ TEST_F(HdDeviceTest, AReconnectionThatFailsKeepsTheFaultAndTheReason) {
             std::string::npos)
       << error;
   EXPECT_EQ(first("hdEnable"), -1);
-  configure_("");  // Plugged in again.
+  configure("");  // Plugged in again.
   device->maintain();
   EXPECT_EQ(device->last_error(), "");
   EXPECT_TRUE(static_cast<HdDevice&>(*device).connected());
@@ -376,7 +360,7 @@ TEST_F(HdDeviceTest, StopSetsAZeroForceThenUnschedulesStopsAndReleases) {
   device->stop();
   const std::vector<HdStandinCall> set = forces();
   ASSERT_FALSE(set.empty());
-  EXPECT_TRUE(is_zero(set.back()));
+  EXPECT_TRUE(is_zero_force(set.back()));
   const long unschedule = first("hdUnschedule");
   ASSERT_GT(unschedule, 0);
   EXPECT_GT(first("hdStopScheduler"), unschedule);
@@ -396,7 +380,7 @@ TEST_F(HdDeviceTest, TheLoopsForcesReachTheDeviceWithinAboutAFrameOfTheirSample)
 }
 
 TEST_F(HdDeviceTest, TheListingNamesTheLibraryAndTheDefaultDeviceWithItsLimits) {
-  configure_("continuous=0.88,stiffness=1.2");
+  configure("continuous=0.88,stiffness=1.2");
   const HdListing listing = list_hd_devices();
   EXPECT_TRUE(listing.library_found);
   EXPECT_NE(listing.library.find("hapticut-hd-standin"), std::string::npos);

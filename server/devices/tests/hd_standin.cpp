@@ -14,6 +14,8 @@
 #include <thread>
 #include <vector>
 
+#include "standin_script.h"
+
 namespace {
 
 using HHD = unsigned int;
@@ -102,41 +104,29 @@ thread_local std::vector<HDErrorInfo> errors;  // Each thread's own error stack.
 
 void push_error(unsigned int code, int internal = 0) { errors.push_back({code, internal, 1}); }
 
-bool parse_xyz(const std::string& text, double out[3]) {
-  return std::sscanf(text.c_str(), "%lf:%lf:%lf", &out[0], &out[1], &out[2]) == 3;
-}
-
 void apply(Script& script, const std::string& text) {
-  std::size_t start = 0;
-  while (start < text.size()) {
-    std::size_t end = text.find(',', start);
-    if (end == std::string::npos) end = text.size();
-    const std::string pair = text.substr(start, end - start);
-    start = end + 1;
-    const std::size_t eq = pair.find('=');
-    if (eq == std::string::npos) continue;
-    const std::string key = pair.substr(0, eq);
-    const std::string value = pair.substr(eq + 1);
-    const double number = std::strtod(value.c_str(), nullptr);
-    if (key == "devices") script.devices = static_cast<int>(number);
-    if (key == "init_error") script.init_error = std::stoul(value, nullptr, 0);
-    if (key == "calibration") script.calibration = value;
-    if (key == "max_force") script.max_force = number;
-    if (key == "continuous") script.continuous = number;
-    if (key == "stiffness") script.stiffness = number;
-    if (key == "ws_min") parse_xyz(value, script.ws_min);
-    if (key == "ws_max") parse_xyz(value, script.ws_max);
-    if (key == "from") parse_xyz(value, script.from);
-    if (key == "to") parse_xyz(value, script.to);
-    if (key == "frames") script.frames = std::max(1L, static_cast<long>(number));
-    if (key == "buttons") script.buttons = static_cast<int>(number);
-    if (key == "rate" && number > 0.0) script.rate = number;
-    if (key == "fail_frame_at") script.fail_frame_at = static_cast<long>(number);
-    if (key == "fail_count") script.fail_count = static_cast<long>(number);
-    if (key == "fail_end_at") script.fail_end_at = static_cast<long>(number);
-    if (key == "stall_at") script.stall_at = static_cast<long>(number);
-    if (key == "stall_ms") script.stall_ms = number;
-  }
+  using hapticut_standin::parse_xyz;
+  hapticut_standin::for_each_pair(
+      text, [&](const std::string& key, const std::string& value, double number) {
+        if (key == "devices") script.devices = static_cast<int>(number);
+        if (key == "init_error") script.init_error = std::stoul(value, nullptr, 0);
+        if (key == "calibration") script.calibration = value;
+        if (key == "max_force") script.max_force = number;
+        if (key == "continuous") script.continuous = number;
+        if (key == "stiffness") script.stiffness = number;
+        if (key == "ws_min") parse_xyz(value, script.ws_min);
+        if (key == "ws_max") parse_xyz(value, script.ws_max);
+        if (key == "from") parse_xyz(value, script.from);
+        if (key == "to") parse_xyz(value, script.to);
+        if (key == "frames") script.frames = std::max(1L, static_cast<long>(number));
+        if (key == "buttons") script.buttons = static_cast<int>(number);
+        if (key == "rate" && number > 0.0) script.rate = number;
+        if (key == "fail_frame_at") script.fail_frame_at = static_cast<long>(number);
+        if (key == "fail_count") script.fail_count = static_cast<long>(number);
+        if (key == "fail_end_at") script.fail_end_at = static_cast<long>(number);
+        if (key == "stall_at") script.stall_at = static_cast<long>(number);
+        if (key == "stall_ms") script.stall_ms = number;
+      });
 }
 
 // Locks the state, applying $HAPTICUT_HD_STANDIN at the first call.
@@ -163,6 +153,7 @@ int record(const char* name, double a, double b, double c, int result) {
     call.frame = s.frame;
     call.in_frame = s.in_frame ? 1 : 0;
     call.result = result;
+    call.time_s = hapticut_standin::now_s();
     s.calls.push_back(call);
   }
   if (result != 0) push_error(static_cast<unsigned int>(result));
@@ -175,8 +166,8 @@ void write_log() {
   std::FILE* file = std::fopen(path, "w");
   if (file == nullptr) return;
   for (const HdStandinCall& call : state().calls) {
-    std::fprintf(file, "%s %.17g %.17g %.17g %ld %d %d\n", call.name, call.a, call.b, call.c,
-                 call.frame, call.in_frame, call.result);
+    std::fprintf(file, "%s %.17g %.17g %.17g %ld %d %d %.9f\n", call.name, call.a, call.b, call.c,
+                 call.frame, call.in_frame, call.result, call.time_s);
   }
   std::fclose(file);
 }

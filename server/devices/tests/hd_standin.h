@@ -20,8 +20,9 @@
 //   stall_at=N, stall_ms=M   the scheduler stops for M ms before frame N
 // It records every call but hdGetError's; $HAPTICUT_HD_STANDIN_LOG (if set)
 // receives the record at each hdDisableDevice, one line per call:
-// "name a b c frame in_frame result" (hdGetDoublev(TRANSFORM) and
-// hdSetDoublev(FORCE) are named apart, with the position and the force).
+// "name a b c frame in_frame result time_s" (hdGetDoublev(TRANSFORM) and
+// hdSetDoublev(FORCE) are named apart, with the position and the force;
+// time_s is CLOCK_MONOTONIC at the call, the servo's clock).
 #pragma once
 
 extern "C" {
@@ -31,9 +32,10 @@ struct HdStandinCall {
   double a;  // The call's arguments: a parameter, a force (N), a position (mm).
   double b;
   double c;
-  long frame;    // The scheduler's frame number at the call (0: before the first).
-  int in_frame;  // 1 between hdBeginFrame and hdEndFrame.
-  int result;    // 0, or the HD error the call pushed.
+  long frame;     // The scheduler's frame number at the call (0: before the first).
+  int in_frame;   // 1 between hdBeginFrame and hdEndFrame.
+  int result;     // 0, or the HD error the call pushed.
+  double time_s;  // CLOCK_MONOTONIC when the call was made.
 };
 
 // Resets the record and the counters and applies `script`.

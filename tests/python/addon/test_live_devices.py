@@ -104,9 +104,9 @@ def test_a_force_dimension_arm_the_servo_sees_is_offered_and_bound(scene, monkey
     menu with its model and limits, and makes its forcedimension binding; a binding's own
     limit options and scale change the limits the panel checks against."""
     from addon.live import device_list, live_link, live_properties
-    from tests.python.dhd_standin_support import standin_library
+    from tests.python.standin_support import DHD_STANDIN, built_standin
 
-    monkeypatch.setenv("HAPTICUT_DHD_LIB", str(standin_library()))
+    monkeypatch.setenv("HAPTICUT_DHD_LIB", str(built_standin(DHD_STANDIN)))
     monkeypatch.setenv("HAPTICUT_DHD_STANDIN", "devices=1,type=60")  # A Novint Falcon.
     settings = scene.hapticut_live
     assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
@@ -133,9 +133,9 @@ def test_a_touch_openhaptics_opens_is_offered_and_bound(scene, monkeypatch):
     menu with its limits, and makes the openhaptics binding; a binding's own limit options
     and scale change the limits the panel checks against."""
     from addon.live import device_list, live_link, live_properties
-    from tests.python.hd_standin_support import standin_library
+    from tests.python.standin_support import HD_STANDIN, built_standin
 
-    monkeypatch.setenv("HAPTICUT_OPENHAPTICS_LIB", str(standin_library()))
+    monkeypatch.setenv("HAPTICUT_OPENHAPTICS_LIB", str(built_standin(HD_STANDIN)))
     monkeypatch.setenv("HAPTICUT_HD_STANDIN", "continuous=0.88,stiffness=1.2")
     settings = scene.hapticut_live
     assert bpy.ops.hapticut.refresh_devices() == {"FINISHED"}
