@@ -787,9 +787,8 @@ def _tetrahedralize(
         threads=settings.threads,
     )
 
-    def poll(elapsed_s: float) -> None:
-        # fTetWild reports nothing while it runs: creep towards the end of its share.
-        steps(1 - 1 / (1 + elapsed_s / 10), f"tetrahedralizing (fTetWild, {elapsed_s:.0f} s)")
+    def poll(elapsed_s: float, fraction: float, stage: str) -> None:
+        steps(fraction, f"tetrahedralizing (fTetWild, {stage}, {elapsed_s:.0f} s)")
 
     try:
         vertices, tets = tetwild.tetrahedralize(
