@@ -55,7 +55,7 @@ from .repair import (
     self_intersecting_faces,
     surface_deviation,
 )
-from .report import BuildReport, SurfaceReport
+from .report import BuildReport, SurfaceReport, figures_apart
 from .simplify import simplify_surface
 
 __all__ = [
@@ -1047,10 +1047,11 @@ def _keep_best(
         worst = max(best.misses, key=lambda miss: miss.deviation_mm)
         attempts = len(meshings)
         meshings_text = f"{attempts} meshing" + ("s" if attempts > 1 else "")
+        deviation, accuracy = figures_apart(worst.deviation_mm, lengths.accuracy_mm)
         raise BuildError(
             worst.region,
-            f"its meshed surface lies up to {worst.deviation_mm:.3g} mm from the input surface, "
-            f"beyond accuracy_mm ({lengths.accuracy_mm:.3g} mm), after {meshings_text} down to "
+            f"its meshed surface lies up to {deviation} mm from the input surface, "
+            f"beyond accuracy_mm ({accuracy} mm), after {meshings_text} down to "
             f"a {lengths.envelope_mm:.3g} mm envelope{_lost_text(worst)}; raise accuracy_mm "
             "or report this input",
         )
