@@ -100,7 +100,7 @@ class RunProgress:
     optimization pass's sub-steps with the worst tet's energy, the coarsening's rounds.
 
     ``fraction`` is the share of the run done. Each stage starts at a mark (STAGES: the
-    shares the stages took of default builds of scans, which vary by a factor of two) and
+    shares the stages take of default builds of scans, which differ from scan to scan) and
     moves towards the next as it prints (a line is work done; how many a stage prints is not
     known, so the share approaches the next mark without reaching it) or, while optimizing,
     as the worst energy falls towards the stop energy on a log scale, whichever is further.
