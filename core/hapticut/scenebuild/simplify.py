@@ -120,6 +120,8 @@ def simplify_surface(
                     misses = fits
             else:
                 misses = max(misses, target)
+                meshes.set_current_mesh(candidate)  # Nothing starts from a miss: free it.
+                meshes.delete_current_mesh()
             continue
         if not screened:
             break
