@@ -119,7 +119,8 @@ class RunProgress:
     )
     # Within a stage at most this share of the way to the next mark is given.
     WITHIN = 0.95
-    # Between lines the fraction creeps half the way to the stage's limit in this time.
+    # Between lines the fraction creeps towards the stage's limit: a quarter of the way in
+    # this time, never more than half (a line read then moves it on).
     CREEP_S = 5.0
 
     def __init__(self, stop_energy: float, max_passes: int) -> None:
