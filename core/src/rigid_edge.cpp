@@ -36,6 +36,10 @@ constexpr int kFitPasses = 4;
 // (bowed_contacts), far below what a hand feels as a gap; a round's turn is cut
 // to one that bows no more (limit_turn).
 constexpr double kMostBow = 0.01;
+// How far off the ridge it met a warm contact's sample may lie and the ridge
+// still hold it (over_feature): a sample beyond it rests on a face beside the
+// ridge, and a ridge held farther keeps a sliding blade above a round bone.
+constexpr double kRidgeReach = 0.001;
 
 // The contact for a stretch a -> b of the edge that enters rigid material
 // through plane `in` (at fraction s_in) and leaves it through plane `out` (at
@@ -148,6 +152,7 @@ bool RigidEdge::seat(const EdgePose& edge) {
     }
   }
   accept_trial(edge);
+  contacts_.clear();  // A new start rests on nothing yet.
   return true;
 }
 
@@ -290,6 +295,98 @@ void RigidEdge::advance_verified(const EdgePose& trial, double advance) {
   }
 }
 
+bool RigidEdge::over_feature(const ContactFeature& feature, const Plane& plane,
+                             const Vec3& x) const {
+  const TetMesh& mesh = space_->mesh();
+  const Vec3 foot = x - plane.normal * plane.signed_distance(x);
+  if (feature.kind == ContactFeature::Kind::Edge) {
+    const std::array<std::int32_t, 2>& ends = mesh.edge_vertices(feature.index);
+    const Vec3 a = mesh.vertex(ends[0]);
+    const Vec3 ab = mesh.vertex(ends[1]) - a;
+    // A ridge holds the edge only on it: off it, along the plane through it,
+    // the edge lies over one of the faces beside it, whose own plane is lower.
+    const double length_sq = squared_norm(ab);
+    const double t = dot(foot - a, ab);
+    if (!(t >= 0.0 && t <= length_sq) || !(length_sq > 0.0)) return false;
+    return norm(foot - (a + ab * (t / length_sq))) <= kRidgeReach;
+  }
+  if (feature.kind != ContactFeature::Kind::Face) return false;
+  // The face's corners: the owner tet's vertices other than the face's own.
+  std::array<Vec3, 3> corner;
+  int k = 0;
+  for (int v = 0; v < 4; ++v) {
+    if (v != feature.face) corner[k++] = mesh.vertex(mesh.tet(feature.index)[v]);
+  }
+  // Over the face: on the inner side of each of its edges (the sides' signs
+  // agree with the face's own orientation).
+  const Vec3 normal = cross(corner[1] - corner[0], corner[2] - corner[0]);
+  for (int e = 0; e < 3; ++e) {
+    const Vec3& a = corner[e];
+    const Vec3& b = corner[(e + 1) % 3];
+    if (dot(cross(b - a, foot - a), normal) < 0.0) return false;
+  }
+  return true;
+}
+
+bool RigidEdge::still_a_wall(const ContactFeature& feature, double fraction) const {
+  if (feature.kind != ContactFeature::Kind::Face) return true;
+  const std::int32_t wall = space_->mesh().neighbour(feature.index, feature.face);
+  if (wall != kNoTet && space_->tet_is_rigid(wall)) return true;
+  // A membrane is a wall only for a sample whose own tick has not broken it.
+  const auto sample = std::lower_bound(fractions_.begin(), fractions_.end(), fraction);
+  return sample != fractions_.end() && *sample == fraction &&
+         walls_[static_cast<std::size_t>(sample - fractions_.begin())] ==
+             ProbeWalls::RigidAndMembrane;
+}
+
+void RigidEdge::keep_warm_contacts() {
+  // The last tick's planes where a sample of the verified pose still touches
+  // one and lies over the face or ridge it met there: the pose rests on them
+  // still, and the first fit can hold them instead of the walks finding them
+  // again. One that no longer lies over what it met (slid off a facet) is
+  // left to the walks.
+  const double touching = touching_distance();
+  int count = 0;
+  for (const EdgeContactSet::HeldPlane& held : contacts_.planes()) {
+    for (int end = 0; end < 2; ++end) {
+      const double fraction = end == 0 ? held.least_fraction : held.greatest_fraction;
+      const ContactFeature& feature = end == 0 ? held.least_feature : held.greatest_feature;
+      const Vec3 x = ideal_edge_.point(fraction, length_mm_);
+      if (held.plane.signed_distance(x) <= touching && over_feature(feature, held.plane, x) &&
+          still_a_wall(feature, fraction)) {
+        warm_[count++] = {fraction, held.plane, feature};
+      }
+      if (!(held.greatest_fraction > held.least_fraction)) break;
+    }
+  }
+  contacts_.clear();
+  if (count == 0) {
+    contact_static_friction_ = 0.0;
+    contact_dynamic_friction_ = 0.0;
+  }
+  for (int j = 0; j < count; ++j) {
+    contacts_.add(warm_[j].fraction, warm_[j].plane, space_->tolerance(), warm_[j].feature);
+  }
+}
+
+bool RigidEdge::warm_contacts_hold(const EdgePose& trial) const {
+  // A plane holds a sample only over the face or ridge it came from: one that
+  // holds the trial's sample past it (slid off a facet of a round bone onto
+  // the next, lower one) keeps the edge off that facet, above the optimum.
+  const double held = kMostBow + 8.0 * space_->tolerance();
+  for (const EdgeContactSet::HeldPlane& plane : contacts_.planes()) {
+    for (int end = 0; end < 2; ++end) {
+      const double fraction = end == 0 ? plane.least_fraction : plane.greatest_fraction;
+      const ContactFeature& feature = end == 0 ? plane.least_feature : plane.greatest_feature;
+      const Vec3 x = trial.point(fraction, length_mm_);
+      if (plane.plane.signed_distance(x) <= held && !over_feature(feature, plane.plane, x)) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
 void RigidEdge::start_cold() {
   contacts_.clear();
   contact_static_friction_ = 0.0;
@@ -362,23 +459,45 @@ bool RigidEdge::limit_turn(std::span<const EdgeContact> contacts, double margin,
 }
 
 bool RigidEdge::solve(bool lock, const Vec3& lock_direction, int& rounds) {
-  EdgePose trial = fit_edge(std::span<const double>(fractions_), std::span<const Vec3>(targets_),
-                            length_mm_, lock_direction, lock);
-  start_cold();
+  const EdgePose cold = fit_edge(std::span<const double>(fractions_),
+                                 std::span<const Vec3>(targets_), length_mm_, lock_direction, lock);
+  EdgePose trial = cold;
   // The fit keeps contacts this far on their free side: a rounding error of
   // the pose then never reads as a step into the plane.
   const double margin = 4.0 * space_->tolerance();
+  // Warm start: the first trial already holds the planes the pose rests on.
+  // Where that trial does not verify whole, the tick starts again cold (the
+  // planes kept may have ended beyond their faces): a warm start costs at
+  // most one round.
+  motion_pivot_ = 0.5;
+  keep_warm_contacts();
   bool cut = false;
+  bool warm =
+      contacts_.plane_count() > 0 && fit_with_contacts(lock, lock_direction, margin, trial, cut);
+  if (!warm) {
+    trial = cold;
+    start_cold();
+  }
   rounds = 0;
-  while (rounds < kMaxRounds) {
+  const int limit = kColdRounds + (warm ? 1 : 0);
+  while (rounds < limit) {
     ++rounds;
     const int known = contacts_.changes();
     double advance = 1.0;
-    if (probe_motion(trial, advance, true)) {
+    const bool verified = probe_motion(trial, advance, true);
+    if (verified && !(warm && !warm_contacts_hold(trial))) {
       accept_trial(trial);
       // A turn cut short goes on from there with the same contacts.
       if (!cut) return true;
+      warm = false;
       if (!fit_with_contacts(lock, lock_direction, margin, trial, cut)) return false;
+      continue;
+    }
+    if (warm) {
+      warm = false;
+      cut = false;
+      trial = cold;
+      start_cold();
       continue;
     }
     // As far as every walk got, verified; halved while the edge between the

@@ -31,9 +31,11 @@ namespace hapticut {
 
 class RigidEdge {
  public:
-  // Rounds of a tick (walk, fit, walk again), and the halvings of one
+  // Rounds of a tick (walk, fit, walk again) from its unconstrained fit, a
+  // round more for a warm start's trial (solve), and the halvings of one
   // conservative advance: bounded work.
-  static constexpr int kMaxRounds = 8;
+  static constexpr int kColdRounds = 8;
+  static constexpr int kMaxRounds = kColdRounds + 1;
   static constexpr int kMaxAdvanceHalvings = 4;
 
   // Samples at `fractions` (ascending, in [0, 1]) of an edge `length_mm` long.
@@ -129,6 +131,18 @@ class RigidEdge {
   // planes all along the motion, not only at its end. Valid until the next call.
   std::span<const EdgeContact> bowed_contacts(std::span<const EdgeContact> contacts,
                                               const Vec3& direction);
+  // Whether x, moved onto `plane`, lies over the face or ridge `feature`
+  // names (false for none).
+  bool over_feature(const ContactFeature& feature, const Plane& plane, const Vec3& x) const;
+  // Whether what a contact met still walls its sample this tick: rigid
+  // material, or a membrane the sample's own tick has not broken.
+  bool still_a_wall(const ContactFeature& feature, double fraction) const;
+  // Starts the contact set with the last tick's contacts that still hold the
+  // verified pose (their friction with them), and no others.
+  void keep_warm_contacts();
+  // Whether every warm contact the trial rests on still lies over the face or
+  // ridge it came from (else the warm trial is not taken).
+  bool warm_contacts_hold(const EdgePose& trial) const;
   // Starts the contact set empty, with no friction, the motion about the middle.
   void start_cold();
   // The constrained fit from the verified pose with the contacts met so far
@@ -165,6 +179,13 @@ class RigidEdge {
   std::vector<ProbeWalls> walls_;
   EdgeContactSet contacts_;
   std::array<EdgeContact, kMaxEdgeContacts> bowed_contacts_{};
+  // The contacts kept from the last tick (keep_warm_contacts' storage).
+  struct WarmContact {
+    double fraction = 0.0;
+    Plane plane;
+    ContactFeature feature;
+  };
+  std::array<WarmContact, 2 * EdgeContactSet::kMaxPlanes> warm_{};
   // The sample of the edge a motion moves in a straight line (interpolate_edge):
   // the middle, or once there are contacts the one the pose rests on, so a
   // turn does not swing the held sample into its plane.
