@@ -119,6 +119,10 @@ std::string with_vendor_listings(const std::string& listing_json, const DhdListi
     if (row.error.empty()) {
       device["system_type"] = row.system_type;
       device["model"] = row.model;
+      // false: a stalled loop leaves the arm its last force (the warning says so).
+      device["firmware_watchdog"] = row.firmware_watchdog;
+      if (!row.firmware_watchdog)
+        device["firmware_watchdog_warning"] = row.firmware_watchdog_warning;
     }
     arms.push_back(device_row(device, row.error, row.limits, rate_Hz));
   }

@@ -159,6 +159,10 @@ def cut_mesh(name: str, surface, mm: float, slit_mm: float = 0.0):
     mesh.polygons.add(len(faces))
     mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * len(faces), 3, dtype=np.int32))
     mesh.update(calc_edges=True)
+    # Smooth across the swept surface's triangles (cut_slit.slit_normals), not flat per face.
+    mesh.polygons.foreach_set("use_smooth", np.ones(len(faces), bool))
+    normals = cut_slit.slit_normals(surface.vertices, surface.faces)
+    mesh.normals_split_custom_set(normals.reshape(-1, 3).tolist())
     attribute = mesh.attributes.new(cut_reveal.FRAME_ATTRIBUTE, "INT", "FACE")
     attribute.data.foreach_set("value", np.asarray(face_frames, np.int32))
     mesh.materials.append(_material("Hapticut Cut", CUT_COLOUR))

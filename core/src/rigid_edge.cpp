@@ -36,6 +36,10 @@ constexpr int kFitPasses = 4;
 // (bowed_contacts), far below what a hand feels as a gap; a round's turn is cut
 // to one that bows no more (limit_turn).
 constexpr double kMostBow = 0.01;
+// How far off the ridge it met a warm contact's sample may lie and the ridge
+// still hold it (over_feature): a sample beyond it rests on a face beside the
+// ridge, and a ridge held farther keeps a sliding blade above a round bone.
+constexpr double kRidgeReach = 0.001;
 
 // The contact for a stretch a -> b of the edge that enters rigid material
 // through plane `in` (at fraction s_in) and leaves it through plane `out` (at
@@ -299,8 +303,12 @@ bool RigidEdge::over_feature(const ContactFeature& feature, const Plane& plane,
     const std::array<std::int32_t, 2>& ends = mesh.edge_vertices(feature.index);
     const Vec3 a = mesh.vertex(ends[0]);
     const Vec3 ab = mesh.vertex(ends[1]) - a;
+    // A ridge holds the edge only on it: off it, along the plane through it,
+    // the edge lies over one of the faces beside it, whose own plane is lower.
+    const double length_sq = squared_norm(ab);
     const double t = dot(foot - a, ab);
-    return t >= 0.0 && t <= squared_norm(ab);
+    if (!(t >= 0.0 && t <= length_sq) || !(length_sq > 0.0)) return false;
+    return norm(foot - (a + ab * (t / length_sq))) <= kRidgeReach;
   }
   if (feature.kind != ContactFeature::Kind::Face) return false;
   // The face's corners: the owner tet's vertices other than the face's own.
@@ -320,6 +328,17 @@ bool RigidEdge::over_feature(const ContactFeature& feature, const Plane& plane,
   return true;
 }
 
+bool RigidEdge::still_a_wall(const ContactFeature& feature, double fraction) const {
+  if (feature.kind != ContactFeature::Kind::Face) return true;
+  const std::int32_t wall = space_->mesh().neighbour(feature.index, feature.face);
+  if (wall != kNoTet && space_->tet_is_rigid(wall)) return true;
+  // A membrane is a wall only for a sample whose own tick has not broken it.
+  const auto sample = std::lower_bound(fractions_.begin(), fractions_.end(), fraction);
+  return sample != fractions_.end() && *sample == fraction &&
+         walls_[static_cast<std::size_t>(sample - fractions_.begin())] ==
+             ProbeWalls::RigidAndMembrane;
+}
+
 void RigidEdge::keep_warm_contacts() {
   // The last tick's planes where a sample of the verified pose still touches
   // one and lies over the face or ridge it met there: the pose rests on them
@@ -333,7 +352,8 @@ void RigidEdge::keep_warm_contacts() {
       const double fraction = end == 0 ? held.least_fraction : held.greatest_fraction;
       const ContactFeature& feature = end == 0 ? held.least_feature : held.greatest_feature;
       const Vec3 x = ideal_edge_.point(fraction, length_mm_);
-      if (held.plane.signed_distance(x) <= touching && over_feature(feature, held.plane, x)) {
+      if (held.plane.signed_distance(x) <= touching && over_feature(feature, held.plane, x) &&
+          still_a_wall(feature, fraction)) {
         warm_[count++] = {fraction, held.plane, feature};
       }
       if (!(held.greatest_fraction > held.least_fraction)) break;
@@ -347,6 +367,24 @@ void RigidEdge::keep_warm_contacts() {
   for (int j = 0; j < count; ++j) {
     contacts_.add(warm_[j].fraction, warm_[j].plane, space_->tolerance(), warm_[j].feature);
   }
+}
+
+bool RigidEdge::warm_contacts_hold(const EdgePose& trial) const {
+  // A plane holds a sample only over the face or ridge it came from: one that
+  // holds the trial's sample past it (slid off a facet of a round bone onto
+  // the next, lower one) keeps the edge off that facet, above the optimum.
+  const double held = kMostBow + 8.0 * space_->tolerance();
+  for (const EdgeContactSet::HeldPlane& plane : contacts_.planes()) {
+    for (int end = 0; end < 2; ++end) {
+      const double fraction = end == 0 ? plane.least_fraction : plane.greatest_fraction;
+      const ContactFeature& feature = end == 0 ? plane.least_feature : plane.greatest_feature;
+      const Vec3 x = trial.point(fraction, length_mm_);
+      if (plane.plane.signed_distance(x) <= held && !over_feature(feature, plane.plane, x)) {
+        return false;
+      }
+    }
+  }
+  return true;
 }
 
 void RigidEdge::start_cold() {
@@ -446,7 +484,8 @@ bool RigidEdge::solve(bool lock, const Vec3& lock_direction, int& rounds) {
     ++rounds;
     const int known = contacts_.changes();
     double advance = 1.0;
-    if (probe_motion(trial, advance, true)) {
+    const bool verified = probe_motion(trial, advance, true);
+    if (verified && !(warm && !warm_contacts_hold(trial))) {
       accept_trial(trial);
       // A turn cut short goes on from there with the same contacts.
       if (!cut) return true;

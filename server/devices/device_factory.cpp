@@ -54,9 +54,11 @@ std::unique_ptr<Device> make_bridge(const DeviceSpec& spec, const DeviceContext&
   return as_device_error(spec, [&] { return make_bridge_device(spec.options); });
 }
 
-std::unique_ptr<Device> make_forcedimension(const DeviceSpec& spec,
-                                            const DeviceContext& /*context*/) {
-  return as_device_error(spec, [&] { return make_dhd_device(spec.value, spec.options); });
+std::unique_ptr<Device> make_forcedimension(const DeviceSpec& spec, const DeviceContext& context) {
+  // The device firmware's watchdog is set to the servo's own (as far as it goes).
+  return as_device_error(spec, [&]() -> std::unique_ptr<Device> {
+    return make_dhd_device(spec.value, spec.options, context.watchdog_s);
+  });
 }
 
 std::unique_ptr<Device> make_openhaptics(const DeviceSpec& spec, const DeviceContext& context) {

@@ -11,6 +11,10 @@
 // reference adapted function by function, with the constants' values, in
 // forcedimension_core's "DHD Reference"
 // (https://forcedimension-core-python-docs.readthedocs.io/en/latest/forcedimension_core.dhd-doc.html).
+// dhdSetWatchdog and dhdGetWatchdog are from the SDK's header dhdc.h (its
+// "expert SDK" part, marked "added in release 3.3.2") and the same reference;
+// the servo does not turn on expert mode (dhdEnableExpertMode), so a library
+// that wants it for these calls refuses them (dhd_device.h: a warning).
 //
 // Every device call takes the device ID as its last argument (a char; -1:
 // the default device); positions are in m, forces in N, the frame is the
@@ -61,6 +65,12 @@ inline constexpr int kErrorDeviceInUse = 20;
 inline constexpr int kStatusArraySize = 32;
 inline constexpr int kStatusReset = 3;  // DHD_STATUS_RESET
 
+// The device firmware's watchdog (dhdSetWatchdog, "on compatible devices"): when no force
+// command arrives for its duration, the firmware disables forces. Its unit is 125 us, in
+// an unsigned char (0 turns it off), so the longest is 255 units: 31.875 ms.
+inline constexpr double kWatchdogUnit_s = 125e-6;
+inline constexpr int kWatchdogMaxUnits = 255;
+
 // The signatures, as pointers to the library's C functions.
 using GetDeviceCount = int (*)();                           // dhdGetDeviceCount: devices, -1 error
 using OpenId = int (*)(char index);                         // dhdOpenID: the device ID, -1 error
@@ -76,5 +86,9 @@ using ErrorGetLast = int (*)();             // dhdErrorGetLast: this thread's la
 using ErrorGetLastStr = const char* (*)();  // dhdErrorGetLastStr: the same as text
 using Stop = int (*)(char id);              // dhdStop: forces off, brakes on
 using Close = int (*)(char id);             // dhdClose
+// dhdSetWatchdog(units of kWatchdogUnit_s, 0: off) and dhdGetWatchdog: SDK 3.3.2 and
+// later only, so loaded as optional symbols (dhd_library.h).
+using SetWatchdog = int (*)(unsigned char units, char id);
+using GetWatchdog = int (*)(unsigned char* units, char id);
 
 }  // namespace hapticut::servo::dhd

@@ -1,5 +1,6 @@
 #include "devices/dhd_device.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -41,7 +42,41 @@ std::string initialisation_problem(const DhdLibrary& dhd, char id) {
          "initialise it with the SDK's own tools, then start again (docs/devices.md)";
 }
 
+// What a missing firmware watchdog leaves: nothing zeroes the force while the loop stalls.
+constexpr const char* kStalledLoopKeepsTheForce =
+    "if the servo's loop stalls, the arm keeps its last force until the loop runs again (its "
+    "first tick after a stall longer than --watchdog-ms writes zero, then ramps back in)";
+
+std::string watchdog_unavailable(const DhdLibrary& dhd) {
+  return "no firmware watchdog: " + dhd.path +
+         " lacks dhdSetWatchdog (a Force Dimension SDK before 3.3.2; a current one has it): " +
+         kStalledLoopKeepsTheForce;
+}
+
+std::string watchdog_refused(const std::string& error) {
+  return "no firmware watchdog: " + error +
+         " (the SDK sets it on compatible devices only); going on without it: " +
+         kStalledLoopKeepsTheForce;
+}
+
+// For the listing, without changing the device: whether it answers dhdGetWatchdog.
+std::string probe_firmware_watchdog(const DhdLibrary& dhd, char id) {
+  if (dhd.set_watchdog == nullptr) return watchdog_unavailable(dhd);
+  unsigned char units = 0;
+  if (dhd.get_watchdog != nullptr && dhd.get_watchdog(&units, id) < 0) {
+    return watchdog_refused(dhd.last_error("dhdGetWatchdog"));
+  }
+  return "";
+}
+
 }  // namespace
+
+unsigned char dhd_watchdog_units(double watchdog_s) {
+  // Whole units: the firmware's watchdog is never longer than the servo's.
+  const double units = std::floor(watchdog_s / dhd::kWatchdogUnit_s + 1e-9);
+  return static_cast<unsigned char>(
+      std::clamp(units, 1.0, static_cast<double>(dhd::kWatchdogMaxUnits)));
+}
 
 DhdDevice::DhdDevice(std::shared_ptr<DhdLibrary> library, DhdDeviceOptions options)
     : library_(std::move(library)), options_(options), mapping_(options.mapping) {}
@@ -56,6 +91,43 @@ void DhdDevice::set_error(std::string error) {
 std::string DhdDevice::last_error() const {
   const std::lock_guard<std::mutex> lock(error_mutex_);
   return last_error_;
+}
+
+std::string DhdDevice::firmware_watchdog_warning() const {
+  const std::lock_guard<std::mutex> lock(error_mutex_);
+  return watchdog_warning_;
+}
+
+std::string DhdDevice::set_firmware_watchdog() {
+  const DhdLibrary& dhd = *library_;
+  firmware_watchdog_s_ = 0.0;
+  counters_.firmware_watchdog_us.store(0, std::memory_order_relaxed);
+  std::string warning;
+  if (dhd.set_watchdog == nullptr) {
+    warning = watchdog_unavailable(dhd);
+  } else {
+    const unsigned char units = dhd_watchdog_units(options_.watchdog_s);
+    if (dhd.set_watchdog(units, id_) < 0) {
+      warning = watchdog_refused(dhd.last_error("dhdSetWatchdog"));
+    } else {
+      firmware_watchdog_s_ = units * dhd::kWatchdogUnit_s;
+      counters_.firmware_watchdog_us.store(static_cast<std::uint64_t>(units) * 125U,
+                                           std::memory_order_relaxed);
+    }
+  }
+  bool changed = false;
+  {
+    const std::lock_guard<std::mutex> lock(error_mutex_);
+    changed = warning != watchdog_warning_;
+    watchdog_warning_ = warning;
+  }
+  // Said once, and again only when it changes (a reopened device).
+  if (changed && !warning.empty()) {
+    std::fprintf(stderr, "hapticut-servo: warning: forcedimension:%d: %s\n", options_.index,
+                 warning.c_str());
+    std::fflush(stderr);
+  }
+  return warning;
 }
 
 void DhdDevice::open() {
@@ -114,8 +186,11 @@ void DhdDevice::open() {
 void DhdDevice::start() {
   if (!open_ || force_enabled_) return;
   const DhdLibrary& dhd = *library_;
+  // The firmware's watchdog before anything can push.
+  set_firmware_watchdog();
   // Zero first: the device renders nothing until the servo's ramp writes.
   const bool zeroed = dhd.set_force(0.0, 0.0, 0.0, id_) >= 0;
+  last_force_command_s_ = monotonic_now_s();
   if (!zeroed || dhd.enable_force(dhd::kOn, id_) < 0) {
     const std::string error = dhd.last_error(zeroed ? "dhdEnableForce" : "dhdSetForce");
     stop();
@@ -190,11 +265,27 @@ void DhdDevice::write(const Vec3& force_N, const Vec3& /*torque_N_mm*/) {
   if (!connected()) return;
   // The safety layer clamps and checks; a non-finite force never reaches the arm regardless.
   const Vec3 device = finite(force_N) ? mapping_.device_force_N(force_N) : Vec3{};
+  const DhdLibrary& dhd = *library_;
+  const double now_s = monotonic_now_s();
   if (sample_unwritten_) {
-    sample_to_force_.add((monotonic_now_s() - sample_read_s_) * 1e6);
+    sample_to_force_.add((now_s - sample_read_s_) * 1e6);
     sample_unwritten_ = false;
   }
-  const int result = library_->set_force(device.x, device.y, device.z, id_);
+  // A gap the firmware's watchdog outlasted may have left forces disabled: enabled
+  // again, at zero (never the force commanded before the gap), before this tick's.
+  if (firmware_watchdog_s_ > 0.0 && now_s - last_force_command_s_ > firmware_watchdog_s_) {
+    if (dhd.set_force(0.0, 0.0, 0.0, id_) < 0) {
+      fault("dhdSetForce");
+      return;
+    }
+    if (dhd.enable_force(dhd::kOn, id_) < 0) {
+      fault("dhdEnableForce");
+      return;
+    }
+    counters_.forces_reenabled.fetch_add(1, std::memory_order_relaxed);
+  }
+  last_force_command_s_ = now_s;
+  const int result = dhd.set_force(device.x, device.y, device.z, id_);
   if (result < 0) {
     fault("dhdSetForce");
     return;
@@ -246,10 +337,12 @@ void DhdDevice::maintain() {
               "the servo");
     return;
   }
+  set_firmware_watchdog();
   if (dhd.set_force(0.0, 0.0, 0.0, id_) < 0) {
     set_error(error + "; reopening: " + dhd.last_error("dhdSetForce"));
     return;
   }
+  last_force_command_s_ = monotonic_now_s();
   if (dhd.enable_force(dhd::kOn, id_) < 0) {
     set_error(error + "; reopening: " + dhd.last_error("dhdEnableForce"));
     return;
@@ -269,6 +362,8 @@ std::vector<std::pair<std::string, std::uint64_t>> DhdDevice::status_counters() 
           {"faults", load(counters_.faults)},
           {"reconnects", load(counters_.reconnects)},
           {"reconnect_attempts", load(counters_.reconnect_attempts)},
+          {"firmware_watchdog_us", load(counters_.firmware_watchdog_us)},
+          {"forces_reenabled", load(counters_.forces_reenabled)},
           {"sample_to_force_ns_p50", sample_to_force_.percentile_ns(0.5)},
           {"sample_to_force_ns_p99", sample_to_force_.percentile_ns(0.99)}};
 }
@@ -300,6 +395,8 @@ DhdListing list_dhd_devices() {
       row.system_type = device.model().system_type;
       row.model = device.model().name;
       row.limits = device.limits();
+      row.firmware_watchdog_warning = probe_firmware_watchdog(*library, device.sdk_id());
+      row.firmware_watchdog = row.firmware_watchdog_warning.empty();
     } catch (const std::exception& e) {
       row.error = e.what();
     }
@@ -329,6 +426,12 @@ std::string format_dhd_listing(const DhdListing& listing) {
                   row.binding.c_str(), row.model.c_str(), row.system_type, row.limits.max_force_N,
                   row.limits.max_stiffness_N_per_mm);
     out << line;
+    out << "    firmware watchdog: "
+        << (row.firmware_watchdog
+                ? std::string("yes (dhdSetWatchdog; the servo sets it to --watchdog-ms, at most "
+                              "31.875 ms)")
+                : row.firmware_watchdog_warning)
+        << "\n";
   }
   return out.str();
 }
@@ -360,8 +463,10 @@ DhdDeviceOptions dhd_device_options(const std::string& bare_id, const DeviceOpti
   return out;
 }
 
-std::unique_ptr<Device> make_dhd_device(const std::string& bare_id, const DeviceOptions& options) {
-  const DhdDeviceOptions device_options = dhd_device_options(bare_id, options);
+std::unique_ptr<DhdDevice> make_dhd_device(const std::string& bare_id, const DeviceOptions& options,
+                                           double watchdog_s) {
+  DhdDeviceOptions device_options = dhd_device_options(bare_id, options);
+  if (watchdog_s > 0.0) device_options.watchdog_s = watchdog_s;
   std::string error;
   std::shared_ptr<DhdLibrary> library = load_dhd_library(error);
   if (!library) throw std::runtime_error(error);

@@ -12,6 +12,19 @@
 // initialised), and reads its type and force limit (limits() holds them
 // before start()); start() only then enables the force, at zero.
 //
+// A stalled loop. Nothing on the tick runs while the loop stalls, so the
+// device's own firmware watchdog stands in (dhdSetWatchdog, SDK 3.3.2 and
+// later, "on compatible devices"): set before each enabling of the force to
+// the servo's --watchdog-ms, as far as the firmware's unit allows (at most
+// 255 x 125 us), it disables forces when no force command arrives for that
+// long. The SDK does not say whether the firmware lets forces back on with
+// the next command, so a write() after a longer gap enables them again
+// first (the servo's own watchdog has made that write's force zero when the
+// gap outlasted it, and ramps back in). A library without the call, or a
+// device that refuses it, is a warning (start log, listing), not a refusal:
+// a stalled loop then leaves the arm its last force until the loop runs
+// again and its first tick zeroes it.
+//
 // Faults. Any failed call on the tick is a fault: the same call site sets a
 // zero force (best effort) and marks the device Lost, so read() says Lost in
 // the same tick and the servo's safety layer renders nothing and ramps back
@@ -45,7 +58,14 @@ inline constexpr Matrix3 kDhdToSceneAxes{{{0, 1, 0}, {-1, 0, 0}, {0, 0, 1}}};
 struct DhdDeviceOptions : ArmDeviceOptions {
   DhdDeviceOptions() { mapping.axes = kDhdToSceneAxes; }
   int index = 0;  // dhdOpenID's enumeration index (the ID in forcedimension:ID).
+  // The servo's watchdog (--watchdog-ms): the device firmware's is set to it, or to
+  // its longest when this is longer.
+  double watchdog_s = 0.1;
 };
+
+// dhdSetWatchdog's value for a watchdog of `watchdog_s`: whole 125 us units, never
+// longer than asked, within 1..255 (0 would turn the firmware's watchdog off).
+unsigned char dhd_watchdog_units(double watchdog_s);
 
 struct DhdDeviceCounters {
   std::atomic<std::uint64_t> samples{0};
@@ -54,6 +74,10 @@ struct DhdDeviceCounters {
   std::atomic<std::uint64_t> faults{0};
   std::atomic<std::uint64_t> reconnects{0};
   std::atomic<std::uint64_t> reconnect_attempts{0};
+  // The firmware's watchdog as set (us; 0: not set: no library call, or refused).
+  std::atomic<std::uint64_t> firmware_watchdog_us{0};
+  // Forces enabled again on the tick after a gap the firmware's watchdog outlasted.
+  std::atomic<std::uint64_t> forces_reenabled{0};
 };
 
 class DhdDevice final : public Device {
@@ -76,13 +100,17 @@ class DhdDevice final : public Device {
   void write(const Vec3& force_N, const Vec3& torque_N_mm) override;
   void maintain() override;
   // samples, forces_written, motor_saturated, faults, reconnects, reconnect_attempts,
-  // sample_to_force_ns_p50, sample_to_force_ns_p99.
+  // firmware_watchdog_us, forces_reenabled, sample_to_force_ns_p50, sample_to_force_ns_p99.
   std::vector<std::pair<std::string, std::uint64_t>> status_counters() const override;
   std::string last_error() const override;
 
   bool connected() const { return connection_.load(std::memory_order_acquire) == kConnected; }
   const DhdModel& model() const { return model_; }
+  char sdk_id() const { return id_; }  // The SDK's ID while open.
   const DhdDeviceCounters& counters() const { return counters_; }
+  // "" before start() and while the firmware's watchdog is set; else why it is not
+  // and what a stalled loop then leaves on the arm. Not real-time.
+  std::string firmware_watchdog_warning() const;
   // From dhdGetPosition's return to the dhdSetForce of the force the tick
   // computed from that sample: the tick's own compute between read and write.
   const LatencyHistogram& sample_to_force() const { return sample_to_force_; }
@@ -92,6 +120,8 @@ class DhdDevice final : public Device {
 
   // Tick side: a failed call; zero force, keep the error, Lost.
   DeviceStatus fault(const char* call);
+  // Before forces are enabled: sets the firmware's watchdog; "" or a warning.
+  std::string set_firmware_watchdog();
   void set_error(std::string error);
 
   std::shared_ptr<DhdLibrary> library_;
@@ -113,10 +143,15 @@ class DhdDevice final : public Device {
   DeviceSample last_sample_;
   double sample_read_s_ = 0.0;     // Tick: when dhdGetPosition returned the last sample.
   bool sample_unwritten_ = false;  // Tick: no force written since that sample.
+  // The firmware's watchdog as set (s; 0: none) and the last force command's time:
+  // written by start() and maintain() before connection_ turns Connected, then the tick's.
+  double firmware_watchdog_s_ = 0.0;
+  double last_force_command_s_ = 0.0;
   LatencyHistogram sample_to_force_;
   DhdDeviceCounters counters_;
   mutable std::mutex error_mutex_;  // Not real-time: open, maintain() and status lines.
   std::string last_error_;
+  std::string watchdog_warning_;  // Under error_mutex_.
 };
 
 // One device the library sees, for --list-devices.
@@ -127,6 +162,10 @@ struct DhdDeviceRow {
   std::string binding;  // "forcedimension:INDEX"
   DeviceLimits limits;  // With the default mapping, as a binding without options gets.
   std::string error;
+  // Whether the firmware's watchdog can be set (the library has dhdSetWatchdog and the
+  // device answers dhdGetWatchdog); else the warning says why not and what it means.
+  bool firmware_watchdog = false;
+  std::string firmware_watchdog_warning;
 };
 struct DhdListing {
   bool library_found = false;
@@ -148,7 +187,9 @@ inline constexpr const char* kDhdDeviceUsage =
     "      ($HAPTICUT_DHD_LIB, else libdhd.so; docs/devices.md)\n";
 // Parses the options, loads the library and opens the device. Throws
 // std::invalid_argument (bad option) or std::runtime_error (library, device).
-std::unique_ptr<Device> make_dhd_device(const std::string& bare_id, const DeviceOptions& options);
+// `watchdog_s` (> 0): the servo's --watchdog-ms, for the firmware's watchdog.
+std::unique_ptr<DhdDevice> make_dhd_device(const std::string& bare_id, const DeviceOptions& options,
+                                           double watchdog_s = 0.0);
 DhdDeviceOptions dhd_device_options(const std::string& bare_id, const DeviceOptions& options);
 
 }  // namespace hapticut::servo

@@ -57,6 +57,9 @@ std::shared_ptr<DhdLibrary> load_dhd_library(std::string& error) {
             "one)";
     return nullptr;
   }
+  std::string optional;
+  bind_symbol(handle, "dhdSetWatchdog", library->set_watchdog, optional);
+  bind_symbol(handle, "dhdGetWatchdog", library->get_watchdog, optional);
   return library;
 }
 

@@ -4,7 +4,9 @@
 // $HAPTICUT_DHD_LIB, then libdhd.so, libdhd.so.3, libdrd.so, libdrd.so.3
 // through the dynamic loader's own search (LD_LIBRARY_PATH, ld.so.cache; the
 // SDK's lib/release/lin-*-gcc folder is on neither until installed or named).
-// libdrd carries libdhd's calls too.
+// libdrd carries libdhd's calls too. dhdSetWatchdog and dhdGetWatchdog are
+// optional: a library before SDK 3.3.2 lacks them and still loads, the
+// pointers left null (the device then runs without the firmware's watchdog).
 #pragma once
 
 #include <memory>
@@ -35,6 +37,9 @@ struct DhdLibrary {
   dhd::ErrorGetLastStr error_get_last_str = nullptr;
   dhd::Stop stop = nullptr;
   dhd::Close close = nullptr;
+  // Optional (null: the library predates them).
+  dhd::SetWatchdog set_watchdog = nullptr;
+  dhd::GetWatchdog get_watchdog = nullptr;
 
   std::string path;        // The file loaded (as the loader resolved it).
   void* handle = nullptr;  // dlopen's; closed with the last reference.
@@ -51,7 +56,7 @@ struct DhdLibrary {
 // The library, or nullptr and `error` saying what to install or set: no file
 // found (each name tried, with dlerror()), a file that does not load
 // (dlerror(): a wrong architecture, a missing dependency), a symbol missing
-// (an SDK too old or not DHD's).
+// (an SDK too old or not DHD's); an optional one missing is no error.
 std::shared_ptr<DhdLibrary> load_dhd_library(std::string& error);
 
 }  // namespace hapticut::servo

@@ -18,6 +18,8 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 
 DHD_STANDIN = "libhapticut-dhd-standin.so"  # Force Dimension's libdhd ($HAPTICUT_DHD_LIB)
+# The same without dhdSetWatchdog and dhdGetWatchdog: a libdhd before SDK 3.3.2.
+DHD_STANDIN_NO_WATCHDOG = "libhapticut-dhd-standin-no-watchdog.so"
 HD_STANDIN = "libhapticut-hd-standin.so"  # OpenHaptics's libHD ($HAPTICUT_OPENHAPTICS_LIB)
 
 

@@ -14,7 +14,7 @@ from hapticut.scenebuild.geometry import (
     enclosure_surface,
     ray_hit_distances,
 )
-from hapticut.scenebuild.report import accuracy_lines
+from hapticut.scenebuild.report import accuracy_lines, figures_apart
 from hapticut.scenefile import Material
 
 BONE = Material("bone", "rigid")
@@ -123,3 +123,13 @@ def test_a_2_mm_input_is_warned_about_in_the_report():
     scene = build([Region("cow", *cube, BONE)])
     (warning,) = scene.metadata["build_report"]["warnings"]
     assert "is 2 mm across" in warning and "--scale 50 makes it 100 mm" in warning
+
+
+def test_a_deviation_and_the_accuracy_it_is_beyond_are_worded_apart():
+    assert figures_apart(1.2143, 1.2101) == ("1.214", "1.21")
+    assert figures_apart(1.43, 1.21) == ("1.43", "1.21")
+    report = {"accuracy_not_held": [{"region": "Cow", "deviation_mm": 1.2143, "accuracy_mm": 1.21,
+              "lost_mm": 0.0, "strayed_mm": 1.2143, "lost_features": []}]}  # fmt: skip
+    assert (
+        "up to 1.214 mm from its input, beyond accuracy_mm (1.21 mm)" in accuracy_lines(report)[0]
+    )

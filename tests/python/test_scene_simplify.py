@@ -1,5 +1,5 @@
-"""The simplification's search (scenebuild/simplify.py): few tries, each inside its bracket,
-and progress in even steps."""
+"""The simplification's search (scenebuild/simplify.py): few tries, each inside its bracket;
+the surface kept measured in full; progress that never goes back."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 from build_test_support import icosphere
 from hapticut.scenebuild import simplify
 from hapticut.scenebuild.geometry import Surface
-from hapticut.scenebuild.simplify import next_face_count, search_progress, simplify_surface
+from hapticut.scenebuild.simplify import next_face_count, simplify_surface
 
 
 def search(deviation_at, original: int, tolerance: float) -> tuple[int, list[int]]:
@@ -56,15 +56,6 @@ def test_zero_deviations_halve_the_bracket_in_log_face_count():
     assert target == pytest.approx(math.sqrt(100 * 10_000), rel=0.01)
 
 
-def test_progress_moves_in_even_steps_then_creeps_below_the_end():
-    steps = [search_progress(n) for n in range(1, simplify.MAX_ATTEMPTS + 1)]
-    assert steps == sorted(steps) and steps[-1] < 1.0
-    usual = steps[: simplify.EXPECTED_ATTEMPTS - 1]
-    assert usual == pytest.approx(
-        [n / simplify.EXPECTED_ATTEMPTS for n in range(1, len(usual) + 1)]
-    )
-
-
 def test_a_flat_surface_keeps_its_few_faces_and_tells_its_progress():
     vertices, faces = icosphere(30.0, 3)  # 1280 faces
     seen = []
@@ -73,3 +64,42 @@ def test_a_flat_surface_keeps_its_few_faces_and_tells_its_progress():
     )
     assert before == 1280 and len(simple.faces) < before and deviation <= 0.3
     assert seen == sorted(seen) and 0 < len(seen) <= simplify.MAX_ATTEMPTS
+
+
+def measures(monkeypatch, full_factor: float = 1.0):
+    """Each Hausdorff measure the search makes as (faces measured, samples: None for the full
+    count, deviation reported); full measures reported full_factor times what they found."""
+    made = []
+    real = simplify.hausdorff
+
+    def recording(meshes, source, candidate, samples=None, between=None):
+        deviation = real(meshes, source, candidate, samples, between)
+        if samples is None:
+            deviation *= full_factor
+        made.append((meshes.mesh(candidate).face_number(), samples, deviation))
+        return deviation
+
+    monkeypatch.setattr(simplify, "hausdorff", recording)
+    return made
+
+
+def test_the_surface_kept_is_measured_in_full_and_the_tries_screened(monkeypatch):
+    vertices, faces = icosphere(30.0, 4)  # 5120 faces
+    made = measures(monkeypatch)
+    simple, _, deviation = simplify_surface(Surface(vertices, faces), 0.5)
+    full = [m for m in made if m[1] is None]
+    assert full and full[-1][0] == len(simple.faces) and full[-1][2] == deviation <= 0.5
+    assert len(full) < len(made)  # The tries were screened, not measured in full.
+
+
+def test_a_candidate_that_misses_in_full_is_a_miss(monkeypatch):
+    """The screen says it fits; the full measure says it does not: a surface with more faces,
+    measured in full within the tolerance, is kept."""
+    vertices, faces = icosphere(30.0, 4)
+    made = measures(monkeypatch, full_factor=1.4)
+    simple, _, deviation = simplify_surface(Surface(vertices, faces), 0.5)
+    full = [m for m in made if m[1] is None]
+    assert any(d > 0.5 for _, _, d in full)
+    missed = min(f for f, _, d in full if d > 0.5)
+    assert len(simple.faces) > missed
+    assert 0 < deviation <= 0.5 and full[-1][:3:2] == (len(simple.faces), deviation)

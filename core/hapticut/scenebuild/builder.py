@@ -55,7 +55,7 @@ from .repair import (
     self_intersecting_faces,
     surface_deviation,
 )
-from .report import BuildReport, SurfaceReport
+from .report import BuildReport, SurfaceReport, figures_apart
 from .simplify import simplify_surface
 
 __all__ = [
@@ -787,9 +787,8 @@ def _tetrahedralize(
         threads=settings.threads,
     )
 
-    def poll(elapsed_s: float) -> None:
-        # fTetWild reports nothing while it runs: creep towards the end of its share.
-        steps(1 - 1 / (1 + elapsed_s / 10), f"tetrahedralizing (fTetWild, {elapsed_s:.0f} s)")
+    def poll(elapsed_s: float, fraction: float, stage: str) -> None:
+        steps(fraction, f"tetrahedralizing (fTetWild, {stage}, {elapsed_s:.0f} s)")
 
     try:
         vertices, tets = tetwild.tetrahedralize(
@@ -1048,10 +1047,11 @@ def _keep_best(
         worst = max(best.misses, key=lambda miss: miss.deviation_mm)
         attempts = len(meshings)
         meshings_text = f"{attempts} meshing" + ("s" if attempts > 1 else "")
+        deviation, accuracy = figures_apart(worst.deviation_mm, lengths.accuracy_mm)
         raise BuildError(
             worst.region,
-            f"its meshed surface lies up to {worst.deviation_mm:.3g} mm from the input surface, "
-            f"beyond accuracy_mm ({lengths.accuracy_mm:.3g} mm), after {meshings_text} down to "
+            f"its meshed surface lies up to {deviation} mm from the input surface, "
+            f"beyond accuracy_mm ({accuracy} mm), after {meshings_text} down to "
             f"a {lengths.envelope_mm:.3g} mm envelope{_lost_text(worst)}; raise accuracy_mm "
             "or report this input",
         )

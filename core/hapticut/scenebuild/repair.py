@@ -254,8 +254,9 @@ def repair_surface(
     return Surface(out_vertices, out_faces), repairs
 
 
-def hausdorff(meshes, first: int, second: int, samples: int | None = None) -> float:
-    """Symmetric Hausdorff distance between two meshes of a MeshSet (vertex + face samples)."""
+def hausdorff(meshes, first: int, second: int, samples: int | None = None, between=None) -> float:
+    """Symmetric Hausdorff distance between two meshes of a MeshSet (vertex + face samples);
+    between() is called after the first of its two ways (each way costs seconds on a scan)."""
     pymeshlab = _meshlab()
     largest = max(meshes.mesh(first).face_number(), meshes.mesh(second).face_number())
     samples = samples or max(20_000, 4 * largest)
@@ -264,6 +265,8 @@ def hausdorff(meshes, first: int, second: int, samples: int | None = None) -> fl
         sampledmesh=first, targetmesh=second, samplevert=True, sampleface=True,
         samplenum=samples, maxdist=far,
     )  # fmt: skip
+    if between is not None:
+        between()
     back = meshes.get_hausdorff_distance(
         sampledmesh=second, targetmesh=first, samplevert=True, sampleface=True,
         samplenum=samples, maxdist=far,

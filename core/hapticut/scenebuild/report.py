@@ -84,15 +84,27 @@ class BuildReport:
         return _plain(out)
 
 
+def figures_apart(deviation_mm: float, accuracy_mm: float) -> tuple[str, str]:
+    """A deviation and the accuracy it is beyond, with the digits that tell them apart
+    (1.214 beyond 1.21, not 1.21 beyond 1.21); the add-on's panel words them the same way
+    (addon/authoring/report_text.py)."""
+    for digits in (3, 4, 5, 6):
+        shown = f"{deviation_mm:.{digits}g}", f"{accuracy_mm:.{digits}g}"
+        if shown[0] != shown[1]:
+            break
+    return shown
+
+
 def accuracy_lines(report: dict) -> list[str]:
     """Where a build did not hold its accuracy, as lines for people (``hapticut mesh`` and
     ``hapticut info``; the add-on's panel has its own short copy in
     addon/authoring/report_text.py)."""
     lines = []
     for miss in report.get("accuracy_not_held") or []:
+        deviation, accuracy = figures_apart(miss["deviation_mm"], miss["accuracy_mm"])
         lines.append(
-            f"accuracy not held: region {miss['region']!r} lies up to {miss['deviation_mm']:.3g} "
-            f"mm from its input, beyond accuracy_mm ({miss['accuracy_mm']:.3g} mm)"
+            f"accuracy not held: region {miss['region']!r} lies up to {deviation} mm from its "
+            f"input, beyond accuracy_mm ({accuracy} mm)"
         )
         if miss["lost_mm"] >= miss["strayed_mm"]:
             for feature in miss["lost_features"]:

@@ -1,10 +1,17 @@
 """Simplifying a surface to the fewest faces within a tolerance (pymeshlab's quadric edge
-collapse, each candidate measured against the whole input with its Hausdorff distance).
+collapse; the surface kept is measured against the whole input with its Hausdorff distance).
 
-Each try costs about the same (a decimation of the input and two Hausdorff distances over
-it), so the search makes few: it predicts the face count from the tries so far (a
-decimated smooth surface's deviation falls about as its face count grows) and falls back on
-halving the bracket where the prediction does not help.
+A try is a decimation and a measurement. Decimating the whole input and measuring a candidate
+against all of it cost about the same, and both grow with the input, so on a scan the search
+spends them once each:
+- the first try decimates the input; a try below a try that fitted is decimated from that one
+  (a few collapses more, not the whole input again);
+- the tries steer the search with a screening measure (every input vertex, and as many face
+  samples); the candidate the search ends on is then measured as every kept surface is
+  (hausdorff's own sample count), and one that misses there is a miss like any other.
+The face count to try is predicted from the tries so far (a decimated smooth surface's
+deviation falls about as its face count grows), halving the bracket where the prediction does
+not help.
 """
 
 from __future__ import annotations
@@ -22,7 +29,7 @@ from .repair import _meshlab, hausdorff
 FACE_COUNT_PRECISION = 0.1
 # At most this many tries (decimations measured); the one known to fit best is kept.
 MAX_ATTEMPTS = 8
-# Tries a search usually makes: each is this share of the progress, until the last ones.
+# Tries a search usually makes (the progress expects them).
 EXPECTED_ATTEMPTS = 4
 # The first try keeps this share of the faces (scans in mm at the default accuracy keep
 # from a twentieth to a half).
@@ -32,6 +39,13 @@ FIRST_SHARE = 0.25
 # misses); each try lies at least this share of the bracket (in log face count) inside it.
 AIM_ABOVE = 0.5 * FACE_COUNT_PRECISION
 BRACKET_MARGIN = 0.1
+# The margin counts at most this span of the bracket (a factor of 4 in face count): while
+# nothing has missed, the bracket reaches down to min_faces, and a tenth of that would hold
+# a prediction far from where it points.
+MARGIN_SPAN = math.log(4.0)
+# The screening measure samples at least this many points each way (and every vertex of the
+# input): few enough to cost a small part of a full measure on a scan.
+SCREEN_SAMPLES = 20_000
 
 
 def simplify_surface(
@@ -42,10 +56,10 @@ def simplify_surface(
 ) -> tuple[Surface, int, float]:
     """The surface with as few faces as keep it within tolerance_mm of itself (Hausdorff).
 
-    Quadric edge collapse (topology kept) to a face count searched for (module doc), each
-    candidate measured both ways with pymeshlab's Hausdorff distance. Returns (surface,
-    faces before, the measured deviation in mm). on_attempt(fraction of the search done)
-    after each try (a cancel raises from it).
+    Quadric edge collapse (topology kept) to a face count searched for (module doc); the
+    surface returned is measured both ways with pymeshlab's Hausdorff distance at its full
+    sample count. Returns (surface, faces before, that deviation in mm). on_attempt(fraction
+    of the work done) after each try and measure (a cancel raises from it).
     """
     pymeshlab = _meshlab()
     original = len(surface.faces)
@@ -54,9 +68,19 @@ def simplify_surface(
     meshes = pymeshlab.MeshSet()
     meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=surface.vertices, face_matrix=surface.faces))
     source = meshes.current_mesh_id()
+    screen_samples = max(SCREEN_SAMPLES, len(surface.vertices))
+    work = _Work(original, screen_samples, on_attempt)
+    # Candidates decimated from the input that fitted, kept to decimate further from:
+    # (face count, mesh id).
+    bases: list[tuple[int, int]] = []
 
-    def attempt(target: int):
-        meshes.set_current_mesh(source)
+    def decimate(target: int) -> tuple[int, int]:
+        """A candidate of about ``target`` faces: (its mesh id, the faces it started from)."""
+        start, start_faces = source, original
+        for faces, mesh_id in bases:
+            if target < faces < start_faces:
+                start, start_faces = mesh_id, faces
+        meshes.set_current_mesh(start)
         meshes.add_mesh(meshes.current_mesh(), "candidate")
         meshes.meshing_decimation_quadric_edge_collapse(
             targetfacenum=int(target),
@@ -66,30 +90,53 @@ def simplify_surface(
             planarquadric=True,
             qualitythr=0.3,
         )
-        candidate = meshes.current_mesh_id()
-        deviation = hausdorff(meshes, source, candidate)
-        mesh = meshes.current_mesh()
-        result = (mesh.vertex_matrix().copy(), mesh.face_matrix().copy(), deviation)
-        meshes.delete_current_mesh()
-        return result
+        return meshes.current_mesh_id(), start_faces
 
-    best = (surface.vertices, surface.faces, 0.0)  # The fewest faces known to fit.
+    def arrays(mesh_id: int) -> tuple[np.ndarray, np.ndarray]:
+        mesh = meshes.mesh(mesh_id)
+        return mesh.vertex_matrix().copy(), mesh.face_matrix().copy()
+
+    best = (surface.vertices, surface.faces, 0.0)  # The fewest faces measured in full to fit.
     fits, misses = original, min_faces  # Face counts known to fit and (at most) not to.
+    screened: list[tuple[int, int]] = []  # (faces, mesh id) that fit the screen, not measured.
     tries: list[tuple[int, float]] = []  # (faces, deviation) of each try.
-    for number in range(1, MAX_ATTEMPTS + 1):
-        if fits - misses <= max(4, FACE_COUNT_PRECISION * fits):
+    attempts = 0
+    while True:
+        if attempts < MAX_ATTEMPTS and fits - misses > max(4, FACE_COUNT_PRECISION * fits):
+            attempts += 1
+            target = next_face_count(misses, fits, tries, tolerance_mm)
+            candidate, started_from = decimate(target)
+            faces = meshes.mesh(candidate).face_number()
+            deviation = hausdorff(meshes, source, candidate, screen_samples)
+            tries.append((faces, deviation))
+            work.decimated(started_from, faces)
+            work.screened(attempts)
+            if deviation <= tolerance_mm:
+                fits = faces
+                screened.append((faces, candidate))
+                if started_from == original:
+                    bases.append((faces, candidate))
+                if faces > target:  # Decimation stopped early (topology): no gain below it.
+                    misses = fits
+            else:
+                misses = max(misses, target)
+                meshes.set_current_mesh(candidate)  # Nothing starts from a miss: free it.
+                meshes.delete_current_mesh()
+            continue
+        if not screened:
             break
-        target = next_face_count(misses, fits, tries, tolerance_mm)
-        vertices, faces, deviation = attempt(target)
-        tries.append((len(faces), deviation))
-        if on_attempt is not None:
-            on_attempt(search_progress(number))
+        # The search ends on the fewest faces that fit the screen: measure it in full.
+        faces, candidate = min(screened)
+        screened.remove((faces, candidate))
+        deviation = hausdorff(meshes, source, candidate, between=lambda: work.measured(1 / 3))
+        work.measured(2 / 3)
         if deviation <= tolerance_mm:
-            fits, best = len(faces), (vertices, faces, deviation)
-            if len(faces) > target:  # Decimation stopped early (topology): no gain below it.
-                break
-        else:
-            misses = max(misses, target)
+            best = (*arrays(candidate), deviation)
+            break
+        # A miss after all: search between it and the next that fitted the screen.
+        tries.append((faces, deviation))
+        misses = max(misses, faces)
+        fits = min((f for f, _ in screened), default=original)
     vertices, faces, deviation = best
     faces = faces if signed_volume(vertices, faces) >= 0 else faces[:, ::-1]
     return (
@@ -97,6 +144,56 @@ def simplify_surface(
         original,
         deviation,
     )
+
+
+class _Work:
+    """The search's progress as a share of its expected work, in decimations of the whole
+    input: a decimation costs its share of the input's faces collapsed, a full measure about
+    one decimation of the whole input and a screening measure its share of the full
+    measure's samples (as they time on scans). Never goes back; below 1 until the caller's
+    step ends."""
+
+    # A try decimated from an earlier one collapses about this share of the input.
+    CHAINED_TRY = 0.2
+
+    def __init__(self, original: int, screen_samples: int, report) -> None:
+        self.original = original
+        self.full_measure = 1.0
+        self.screen = min(screen_samples / (4 * original), 1.0)
+        self.report = report
+        self.done = 0.0
+        self.attempts = 0  # Tries made.
+        self.measuring = 0.0  # Full measures made (a fraction while one runs).
+        self.reached = 0.0
+
+    def decimated(self, start_faces: int, faces: int) -> None:
+        self.done += max(start_faces - faces, 0) / self.original
+
+    def screened(self, attempts: int) -> None:
+        self.done += self.screen
+        self.attempts = attempts
+        self._tell()
+
+    def measured(self, share: float) -> None:
+        """``share`` of a full measure done (its first way, from the input's samples to the
+        candidate's few faces, is the smaller share)."""
+        self.measuring += share
+        self.done += share * self.full_measure
+        self._tell()
+
+    def _tell(self) -> None:
+        if self.report is None:
+            return
+        in_measure = self.measuring % 1.0
+        if in_measure:
+            left = (1.0 - in_measure) * self.full_measure
+        elif self.measuring:  # A measure ended: the search ends unless it missed.
+            left = self.CHAINED_TRY
+        else:
+            tries_left = max(EXPECTED_ATTEMPTS - self.attempts, 1)  # Past the usual: creep.
+            left = tries_left * (self.CHAINED_TRY + self.screen) + self.full_measure
+        self.reached = max(self.reached, self.done / (self.done + left))
+        self.report(self.reached)
 
 
 def next_face_count(
@@ -109,10 +206,11 @@ def next_face_count(
     aimed AIM_ABOVE above; the bracket's middle (in log face count) when the tries predict
     nothing (zero deviations, or no fall with more faces). Each try lies at least
     FACE_COUNT_PRECISION inside either end of the bracket (a try there that goes as predicted
-    ends the search) and BRACKET_MARGIN of it (so that a wrong prediction still narrows it).
+    ends the search) and BRACKET_MARGIN of it, up to MARGIN_SPAN (so that a wrong prediction
+    still narrows it).
     """
     low, high = math.log(max(misses, 1)), math.log(fits)
-    step = max(BRACKET_MARGIN * (high - low), math.log1p(FACE_COUNT_PRECISION))
+    step = max(BRACKET_MARGIN * min(high - low, MARGIN_SPAN), math.log1p(FACE_COUNT_PRECISION))
     lowest, highest = low + step, high - step
     if lowest > highest:  # A bracket within twice the precision: its middle ends the search.
         lowest = highest = (low + high) / 2
@@ -139,12 +237,3 @@ def next_face_count(
 
 def _inside(target: float, misses: int, fits: int) -> int:
     return int(min(max(round(target), misses + 1), fits - 1))
-
-
-def search_progress(tries_made: int) -> float:
-    """The share of the search done after this many tries: even steps for the usual number
-    of tries (each costs about the same), then creeping towards the end."""
-    if tries_made <= EXPECTED_ATTEMPTS - 1:
-        return tries_made / EXPECTED_ATTEMPTS
-    beyond = tries_made - (EXPECTED_ATTEMPTS - 1)
-    return 1 - (1 / EXPECTED_ATTEMPTS) / (1 + beyond)

@@ -16,6 +16,7 @@ import contextlib
 import importlib.metadata
 import importlib.util
 import json
+import math
 import os
 import subprocess
 import sys
@@ -94,12 +95,111 @@ def _empty_sizing():
     return (np.zeros((0, 3)), np.zeros((0, 4), np.int32), np.zeros(0))
 
 
-def _run_in_process(vertices, faces, params: TetWildParams, sizing, scratch: str | None = None):
+class RunProgress:
+    """How far a fTetWild run is, read from the lines it prints as it goes: its stages, each
+    optimization pass's sub-steps with the worst tet's energy, the coarsening's rounds.
+
+    ``fraction`` is the share of the run done. Each stage starts at a mark (STAGES: the
+    shares the stages take of default builds of scans, which differ from scan to scan) and
+    moves towards the next as it prints (a line is work done; how many a stage prints is not
+    known, so the share approaches the next mark without reaching it) or, while optimizing,
+    as the worst energy falls towards the stop energy on a log scale, whichever is further.
+    Between lines it creeps a little, so that the bar moves through a quiet stage. It never
+    goes back, and stays below 1 until the run ends.
+    """
+
+    # (the line that starts the stage, its name, the share of the run done when it starts,
+    # the lines that take the stage about two thirds of the way to the next mark)
+    STAGES = (
+        ("", "preparing the surfaces", 0.0, 20),
+        ("Tetrahedralization performed.", "inserting the surfaces", 0.04, 10),
+        ("initializing...", "optimizing", 0.12, 200),
+        ("//////////////// postprocessing", "finishing", 0.65, 300),
+        ("Tetrahedralization completed.", "filtering", 0.97, 10),
+    )
+    # Within a stage at most this share of the way to the next mark is given.
+    WITHIN = 0.95
+    # Between lines the fraction creeps towards the stage's limit: a quarter of the way in
+    # this time, never more than half (a line read then moves it on).
+    CREEP_S = 5.0
+
+    def __init__(self, stop_energy: float, max_passes: int) -> None:
+        self.stop_energy = stop_energy
+        self.max_passes = max(max_passes, 1)
+        self.number = 0  # Which of STAGES runs.
+        self.lines = 0  # Lines read in this stage.
+        self.passes = 0
+        self.first_energy: float | None = None
+        self.energy_share = 0.0
+        self.fraction = 0.0  # At the last line read.
+        self.shown = 0.0  # The most given (at).
+        self._partial = ""
+
+    @property
+    def stage(self) -> str:
+        return self.STAGES[self.number][1]
+
+    def feed(self, text: str) -> None:
+        """Read what the run printed since the last call (lines may arrive in pieces)."""
+        lines = (self._partial + text).split("\n")
+        self._partial = lines.pop()
+        for line in lines:
+            self._read(line.strip())
+        start, end = self._span()
+        scale = self.STAGES[self.number][3]
+        share = max(1 - math.exp(-self.lines / scale), self.energy_share)
+        self.fraction = max(self.fraction, start + (end - start) * self.WITHIN * min(share, 1.0))
+
+    def _span(self) -> tuple[float, float]:
+        start = self.STAGES[self.number][2]
+        end = self.STAGES[self.number + 1][2] if self.number + 1 < len(self.STAGES) else 1.0
+        return start, end
+
+    def _read(self, line: str) -> None:
+        for number in range(self.number + 1, len(self.STAGES)):
+            if line.startswith(self.STAGES[number][0]):
+                self.number, self.lines, self.energy_share = number, 0, 0.0
+                self.fraction = max(self.fraction, self.STAGES[number][2])
+                return
+        self.lines += 1
+        if self.stage != "optimizing":
+            return
+        if line.startswith("//////////////// pass "):
+            self.passes += 1
+            self.energy_share = max(self.energy_share, self.passes / self.max_passes)
+        elif line.startswith("max_energy = "):
+            try:
+                energy = float(line.split("=", 1)[1])
+            except ValueError:
+                return
+            if self.first_energy is None:
+                self.first_energy = energy
+            first = self.first_energy
+            if first > self.stop_energy and energy > 0:
+                fallen = math.log(first / max(energy, self.stop_energy))
+                self.energy_share = max(
+                    self.energy_share, fallen / math.log(first / self.stop_energy)
+                )
+
+    def at(self, since_line_s: float) -> float:
+        """The fraction done ``since_line_s`` after the last line read (never less than the
+        last one given)."""
+        start, end = self._span()
+        limit = start + (end - start) * self.WITHIN
+        creep = 0.5 * since_line_s / (since_line_s + self.CREEP_S)
+        self.shown = max(self.shown, self.fraction + max(limit - self.fraction, 0) * creep)
+        return self.shown
+
+
+def _run_in_process(
+    vertices, faces, params: TetWildParams, sizing, scratch: str | None = None, quiet=True
+):
     """fTetWild in this process, inside a scratch directory (it writes a file into cwd):
-    ``scratch``, or a temporary directory made and removed here."""
+    ``scratch``, or a temporary directory made and removed here. Not quiet, it prints its
+    stages on stdout (what RunProgress reads)."""
     if scratch is None:
         with tempfile.TemporaryDirectory(prefix="hapticut-tetwild-") as scratch:
-            return _run_in_process(vertices, faces, params, sizing, scratch)
+            return _run_in_process(vertices, faces, params, sizing, scratch, quiet)
     wrapper = load_wrapper()
     bg_vertices, bg_tets, bg_values = sizing if sizing is not None else _empty_sizing()
     if params.envelope_relative is not None:
@@ -122,8 +222,8 @@ def _run_in_process(vertices, faces, params: TetWildParams, sizing, scratch: str
             params.coarsen,
             int(params.threads),
             int(params.max_opt_iterations),
-            6,  # Log level: minimal.
-            True,  # Quiet.
+            6,  # Log level: minimal (its stages still print unless quiet).
+            bool(quiet),
             False,  # fTetWild's own tet ordering; the scene reader orients tets.
             False,  # Filtering on: only the inside of the outer surface (the enclosure).
             np.ascontiguousarray(bg_vertices, dtype=np.float64),
@@ -148,8 +248,9 @@ def tetrahedralize(
     vertices: (n, 3) float, faces: (f, 3) int triangles; sizing: (background vertices (b, 3),
     background tets (c, 4), target edge length per background vertex (b,)) or None.
     Returns (vertices (n', 3) float64, tets (m, 4) int32).
-    With ``poll``, the run happens in a child process and poll(elapsed_s) is called about every
-    50 ms; an exception it raises (a cancel) kills the child and propagates.
+    With ``poll``, the run happens in a child process and poll(elapsed_s, fraction, stage) is
+    called about every 50 ms, with the share of the run done and the stage it is in
+    (RunProgress); an exception it raises (a cancel) kills the child and propagates.
     """
     vertices = np.ascontiguousarray(vertices, dtype=np.float64)
     faces = np.ascontiguousarray(faces, dtype=np.uint32)
@@ -174,7 +275,8 @@ def _run_in_child(vertices, faces, params, sizing, poll):
             params=np.array(json.dumps(asdict(params))),
         )
         start = time.perf_counter()
-        with open(log, "wb") as log_file:
+        progress = RunProgress(params.stop_energy, params.max_opt_iterations)
+        with open(log, "wb") as log_file, open(log, "rb") as printed:
             child = subprocess.Popen(
                 [sys.executable, os.path.abspath(__file__), request, result],
                 cwd=scratch,
@@ -182,9 +284,15 @@ def _run_in_child(vertices, faces, params, sizing, poll):
                 stdout=log_file,
                 stderr=subprocess.STDOUT,
             )
+            last_line = start
             try:
                 while child.poll() is None:
-                    poll(time.perf_counter() - start)
+                    now = time.perf_counter()
+                    text = printed.read()
+                    if text:
+                        progress.feed(text.decode("utf-8", "replace"))
+                        last_line = now
+                    poll(now - start, progress.at(now - last_line), progress.stage)
                     with contextlib.suppress(subprocess.TimeoutExpired):
                         child.wait(_POLL_INTERVAL_S)
             finally:
@@ -218,7 +326,7 @@ def _child_main(request: str, result: str) -> int:
         sizing = (data["bg_vertices"], data["bg_tets"], data["bg_values"])
         # The parent made this directory the child's cwd and removes it, even after a kill.
         out_vertices, out_tets = _run_in_process(
-            data["vertices"], data["faces"], params, sizing, os.getcwd()
+            data["vertices"], data["faces"], params, sizing, os.getcwd(), quiet=False
         )
     partial = result + ".partial.npz"
     np.savez(partial, vertices=out_vertices, tets=out_tets)

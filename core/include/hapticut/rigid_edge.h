@@ -134,9 +134,15 @@ class RigidEdge {
   // Whether x, moved onto `plane`, lies over the face or ridge `feature`
   // names (false for none).
   bool over_feature(const ContactFeature& feature, const Plane& plane, const Vec3& x) const;
+  // Whether what a contact met still walls its sample this tick: rigid
+  // material, or a membrane the sample's own tick has not broken.
+  bool still_a_wall(const ContactFeature& feature, double fraction) const;
   // Starts the contact set with the last tick's contacts that still hold the
   // verified pose (their friction with them), and no others.
   void keep_warm_contacts();
+  // Whether every warm contact the trial rests on still lies over the face or
+  // ridge it came from (else the warm trial is not taken).
+  bool warm_contacts_hold(const EdgePose& trial) const;
   // Starts the contact set empty, with no friction, the motion about the middle.
   void start_cold();
   // The constrained fit from the verified pose with the contacts met so far

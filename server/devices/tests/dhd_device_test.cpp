@@ -2,13 +2,16 @@
 // the real library would be: through $HAPTICUT_DHD_LIB and dlopen.
 #include "devices/dhd_device.h"
 
+#include <dlfcn.h>
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "devices/arm_pose_mapping.h"
@@ -24,12 +27,43 @@ class DhdDeviceTest : public StandinTest<DhdStandinCall> {
   DhdDeviceTest()
       : StandinTest(kDhdLibraryVariable, HAPTICUT_DHD_STANDIN, "hapticut_dhd_standin") {}
 
-  std::unique_ptr<Device> make(const std::string& script, const DeviceOptions& options = {},
-                               const std::string& id = "") {
+  std::unique_ptr<DhdDevice> make(const std::string& script, const DeviceOptions& options = {},
+                                  const std::string& id = "", double watchdog_s = 0.0) {
     configure(script);
-    return make_dhd_device(id, options);
+    return make_dhd_device(id, options, watchdog_s);
+  }
+
+  // The stand-in's model of what the arm applies at `time_s` (SDK frame); whether forces are on.
+  static bool applied_force(double time_s, Vec3& force) {
+    void* handle = dlopen(HAPTICUT_DHD_STANDIN, RTLD_NOW | RTLD_NOLOAD);
+    EXPECT_NE(handle, nullptr);
+    if (handle == nullptr) return false;
+    using Applied = int (*)(double, double*);
+    const auto applied =
+        reinterpret_cast<Applied>(dlsym(handle, "hapticut_dhd_standin_applied_force"));
+    double out[3] = {0, 0, 0};
+    const bool on = applied != nullptr && applied(time_s, out) != 0;
+    dlclose(handle);
+    force = {out[0], out[1], out[2]};
+    return on;
   }
 };
+
+// The stand-in built without dhdSetWatchdog and dhdGetWatchdog (a libdhd before SDK 3.3.2).
+class DhdDeviceWithoutWatchdogTest : public StandinTest<DhdStandinCall> {
+ protected:
+  DhdDeviceWithoutWatchdogTest()
+      : StandinTest(kDhdLibraryVariable, HAPTICUT_DHD_STANDIN_NO_WATCHDOG, "hapticut_dhd_standin") {
+  }
+};
+
+std::uint64_t counter(const Device& device, const std::string& name) {
+  for (const auto& [key, value] : device.status_counters()) {
+    if (key == name) return value;
+  }
+  ADD_FAILURE() << "no counter " << name;
+  return 0;
+}
 
 // The servo's loop for `ticks` ticks at 1 kHz, as tick_blade calls a device:
 // read, then write `force` (scene frame).
@@ -349,6 +383,146 @@ TEST_F(DhdDeviceTest, TheListingNamesTheLibraryAndEachDeviceWithItsLimits) {
   EXPECT_NE(text.find("forcedimension:0"), std::string::npos) << text;
   // Each device was closed again: a servo may open it next.
   EXPECT_GT(first("dhdClose", first("dhdOpenID", first("dhdOpenID") + 1)), 0);
+}
+
+TEST(DhdWatchdogUnits, WholeUnitsOf125UsNeverLongerThanAskedWithinOneTo255) {
+  EXPECT_EQ(dhd_watchdog_units(0.005), 40);
+  EXPECT_EQ(dhd_watchdog_units(0.002), 16);
+  EXPECT_EQ(dhd_watchdog_units(0.00199), 15);
+  EXPECT_EQ(dhd_watchdog_units(0.1), 255);  // The servo's default: the firmware's longest.
+  EXPECT_EQ(dhd_watchdog_units(0.0001), 1);
+  EXPECT_EQ(dhd_watchdog_units(0.031875), 255);
+}
+
+TEST_F(DhdDeviceTest, TheFirmwareWatchdogIsSetToTheServosBeforeForceIsEnabled) {
+  std::unique_ptr<DhdDevice> device = make("fail_position_at=2", {}, "", 0.005);
+  EXPECT_EQ(first("dhdSetWatchdog"), -1) << "set before start(): the listing opens devices too";
+  device->start();
+  const long watchdog = first("dhdSetWatchdog");
+  const long enable = first("dhdEnableForce");
+  ASSERT_GE(watchdog, 0);
+  EXPECT_LT(watchdog, enable);
+  EXPECT_EQ(calls()[static_cast<std::size_t>(watchdog)].a, 40.0);  // 5 ms in 125 us units.
+  EXPECT_EQ(counter(*device, "firmware_watchdog_us"), 5000U);
+  EXPECT_EQ(device->firmware_watchdog_warning(), "");
+
+  // Reopened after a fault: set again before the force is enabled again.
+  DeviceSample sample;
+  ASSERT_EQ(device->read(0.0, sample), DeviceStatus::Fresh);
+  ASSERT_EQ(device->read(0.001, sample), DeviceStatus::Lost);
+  const long lost = static_cast<long>(calls().size());
+  device->maintain();
+  const long reopen = first("dhdOpenID", lost);
+  const long again = first("dhdSetWatchdog", lost);
+  ASSERT_GT(reopen, 0);
+  EXPECT_GT(again, reopen);
+  EXPECT_LT(again, first("dhdEnableForce", lost));
+  EXPECT_EQ(calls()[static_cast<std::size_t>(again)].a, 40.0);
+
+  // The servo's default --watchdog-ms (100) is beyond the firmware's longest: 255 units.
+  std::unique_ptr<DhdDevice> other = make("", {}, "", 0.1);
+  other->start();
+  EXPECT_EQ(calls()[static_cast<std::size_t>(first("dhdSetWatchdog"))].a, 255.0);
+  EXPECT_EQ(counter(*other, "firmware_watchdog_us"), 31875U);
+}
+
+TEST_F(DhdDeviceTest, AStalledLoopLeavesNoForceOnceTheFirmwareWatchdogExpires) {
+  std::unique_ptr<DhdDevice> device = make("", {}, "", 0.02);  // 160 units
+  device->start();
+  loop(*device, 20, {0.0, 0.4, 0.0});  // The scene's y: the SDK's -x.
+  std::vector<DhdStandinCall> all = calls();
+  const DhdStandinCall last = all.back();
+  ASSERT_STREQ(last.name, "dhdSetForce");
+  ASSERT_EQ(last.a, -0.4);
+  Vec3 force;
+  // Within the duration the arm applies the last command; past it, nothing.
+  EXPECT_TRUE(applied_force(last.time_s + 0.0199, force));
+  EXPECT_EQ(force.x, -0.4);
+  EXPECT_FALSE(applied_force(last.time_s + 0.0201, force));
+  EXPECT_EQ(force.x, 0.0);
+  // A tick of the loop above late past the watchdog (a loaded machine) enabled forces again.
+  const std::uint64_t reenabled = counter(*device, "forces_reenabled");
+
+  // The loop stalls: no call for 60 ms. The firmware's watchdog disabled forces.
+  std::this_thread::sleep_for(std::chrono::milliseconds(60));
+  all = calls();
+  ASSERT_STREQ(all.back().name, "firmware_watchdog");
+  EXPECT_EQ(all.back().a, -0.4);  // The force it dropped.
+  std::printf("time to zero force on a stalled loop (firmware watchdog 20 ms): %.3f ms\n",
+              (all.back().time_s - last.time_s) * 1e3);
+  EXPECT_FALSE(applied_force(monotonic_now_s(), force));
+
+  // The loop runs again: forces enabled again at zero, then the tick's force.
+  const long before = static_cast<long>(all.size());
+  DeviceSample sample;
+  ASSERT_EQ(device->read(monotonic_now_s(), sample), DeviceStatus::Fresh);
+  device->write({0.0, 0.1, 0.0}, {0, 0, 0});
+  const long zero = first("dhdSetForce", before);
+  const long enable = first("dhdEnableForce", before);
+  ASSERT_GT(zero, 0);
+  EXPECT_TRUE(is_zero_force(calls()[static_cast<std::size_t>(zero)]));
+  EXPECT_GT(enable, zero);
+  EXPECT_EQ(calls()[static_cast<std::size_t>(enable)].a, 1.0);
+  EXPECT_STREQ(calls().back().name, "dhdSetForce");
+  EXPECT_TRUE(applied_force(calls().back().time_s, force));
+  EXPECT_EQ(force.x, -0.1);
+  EXPECT_EQ(counter(*device, "forces_reenabled"), reenabled + 1);
+}
+
+TEST_F(DhdDeviceTest, ADeviceThatRefusesTheWatchdogIsAWarningNotARefusal) {
+  std::unique_ptr<DhdDevice> device = make("watchdog_error=10", {}, "", 0.005);
+  device->start();
+  EXPECT_GE(first("dhdEnableForce"), 0);
+  const std::string warning = device->firmware_watchdog_warning();
+  EXPECT_NE(warning.find("dhdSetWatchdog failed: not available on this device (stand-in) (DHD "
+                         "error 10)"),
+            std::string::npos)
+      << warning;
+  EXPECT_NE(warning.find("the arm keeps its last force"), std::string::npos) << warning;
+  EXPECT_EQ(counter(*device, "firmware_watchdog_us"), 0U);
+  DeviceSample sample;
+  EXPECT_EQ(device->read(0.0, sample), DeviceStatus::Fresh);
+  device.reset();
+
+  // The listing asks dhdGetWatchdog, which changes nothing on the device.
+  configure("watchdog_error=10");
+  const DhdListing listing = list_dhd_devices();
+  ASSERT_EQ(listing.devices.size(), 1U);
+  EXPECT_FALSE(listing.devices[0].firmware_watchdog);
+  EXPECT_NE(listing.devices[0].firmware_watchdog_warning.find("dhdGetWatchdog failed"),
+            std::string::npos);
+  EXPECT_EQ(first("dhdSetWatchdog"), -1);
+  configure("");
+  const DhdListing supported = list_dhd_devices();
+  EXPECT_TRUE(supported.devices[0].firmware_watchdog);
+  EXPECT_NE(format_dhd_listing(supported).find("firmware watchdog: yes"), std::string::npos);
+}
+
+TEST_F(DhdDeviceWithoutWatchdogTest, ALibraryWithoutTheWatchdogOpensAndSaysWhatThatLeaves) {
+  configure("");
+  std::unique_ptr<DhdDevice> device = make_dhd_device("", {}, 0.005);
+  device->start();
+  EXPECT_GE(first("dhdEnableForce"), 0);
+  const std::string warning = device->firmware_watchdog_warning();
+  EXPECT_NE(warning.find("lacks dhdSetWatchdog (a Force Dimension SDK before 3.3.2"),
+            std::string::npos)
+      << warning;
+  EXPECT_NE(warning.find("the arm keeps its last force until the loop runs again"),
+            std::string::npos)
+      << warning;
+  EXPECT_EQ(counter(*device, "firmware_watchdog_us"), 0U);
+  DeviceSample sample;
+  EXPECT_EQ(device->read(0.0, sample), DeviceStatus::Fresh);
+  device->write({0.1, 0.0, 0.0}, {0, 0, 0});
+  EXPECT_EQ(counter(*device, "forces_reenabled"), 0U);
+  device.reset();
+
+  const DhdListing listing = list_dhd_devices();
+  ASSERT_EQ(listing.devices.size(), 1U);
+  EXPECT_FALSE(listing.devices[0].firmware_watchdog);
+  const std::string text = format_dhd_listing(listing);
+  EXPECT_NE(text.find("firmware watchdog: no firmware watchdog:"), std::string::npos) << text;
+  EXPECT_NE(text.find("lacks dhdSetWatchdog"), std::string::npos) << text;
 }
 
 TEST(ArmPoseMapping, MatrixQuaternionAndBack) {

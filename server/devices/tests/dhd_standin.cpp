@@ -34,7 +34,10 @@ struct Script {
   long fail_force_at = 0;
   int position_result = 0;  // What a dhdGetPosition that succeeds returns (1: DHD_TIMEGUARD).
   int force_result = 0;     // What a dhdSetForce that succeeds returns (2: DHD_MOTOR_SATURATED).
+  int watchdog_error = 0;   // dhdSetWatchdog and dhdGetWatchdog fail with this DHD error.
 };
+
+constexpr double kWatchdogUnit_s = 125e-6;
 
 struct State {
   std::mutex mutex;
@@ -44,6 +47,11 @@ struct State {
   long position_calls = 0;
   long force_calls = 0;
   bool open = false;
+  // The firmware: its watchdog (units; 0: off), whether forces are on, the last command.
+  int watchdog_units = 0;
+  bool forces_enabled = false;
+  double last_force_s = -1.0;
+  double last_force[3] = {0, 0, 0};
 };
 
 State& state() {
@@ -78,6 +86,7 @@ void apply(Script& script, const std::string& text) {
         if (key == "fail_force_at") script.fail_force_at = static_cast<long>(number);
         if (key == "position_result") script.position_result = static_cast<int>(number);
         if (key == "force_result") script.force_result = static_cast<int>(number);
+        if (key == "watchdog_error") script.watchdog_error = static_cast<int>(number);
       });
 }
 
@@ -94,18 +103,36 @@ std::unique_lock<std::mutex> lock_state() {
   return lock;
 }
 
-int record(const char* name, double a, double b, double c, int result) {
+void push(const char* name, double a, double b, double c, int result, double time_s) {
   State& s = state();
-  if (s.calls.size() < kMaxCalls) {
-    DhdStandinCall call{};
-    std::snprintf(call.name, sizeof call.name, "%s", name);
-    call.a = a;
-    call.b = b;
-    call.c = c;
-    call.result = result;
-    call.time_s = hapticut_standin::now_s();
-    s.calls.push_back(call);
-  }
+  if (s.calls.size() >= kMaxCalls) return;
+  DhdStandinCall call{};
+  std::snprintf(call.name, sizeof call.name, "%s", name);
+  call.a = a;
+  call.b = b;
+  call.c = c;
+  call.result = result;
+  call.time_s = time_s;
+  s.calls.push_back(call);
+}
+
+// The firmware's watchdog at `now_s`: no force command for longer than its duration
+// disabled forces at the last command's time plus the duration.
+void expire_watchdog(double now_s) {
+  State& s = state();
+  if (!s.forces_enabled || s.watchdog_units == 0 || s.last_force_s < 0.0) return;
+  const double expired_s = s.last_force_s + s.watchdog_units * kWatchdogUnit_s;
+  if (now_s <= expired_s) return;
+  s.forces_enabled = false;
+  push("firmware_watchdog", s.last_force[0], s.last_force[1], s.last_force[2], 0, expired_s);
+}
+
+double last_call_s = 0.0;  // Under the lock: the time of the call record() last stamped.
+
+int record(const char* name, double a, double b, double c, int result) {
+  last_call_s = hapticut_standin::now_s();
+  expire_watchdog(last_call_s);
+  push(name, a, b, c, result, last_call_s);
   return result;
 }
 
@@ -134,15 +161,46 @@ __attribute__((visibility("default"))) void hapticut_dhd_standin_configure(const
   s.position_calls = 0;
   s.force_calls = 0;
   s.open = false;
+  s.watchdog_units = 0;
+  s.forces_enabled = false;
+  s.last_force_s = -1.0;
 }
 
 __attribute__((visibility("default"))) int hapticut_dhd_standin_calls(DhdStandinCall* out,
                                                                       int capacity) {
   auto lock = lock_state();
+  expire_watchdog(hapticut_standin::now_s());
   const std::vector<DhdStandinCall>& calls = state().calls;
   const int count = static_cast<int>(calls.size());
   for (int i = 0; i < std::min(count, capacity); ++i) out[i] = calls[static_cast<std::size_t>(i)];
   return count;
+}
+
+__attribute__((visibility("default"))) int hapticut_dhd_standin_applied_force(double time_s,
+                                                                              double force[3]) {
+  auto lock = lock_state();
+  expire_watchdog(hapticut_standin::now_s());
+  bool enabled = false;
+  double watchdog_s = 0.0;
+  double last_s = -1.0;
+  double last[3] = {0, 0, 0};
+  for (const DhdStandinCall& call : state().calls) {
+    if (call.time_s > time_s) break;
+    const std::string name = call.name;
+    if (call.result < 0) continue;
+    if (name == "dhdEnableForce") enabled = call.a != 0.0;
+    if (name == "dhdStop" || name == "dhdClose" || name == "firmware_watchdog") enabled = false;
+    if (name == "dhdSetWatchdog") watchdog_s = call.a * kWatchdogUnit_s;
+    if (name == "dhdSetForce") {
+      last_s = call.time_s;
+      last[0] = call.a;
+      last[1] = call.b;
+      last[2] = call.c;
+    }
+  }
+  const bool on = enabled && last_s >= 0.0 && (watchdog_s == 0.0 || time_s - last_s <= watchdog_s);
+  for (int i = 0; i < 3; ++i) force[i] = on ? last[i] : 0.0;
+  return on ? 1 : 0;
 }
 
 __attribute__((visibility("default"))) int dhdGetDeviceCount() {
@@ -178,8 +236,35 @@ __attribute__((visibility("default"))) double dhdGetMaxForce(char id) {
 
 __attribute__((visibility("default"))) int dhdEnableForce(unsigned char value, char id) {
   auto lock = lock_state();
-  return record("dhdEnableForce", value, id, 0, 0);
+  record("dhdEnableForce", value, id, 0, 0);
+  state().forces_enabled = value != 0;
+  return 0;
 }
+
+#ifndef HAPTICUT_DHD_STANDIN_NO_WATCHDOG
+__attribute__((visibility("default"))) int dhdSetWatchdog(unsigned char units, char id) {
+  auto lock = lock_state();
+  State& s = state();
+  if (s.script.watchdog_error != 0) {
+    set_error(s.script.watchdog_error, "not available on this device (stand-in)");
+    return record("dhdSetWatchdog", units, id, 0, -1);
+  }
+  record("dhdSetWatchdog", units, id, 0, 0);
+  s.watchdog_units = units;
+  return 0;
+}
+
+__attribute__((visibility("default"))) int dhdGetWatchdog(unsigned char* units, char id) {
+  auto lock = lock_state();
+  State& s = state();
+  if (s.script.watchdog_error != 0) {
+    set_error(s.script.watchdog_error, "not available on this device (stand-in)");
+    return record("dhdGetWatchdog", 0, id, 0, -1);
+  }
+  *units = static_cast<unsigned char>(s.watchdog_units);
+  return record("dhdGetWatchdog", *units, id, 0, 0);
+}
+#endif
 
 __attribute__((visibility("default"))) int dhdGetPosition(double* x, double* y, double* z,
                                                           char /*id*/) {
@@ -241,7 +326,12 @@ __attribute__((visibility("default"))) int dhdSetForce(double fx, double fy, dou
     set_error(kErrorCom, "communication error (stand-in)");
     return record("dhdSetForce", fx, fy, fz, -1);
   }
-  return record("dhdSetForce", fx, fy, fz, s.script.force_result);
+  record("dhdSetForce", fx, fy, fz, s.script.force_result);
+  s.last_force_s = last_call_s;
+  s.last_force[0] = fx;
+  s.last_force[1] = fy;
+  s.last_force[2] = fz;
+  return s.script.force_result;
 }
 
 __attribute__((visibility("default"))) int dhdErrorGetLast() { return last_error; }
@@ -250,13 +340,16 @@ __attribute__((visibility("default"))) const char* dhdErrorGetLastStr() { return
 
 __attribute__((visibility("default"))) int dhdStop(char id) {
   auto lock = lock_state();
-  return record("dhdStop", id, 0, 0, 0);
+  record("dhdStop", id, 0, 0, 0);
+  state().forces_enabled = false;
+  return 0;
 }
 
 __attribute__((visibility("default"))) int dhdClose(char id) {
   auto lock = lock_state();
   state().open = false;
   record("dhdClose", id, 0, 0, 0);
+  state().forces_enabled = false;
   write_log();
   return 0;
 }
