@@ -24,13 +24,6 @@ constexpr double kK = 0.1;  // N/mm, the paper's.
 
 using testing::axis;
 
-Material bone(double static_friction, double dynamic_friction) {
-  Material m = testing::rigid_material();
-  m.static_friction = static_friction;
-  m.dynamic_friction = dynamic_friction;
-  return m;
-}
-
 template <class InBone>
 std::shared_ptr<const Space> space_of(const MeshData& mesh, InBone in_bone, const Material& rigid) {
   return testing::labelled_space(mesh, in_bone,
@@ -47,7 +40,7 @@ TEST(RigidBladeFriction, PressedPastARoundBonesCentreItStaysWhereItLanded) {
               "end z mm");
   for (const double mu : {0.0, 0.4}) {
     for (Material& m : scene.materials) {
-      if (m.model == MaterialModel::Rigid) m = bone(mu, 0.75 * mu);
+      if (m.model == MaterialModel::Rigid) m = testing::rigid_material(mu, 0.75 * mu);
     }
     const auto space = Space::from_scene(scene);
     radius = 0.0;
@@ -90,7 +83,7 @@ TEST(RigidBladeFriction, PulledAlongAFlatBoneItSticksThenSlidesOnce) {
   for (const double mu : {0.0, 0.4}) {
     const double mu_dynamic = 0.75 * mu;
     const auto space = space_of(
-        mesh, [](const Vec3& c) { return c.z < 0.0; }, bone(mu, mu_dynamic));
+        mesh, [](const Vec3& c) { return c.z < 0.0; }, testing::rigid_material(mu, mu_dynamic));
     for (BladeOrientation orientation : {BladeOrientation::Free, BladeOrientation::Locked}) {
       BladeSpec spec{"knife", {-50, 0, 0}, {50, 0, 0}, 50};
       spec.orientation = orientation;
@@ -141,7 +134,7 @@ TEST(RigidBladeFriction, LandedOnOneEndItTurnsDownOntoTheBoneAboutThatEnd) {
               "Fz N");
   for (const double mu : {0.0, 0.4}) {
     const auto space = space_of(
-        mesh, [](const Vec3& c) { return c.z < 0.0; }, bone(mu, 0.75 * mu));
+        mesh, [](const Vec3& c) { return c.z < 0.0; }, testing::rigid_material(mu, 0.75 * mu));
     BladeSpec spec{"knife", {-50, 0, 0}, {50, 0, 0}, 50};
     Blade blade(*space, spec);
     blade.reset({{0, 0, 6}, tilted});

@@ -21,13 +21,6 @@ constexpr double kK = 0.1;  // N/mm, the paper's.
 // The box: 80 mm along x, its side at y = 10, its top at z = 0.
 constexpr double kSideY = 10.0;
 
-Material bone(double static_friction, double dynamic_friction) {
-  Material m = testing::rigid_material();
-  m.static_friction = static_friction;
-  m.dynamic_friction = dynamic_friction;
-  return m;
-}
-
 TEST(RigidBladeRim, SlidAlongARimItNeitherSticksNorSlipsWithoutFrictionAndReleasesOnceWithIt) {
   using testing::axis;
   const MeshData mesh = grid_mesh(axis(-60, 60, 4), axis(-30, 30, 2), axis(-14, 6, 2));
@@ -39,9 +32,10 @@ TEST(RigidBladeRim, SlidAlongARimItNeitherSticksNorSlipsWithoutFrictionAndReleas
               "points", "|Fx| max N", "max dF N", "releases", "unres", "in bone");
   for (const double mu : {0.0, 0.4}) {
     const double mu_dynamic = 0.75 * mu;
-    const auto space = testing::labelled_space(
-        mesh, in_box,
-        {testing::free_material(), testing::drag_material(1.0), bone(mu, mu_dynamic)});
+    const auto space =
+        testing::labelled_space(mesh, in_box,
+                                {testing::free_material(), testing::drag_material(1.0),
+                                 testing::rigid_material(mu, mu_dynamic)});
     for (const double angle_deg : {0.0, 30.0, 60.0}) {
       const double a = angle_deg * std::numbers::pi / 180.0;
       // Across the side: along y turned about z by the angle, its middle 2 mm

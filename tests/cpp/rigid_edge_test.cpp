@@ -15,13 +15,6 @@ namespace {
 
 constexpr double kLength = 20.0;
 
-Material bone(double static_friction, double dynamic_friction) {
-  Material m = testing::rigid_material();
-  m.static_friction = static_friction;
-  m.dynamic_friction = dynamic_friction;
-  return m;
-}
-
 // Bone below z = 0 in a free box, with the given bone material.
 std::shared_ptr<const Space> floor_of(const Material& rigid) {
   const MeshData mesh =
@@ -99,7 +92,7 @@ TEST(RigidEdge, TheMotionIsVerifiedNotOnlyItsEnd) {
 }
 
 TEST(RigidEdge, FrictionHoldsItUntilThePullLeavesTheCone) {
-  const auto space = floor_of(bone(0.5, 0.4));
+  const auto space = floor_of(testing::rigid_material(0.5, 0.4));
   const std::vector<double> f = testing::evenly_spaced(11);
   RigidEdge edge(space, f, kLength);
   ASSERT_TRUE(edge.seat({{-10, 0, 0.5}, {1, 0, 0}}));

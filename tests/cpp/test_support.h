@@ -18,6 +18,13 @@ inline Material drag_material(double d_mm) {
   return m;
 }
 inline Material rigid_material() { return {"bone", MaterialModel::Rigid}; }
+// Bone with friction at rigid contacts (static, dynamic).
+inline Material rigid_material(double static_friction, double dynamic_friction) {
+  Material m = rigid_material();
+  m.static_friction = static_friction;
+  m.dynamic_friction = dynamic_friction;
+  return m;
+}
 
 // Materials: 0 air (free), 1 flesh (drag 1 mm), 2 bone (rigid).
 inline std::vector<Material> paper_materials() {
