@@ -328,15 +328,10 @@ bool RigidEdge::over_feature(const ContactFeature& feature, const Plane& plane,
   return true;
 }
 
-bool RigidEdge::still_a_wall(const ContactFeature& feature, double fraction) const {
+bool RigidEdge::rigid_wall(const ContactFeature& feature) const {
   if (feature.kind != ContactFeature::Kind::Face) return true;
   const std::int32_t wall = space_->mesh().neighbour(feature.index, feature.face);
-  if (wall != kNoTet && space_->tet_is_rigid(wall)) return true;
-  // A membrane is a wall only for a sample whose own tick has not broken it.
-  const auto sample = std::lower_bound(fractions_.begin(), fractions_.end(), fraction);
-  return sample != fractions_.end() && *sample == fraction &&
-         walls_[static_cast<std::size_t>(sample - fractions_.begin())] ==
-             ProbeWalls::RigidAndMembrane;
+  return wall != kNoTet && space_->tet_is_rigid(wall);
 }
 
 void RigidEdge::keep_warm_contacts() {
@@ -353,7 +348,7 @@ void RigidEdge::keep_warm_contacts() {
       const ContactFeature& feature = end == 0 ? held.least_feature : held.greatest_feature;
       const Vec3 x = ideal_edge_.point(fraction, length_mm_);
       if (held.plane.signed_distance(x) <= touching && over_feature(feature, held.plane, x) &&
-          still_a_wall(feature, fraction)) {
+          rigid_wall(feature)) {
         warm_[count++] = {fraction, held.plane, feature};
       }
       if (!(held.greatest_fraction > held.least_fraction)) break;

@@ -134,9 +134,9 @@ class RigidEdge {
   // Whether x, moved onto `plane`, lies over the face or ridge `feature`
   // names (false for none).
   bool over_feature(const ContactFeature& feature, const Plane& plane, const Vec3& x) const;
-  // Whether what a contact met still walls its sample this tick: rigid
-  // material, or a membrane the sample's own tick has not broken.
-  bool still_a_wall(const ContactFeature& feature, double fraction) const;
+  // Whether what a contact met is rigid material: a membrane's plane is not
+  // kept from one tick to the next (its walls are the points' own each tick).
+  bool rigid_wall(const ContactFeature& feature) const;
   // Starts the contact set with the last tick's contacts that still hold the
   // verified pose (their friction with them), and no others.
   void keep_warm_contacts();
