@@ -361,6 +361,26 @@ def slivers(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return doubled < SLIVER_SHARE * float(np.abs(vertices).max()) * longest
 
 
+def without_slivers(
+    vertices: np.ndarray, faces: np.ndarray, source: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The faces without their slivers, and each one's source. A sliver's corner opposite its
+    longest edge lies on that edge (within the sliver's width): the face across the edge is
+    split at that corner (conform) so the faces either side of the sliver still meet along
+    its two short edges, where dropping it alone would leave an outline inside the surface.
+    Pieces that are slivers in turn are dropped."""
+    thin = slivers(vertices, faces)
+    if not thin.any():
+        return faces, source
+    corners = vertices[faces[thin]]
+    lengths = np.linalg.norm(np.roll(corners, -1, axis=1) - corners, axis=2)  # edge k: k, k+1
+    longest = lengths.argmax(axis=1)
+    turned = faces[thin][np.arange(len(longest))[:, None], (longest[:, None] + np.arange(3)) % 3]
+    faces, source, _ = conform(faces[~thin], source[~thin], turned, len(vertices))
+    solid = ~slivers(vertices, faces)
+    return faces[solid], source[solid]
+
+
 def clipped_sweep(
     rows_q: np.ndarray,
     cutting: np.ndarray,
@@ -411,8 +431,7 @@ def clipped_sweep(
         whole = faces_inside(vertices, inside, pieces, firmly)
         faces = np.concatenate([faces[~new], pieces[whole]])
         source = np.concatenate([source[~new], pieces_source[whole]])
-    solid = ~slivers(vertices, faces)
-    faces, source = faces[solid], source[solid]
+    faces, source = without_slivers(vertices, faces, source)
     frames = np.ceil(np.asarray(row_frames)[face_rows[source] + 1] - 1e-9).astype(np.int32)
     used, compact = np.unique(faces, return_inverse=True)
     return vertices[used], compact.reshape(-1, 3).astype(np.int32), frames

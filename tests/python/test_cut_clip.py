@@ -103,3 +103,21 @@ def test_rows_are_added_where_the_edge_jumped():
     assert 22 in rows  # The tick after the jump: the sweep goes up with it, not through.
     steady = cut_clip.rows_along_path(flat_sweep(rows=41), np.arange(0, 41, 5))
     assert steady.tolist() == list(range(0, 41, 5))
+
+
+def test_a_sliver_is_folded_into_its_neighbour_not_left_as_a_crack():
+    # Two faces meet a cap sliver (0, 1, 2) along its short edges; the face (0, 3, 1) lies
+    # across its long edge. Dropped alone, the sliver leaves an outline inside the surface
+    # (0-1 on one side, 0-2 and 2-1 on the other); folded, the face across is split at 2.
+    vertices = np.array(
+        [[0.0, 0, 0], [1, 0, 0], [0.5, 1e-9, 0], [0.5, -1, 0], [0.25, 1, 0], [0.75, 1, 0]]
+    )
+    faces = np.array([[0, 1, 2], [0, 3, 1], [0, 2, 4], [2, 1, 5], [2, 5, 4]])
+    assert cut_clip.slivers(vertices, faces).tolist() == [True, False, False, False, False]
+    kept, source = cut_clip.without_slivers(vertices, faces, np.arange(len(faces)))
+    edges = np.sort(np.concatenate([kept[:, [0, 1]], kept[:, [1, 2]], kept[:, [2, 0]]]), 1)
+    unique, counts = np.unique(edges, axis=0, return_counts=True)
+    assert [0, 2] in unique[counts == 2].tolist() and [1, 2] in unique[counts == 2].tolist()
+    assert [0, 1] not in unique.tolist()
+    assert sorted(source.tolist()) == [1, 1, 2, 3, 4]
+    assert abs(area(vertices[kept]) - area(vertices[faces])) < 1e-6

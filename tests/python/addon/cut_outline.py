@@ -105,9 +105,32 @@ def nearest_distances(points: np.ndarray, targets: np.ndarray, chunk: int = 256)
     return out
 
 
+# How far round an outline vertex the material's boundary is looked for (mm): from well
+# above where a cut places its crossings to half the sampling step.
+PROBE_RADII_MM = (0.002, 0.005, 0.01, 0.02, 0.05)
+
+
+def boundary_distance(points: np.ndarray, cuttable) -> np.ndarray:
+    """For each point, the least of PROBE_RADII_MM at which one of 26 probes round it (the
+    cube's faces, edges and corners) is out of the cuttable material; inf where none is. The
+    path may dip out of the material for less than the sampling step (the chord between two
+    points resting on a round bone): the surface's outline there is on the material's
+    boundary, which the samples miss."""
+    points = np.asarray(points, np.float64)
+    steps = np.array([(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)])
+    steps = steps[np.any(steps != 0, axis=1)]
+    directions = steps / np.linalg.norm(steps, axis=1, keepdims=True)
+    found = np.full(len(points), np.inf)
+    for radius in sorted(PROBE_RADII_MM, reverse=True):
+        probes = (points[:, None, :] + radius * directions[None]).reshape(-1, 3)
+        out = ~np.asarray(cuttable(probes), bool).reshape(len(points), -1).all(axis=1)
+        found[out] = radius
+    return found
+
+
 def outline_deviation(vertices, faces, rows_q, quad_ok, cuttable) -> np.ndarray:
     """The distance (mm) from each outline vertex of the surface to the nearest point off the
     cut: 0 for an outline on the path's outline, the depth of a step for a stepped one."""
-    return nearest_distances(
-        outline_points(vertices, faces), off_samples(rows_q, quad_ok, cuttable)
-    )
+    outline = outline_points(vertices, faces)
+    sampled = nearest_distances(outline, off_samples(rows_q, quad_ok, cuttable))
+    return np.minimum(sampled, boundary_distance(outline, cuttable))

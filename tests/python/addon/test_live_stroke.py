@@ -313,9 +313,10 @@ def test_the_cut_outline_follows_the_edge_path_not_the_tets(baked):
         f"(tets {tet_mm:.2f} mm)"
     )
     # Whole quads kept by their corners left most outline vertices up to about a tet's edge
-    # inside (the 90th percentile near the whole edge). Where the edge grazes the skin a vertex
-    # or two may still lie a row in, by an amount the build decides: the worst is printed, and
-    # at most one vertex in a hundred may stray past a fifth of a tet's edge.
+    # inside (the 90th percentile near the whole edge). Where the edge's chord dips into the
+    # bone for less than the sampling step, the outline is on the bone: the probes round the
+    # vertex find it (cut_outline.boundary_distance). The worst is printed, and at most one
+    # vertex in a hundred may stray past a fifth of a tet's edge.
     strays = int(np.count_nonzero(deviation > 0.2 * tet_mm))
     assert strays <= 0.01 * len(deviation), f"{strays} of {len(deviation)} vertices stray"
     assert most < 0.05 * tet_mm and middle < 0.02 * tet_mm
