@@ -343,16 +343,13 @@ void RigidEdge::keep_warm_contacts() {
   const double touching = touching_distance();
   int count = 0;
   for (const EdgeContactSet::HeldPlane& held : contacts_.planes()) {
-    for (int end = 0; end < 2; ++end) {
-      const double fraction = end == 0 ? held.least_fraction : held.greatest_fraction;
-      const ContactFeature& feature = end == 0 ? held.least_feature : held.greatest_feature;
+    held.for_each_end([&](double fraction, const ContactFeature& feature) {
       const Vec3 x = ideal_edge_.point(fraction, length_mm_);
       if (held.plane.signed_distance(x) <= touching && over_feature(feature, held.plane, x) &&
           rigid_wall(feature)) {
         warm_[count++] = {fraction, held.plane, feature};
       }
-      if (!(held.greatest_fraction > held.least_fraction)) break;
-    }
+    });
   }
   contacts_.clear();
   if (count == 0) {
@@ -369,17 +366,15 @@ bool RigidEdge::warm_contacts_hold(const EdgePose& trial) const {
   // holds the trial's sample past it (slid off a facet of a round bone onto
   // the next, lower one) keeps the edge off that facet, above the optimum.
   const double held = kMostBow + 8.0 * space_->tolerance();
+  bool holds = true;
   for (const EdgeContactSet::HeldPlane& plane : contacts_.planes()) {
-    for (int end = 0; end < 2; ++end) {
-      const double fraction = end == 0 ? plane.least_fraction : plane.greatest_fraction;
-      const ContactFeature& feature = end == 0 ? plane.least_feature : plane.greatest_feature;
+    plane.for_each_end([&](double fraction, const ContactFeature& feature) {
       const Vec3 x = trial.point(fraction, length_mm_);
-      if (plane.plane.signed_distance(x) <= held && !over_feature(feature, plane.plane, x)) {
-        return false;
-      }
-    }
+      holds = holds &&
+              !(plane.plane.signed_distance(x) <= held && !over_feature(feature, plane.plane, x));
+    });
   }
-  return true;
+  return holds;
 }
 
 void RigidEdge::start_cold() {

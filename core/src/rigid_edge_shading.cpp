@@ -124,10 +124,7 @@ void RigidEdge::shade_force(const ForceShading& shading, const EdgePose& device,
   int sample_count = 0;
   for (int j = 0; j < planes; ++j) {
     const EdgeContactSet::HeldPlane& h = held[j];
-    const int ends = h.greatest_fraction > h.least_fraction ? 2 : 1;
-    for (int end = 0; end < ends; ++end) {
-      const double fraction = end == 0 ? h.least_fraction : h.greatest_fraction;
-      const ContactFeature& feature = end == 0 ? h.least_feature : h.greatest_feature;
+    h.for_each_end([&](double fraction, const ContactFeature& feature) {
       const bool touches =
           h.plane.signed_distance(ideal_edge_.point(fraction, length_mm_)) <= touching;
       samples[sample_count] = {
@@ -136,7 +133,7 @@ void RigidEdge::shade_force(const ForceShading& shading, const EdgePose& device,
           touches};
       sample_plane[sample_count++] = j;
       holds[j] = holds[j] || touches;
-    }
+    });
   }
   // Contacts: planes joined when next to one another along the edge (within
   // a point spacing) and within the crease angle, transitively: one smooth

@@ -37,6 +37,13 @@ class EdgeContactSet {
     double greatest_fraction = 0.0;
     ContactFeature least_feature;
     ContactFeature greatest_feature;
+    // Calls f(fraction, feature) for each end of the range: once where the
+    // plane holds a single sample, else its least and its greatest.
+    template <class F>
+    void for_each_end(F f) const {
+      f(least_fraction, least_feature);
+      if (greatest_fraction > least_fraction) f(greatest_fraction, greatest_feature);
+    }
   };
 
   // Planes kept at most: each gives two constraints of the fit.

@@ -151,8 +151,8 @@ class RigidEdge {
   // turn was cut short (limit_turn).
   bool fit_with_contacts(bool lock, const Vec3& lock_direction, double margin, EdgePose& trial,
                          bool& cut);
-  // A free trial whose motion would bow a contact's sample farther than the
-  // fit keeps it off its plane (the walks would stop it at once on a plane
+  // A trial (free or locked) whose motion would bow a contact's sample farther
+  // than the fit keeps it off its plane (the walks would stop it at once on a plane
   // already held) is cut to part of its turn, fitted with that direction
   // locked; true when cut. The rest of the turn is left to later rounds.
   bool limit_turn(std::span<const EdgeContact> contacts, double margin, EdgePose& trial);
