@@ -56,6 +56,32 @@ def test_zero_deviations_halve_the_bracket_in_log_face_count():
     assert target == pytest.approx(math.sqrt(100 * 10_000), rel=0.01)
 
 
+def test_a_prediction_just_below_the_fewest_that_fit_is_tried_where_a_miss_ends_the_search():
+    """The bunny's tries (56k faces at 100 mm): the next predicted at about 2,320 faces, just
+    below 2,294 that fit; tried at 2,294 / 1.1, so that a miss there ends the search."""
+    tries = [(14_042, 0.127), (2_926, 0.498), (2_294, 0.622)]
+    target = next_face_count(20, 2_294, tries, 0.641)
+    assert target == round(2_294 / (1 + simplify.FACE_COUNT_PRECISION))
+    assert 2_294 - target <= simplify.FACE_COUNT_PRECISION * 2_294
+
+
+def test_the_first_try_on_a_large_surface_keeps_faces_per_tolerance_in_its_size(monkeypatch):
+    vertices, faces = icosphere(30.0, 5)  # 20480 faces, 104 mm across its bounding box
+    firsts = []
+    real = simplify.next_face_count
+
+    def recording(misses, fits, tries, tolerance, first=None):
+        if not tries:
+            firsts.append(first)
+        return real(misses, fits, tries, tolerance, first)
+
+    monkeypatch.setattr(simplify, "next_face_count", recording)
+    simple, _, deviation = simplify_surface(Surface(vertices, faces), 3.0)
+    size = math.dist(vertices.min(axis=0), vertices.max(axis=0))
+    assert firsts == [pytest.approx(simplify.FIRST_FACES_PER_SIZE * size / 3.0)]
+    assert firsts[0] < simplify.FIRST_SHARE * len(faces) and deviation <= 3.0
+
+
 def test_a_flat_surface_keeps_its_few_faces_and_tells_its_progress():
     vertices, faces = icosphere(30.0, 3)  # 1280 faces
     seen = []

@@ -661,7 +661,10 @@ def _simplify(
             faces_meshed=int(len(simple.faces)),
             simplification_deviation_mm=round(float(deviation), 6),
         )
-        steps((i + 1) / len(regions), f"simplified {region.name}")
+        steps(
+            (i + 1) / len(regions),
+            f"simplified {region.name} ({before:,} to {len(simple.faces):,} faces)",
+        )
     return surfaces
 
 
