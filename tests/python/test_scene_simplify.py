@@ -98,8 +98,8 @@ def measures(monkeypatch, full_factor: float = 1.0):
     made = []
     real = simplify.hausdorff
 
-    def recording(meshes, source, candidate, samples=None, between=None):
-        deviation = real(meshes, source, candidate, samples, between)
+    def recording(meshes, source, candidate, samples=None, between=None, **screen):
+        deviation = real(meshes, source, candidate, samples, between, **screen)
         if samples is None:
             deviation *= full_factor
         made.append((meshes.mesh(candidate).face_number(), samples, deviation))

@@ -51,7 +51,8 @@ BRACKET_MARGIN = 0.1
 # a prediction far from where it points.
 MARGIN_SPAN = math.log(4.0)
 # The screening measure samples at least this many points each way (and every vertex of the
-# input): few enough to cost a small part of a full measure on a scan.
+# input): few enough to cost a small part of a full measure on a scan. From an input with as
+# many vertices, it samples only them.
 SCREEN_SAMPLES = 20_000
 
 
@@ -76,6 +77,9 @@ def simplify_surface(
     meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=surface.vertices, face_matrix=surface.faces))
     source = meshes.current_mesh_id()
     screen_samples = max(SCREEN_SAMPLES, len(surface.vertices))
+    # An input of at least SCREEN_SAMPLES vertices is screened at its vertices alone (its
+    # faces' samples found no more on scans, and cost twice as much).
+    fine_input = len(surface.vertices) >= SCREEN_SAMPLES
     size = float(np.linalg.norm(np.ptp(surface.vertices, axis=0)))
     first = min(FIRST_SHARE * original, FIRST_FACES_PER_SIZE * size / tolerance_mm)
     work = _Work(original, screen_samples, on_attempt)
@@ -116,7 +120,9 @@ def simplify_surface(
             target = next_face_count(misses, fits, tries, tolerance_mm, first)
             candidate, started_from = decimate(target)
             faces = meshes.mesh(candidate).face_number()
-            deviation = hausdorff(meshes, source, candidate, screen_samples)
+            deviation = hausdorff(
+                meshes, source, candidate, screen_samples, first_vertices_only=fine_input
+            )
             tries.append((faces, deviation))
             work.decimated(started_from, faces)
             work.screened(attempts)
