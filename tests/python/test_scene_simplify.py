@@ -92,6 +92,21 @@ def test_a_flat_surface_keeps_its_few_faces_and_tells_its_progress():
     assert seen == sorted(seen) and 0 < len(seen) <= simplify.MAX_ATTEMPTS
 
 
+def test_a_way_that_finds_more_than_the_limit_ends_the_measure():
+    """A screen or full measure whose first way misses does not measure the second."""
+    import pymeshlab
+
+    meshes = pymeshlab.MeshSet()
+    for radius in (30.0, 31.0):
+        vertices, faces = icosphere(radius, 2)
+        meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=vertices, face_matrix=faces))
+    called = []
+    stopped = simplify.hausdorff(meshes, 0, 1, between=lambda: called.append(1), stop_above=0.5)
+    assert stopped == pytest.approx(1.0, abs=0.05) and not called
+    both = simplify.hausdorff(meshes, 0, 1, between=lambda: called.append(1), stop_above=2.0)
+    assert both == pytest.approx(1.0, abs=0.05) and called == [1]
+
+
 def measures(monkeypatch, full_factor: float = 1.0):
     """Each Hausdorff measure the search makes as (faces measured, samples: None for the full
     count, deviation reported); full measures reported full_factor times what they found."""

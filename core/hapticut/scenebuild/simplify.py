@@ -121,7 +121,12 @@ def simplify_surface(
             candidate, started_from = decimate(target)
             faces = meshes.mesh(candidate).face_number()
             deviation = hausdorff(
-                meshes, source, candidate, screen_samples, first_vertices_only=fine_input
+                meshes,
+                source,
+                candidate,
+                screen_samples,
+                first_vertices_only=fine_input,
+                stop_above=tolerance_mm,
             )
             tries.append((faces, deviation))
             work.decimated(started_from, faces)
@@ -143,7 +148,13 @@ def simplify_surface(
         # The search ends on the fewest faces that fit the screen: measure it in full.
         faces, candidate = min(screened)
         screened.remove((faces, candidate))
-        deviation = hausdorff(meshes, source, candidate, between=lambda: work.measured(1 / 3))
+        deviation = hausdorff(
+            meshes,
+            source,
+            candidate,
+            between=lambda: work.measured(1 / 3),
+            stop_above=tolerance_mm,
+        )
         work.measured(2 / 3)
         if deviation <= tolerance_mm:
             best = (*arrays(candidate), deviation)
