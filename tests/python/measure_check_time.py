@@ -8,11 +8,12 @@ settings: the accuracy 1% of the size). A measurement, not a test: nothing is as
 
 Each run starts the child as the add-on does (stdout to a file read as it grows) and prints
 its wall time, its CPU time (user + system: less changed by other processes on a loaded
-machine), the face count kept, and its progress records: how many, the longest wait between
-two of them (or the start and the first, or the last and the end) and the largest step of
-the fraction. The toolkit is this checkout's (``core`` first on PYTHONPATH); with several
---core folders (another checkout's ``core``) their runs alternate, so that a machine's load
-weighs on each alike.
+machine), the face count kept, and its progress records: how many, the longest wait
+between two of them (or the start and the first, or the last and the end) and the largest
+step of the fraction. A first run of each toolkit, which compiles its modules, is not
+counted. The toolkit is this checkout's (``core`` first on PYTHONPATH); with several --core
+folders (another checkout's ``core``) their runs alternate, so that a machine's load weighs
+on each alike.
 """
 
 from __future__ import annotations
@@ -65,9 +66,12 @@ def write_request(folder: Path, mesh: Path, size_mm: float) -> Path:
 
 def run_check(request: Path, folder: Path, core: Path) -> dict:
     """One child run: wall and CPU seconds, the progress records (seconds, fraction) as read
-    while it ran (every 10 ms), the faces kept and its last line."""
+    while it ran (every 10 ms), the faces kept and its last line. Its modules are compiled
+    once, into a cache in ``folder``, as an installed toolkit's are."""
     path = os.pathsep.join([str(core), os.environ.get("PYTHONPATH", "")])
     env = dict(os.environ, PYTHONPATH=path, PYTHONUNBUFFERED="1")
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    env["PYTHONPYCACHEPREFIX"] = str(folder / "pycache")
     log = folder / "progress.jsonl"
     records: list[tuple[float, float]] = []
     with open(log, "wb") as stdout:
@@ -116,6 +120,8 @@ def main(argv: list[str] | None = None) -> int:
         folder = Path(work)
         request = write_request(folder, args.mesh or sample_mesh(), args.size_mm)
         runs: dict[Path, list[dict]] = {core: [] for core in cores}
+        for core in cores:  # Compiles its modules: not counted.
+            run_check(request, folder, core)
         for i in range(args.runs):
             for core in cores:
                 run = run_check(request, folder, core)
