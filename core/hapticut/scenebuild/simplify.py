@@ -43,7 +43,8 @@ FIRST_SHARE = 0.25
 FIRST_FACES_PER_SIZE = 60.0
 # A predicted face count is aimed this share above the prediction (the deviation falls in
 # steps as faces are added, and a try that fits narrows the search more than one that
-# misses); each try lies at least this share of the bracket (in log face count) inside it.
+# misses); each try lies at least this share of the bracket (in log face count) above its
+# lower end, the most faces known to miss.
 AIM_ABOVE = 0.5 * FACE_COUNT_PRECISION
 BRACKET_MARGIN = 0.1
 # The margin counts at most this span of the bracket (a factor of 4 in face count): while
@@ -77,8 +78,8 @@ def simplify_surface(
     meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=surface.vertices, face_matrix=surface.faces))
     source = meshes.current_mesh_id()
     screen_samples = max(SCREEN_SAMPLES, len(surface.vertices))
-    # An input of at least SCREEN_SAMPLES vertices is screened at its vertices alone (its
-    # faces' samples found no more on scans, and cost twice as much).
+    # An input of at least SCREEN_SAMPLES vertices is screened at its vertices alone (on the
+    # bunny's tries its faces' samples found no more, and cost twice as much).
     fine_input = len(surface.vertices) >= SCREEN_SAMPLES
     size = float(np.linalg.norm(np.ptp(surface.vertices, axis=0)))
     first = min(FIRST_SHARE * original, FIRST_FACES_PER_SIZE * size / tolerance_mm)
@@ -244,7 +245,7 @@ def next_face_count(
     low, high = math.log(max(misses, 1)), math.log(fits)
     step = max(BRACKET_MARGIN * min(high - low, MARGIN_SPAN), math.log1p(FACE_COUNT_PRECISION))
     lowest, highest = low + step, high - math.log1p(FACE_COUNT_PRECISION)
-    if lowest > highest:  # A bracket within twice the precision: its middle ends the search.
+    if lowest > highest:  # A bracket narrower than its two margins: its middle ends the search.
         lowest = highest = (low + high) / 2
     measured = sorted(
         ((f, d) for f, d in tries if d > 0), key=lambda t: abs(math.log(t[1] / tolerance_mm))
