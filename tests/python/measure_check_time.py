@@ -68,7 +68,7 @@ def run_check(request: Path, folder: Path, core: Path) -> dict:
     """One child run: wall and CPU seconds, the progress records (seconds, fraction) as read
     while it ran (every 10 ms), the faces kept and its last line. Its modules are compiled
     once, into a cache in ``folder``, as an installed toolkit's are."""
-    path = os.pathsep.join([str(core), os.environ.get("PYTHONPATH", "")])
+    path = os.pathsep.join(p for p in (str(core), os.environ.get("PYTHONPATH", "")) if p)
     env = dict(os.environ, PYTHONPATH=path, PYTHONUNBUFFERED="1")
     env.pop("PYTHONDONTWRITEBYTECODE", None)
     env["PYTHONPYCACHEPREFIX"] = str(folder / "pycache")
