@@ -56,6 +56,32 @@ def test_zero_deviations_halve_the_bracket_in_log_face_count():
     assert target == pytest.approx(math.sqrt(100 * 10_000), rel=0.01)
 
 
+def test_a_prediction_just_below_the_fewest_that_fit_is_tried_where_a_miss_ends_the_search():
+    """The bunny's tries (56k faces at 100 mm): the next predicted at about 2,320 faces, just
+    below 2,294 that fit; tried at 2,294 / 1.1, so that a miss there ends the search."""
+    tries = [(14_042, 0.127), (2_926, 0.498), (2_294, 0.622)]
+    target = next_face_count(20, 2_294, tries, 0.641)
+    assert target == round(2_294 / (1 + simplify.FACE_COUNT_PRECISION))
+    assert 2_294 - target <= simplify.FACE_COUNT_PRECISION * 2_294
+
+
+def test_the_first_try_on_a_large_surface_keeps_faces_per_tolerance_in_its_size(monkeypatch):
+    vertices, faces = icosphere(30.0, 5)  # 20480 faces, 104 mm across its bounding box
+    firsts = []
+    real = simplify.next_face_count
+
+    def recording(misses, fits, tries, tolerance, first=None):
+        if not tries:
+            firsts.append(first)
+        return real(misses, fits, tries, tolerance, first)
+
+    monkeypatch.setattr(simplify, "next_face_count", recording)
+    simple, _, deviation = simplify_surface(Surface(vertices, faces), 3.0)
+    size = math.dist(vertices.min(axis=0), vertices.max(axis=0))
+    assert firsts == [pytest.approx(simplify.FIRST_FACES_PER_SIZE * size / 3.0)]
+    assert firsts[0] < simplify.FIRST_SHARE * len(faces) and deviation <= 3.0
+
+
 def test_a_flat_surface_keeps_its_few_faces_and_tells_its_progress():
     vertices, faces = icosphere(30.0, 3)  # 1280 faces
     seen = []
@@ -66,14 +92,29 @@ def test_a_flat_surface_keeps_its_few_faces_and_tells_its_progress():
     assert seen == sorted(seen) and 0 < len(seen) <= simplify.MAX_ATTEMPTS
 
 
+def test_a_way_that_finds_more_than_the_limit_ends_the_measure():
+    """A screen or full measure whose first way misses does not measure the second."""
+    import pymeshlab
+
+    meshes = pymeshlab.MeshSet()
+    for radius in (30.0, 31.0):
+        vertices, faces = icosphere(radius, 2)
+        meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=vertices, face_matrix=faces))
+    called = []
+    stopped = simplify.hausdorff(meshes, 0, 1, between=lambda: called.append(1), stop_above=0.5)
+    assert stopped == pytest.approx(1.0, abs=0.05) and not called
+    both = simplify.hausdorff(meshes, 0, 1, between=lambda: called.append(1), stop_above=2.0)
+    assert both == pytest.approx(1.0, abs=0.05) and called == [1]
+
+
 def measures(monkeypatch, full_factor: float = 1.0):
     """Each Hausdorff measure the search makes as (faces measured, samples: None for the full
     count, deviation reported); full measures reported full_factor times what they found."""
     made = []
     real = simplify.hausdorff
 
-    def recording(meshes, source, candidate, samples=None, between=None):
-        deviation = real(meshes, source, candidate, samples, between)
+    def recording(meshes, source, candidate, samples=None, between=None, **screen):
+        deviation = real(meshes, source, candidate, samples, between, **screen)
         if samples is None:
             deviation *= full_factor
         made.append((meshes.mesh(candidate).face_number(), samples, deviation))

@@ -254,17 +254,31 @@ def repair_surface(
     return Surface(out_vertices, out_faces), repairs
 
 
-def hausdorff(meshes, first: int, second: int, samples: int | None = None, between=None) -> float:
+def hausdorff(
+    meshes,
+    first: int,
+    second: int,
+    samples: int | None = None,
+    between=None,
+    first_vertices_only: bool = False,
+    stop_above: float | None = None,
+) -> float:
     """Symmetric Hausdorff distance between two meshes of a MeshSet (vertex + face samples);
-    between() is called after the first of its two ways (each way costs seconds on a scan)."""
+    between() is called after the first of its two ways (each way costs seconds on a scan).
+    first_vertices_only: the first way samples the first mesh's vertices alone (a screen on
+    a scan, whose vertices lie closer together than face samples would). stop_above: when
+    the first way finds more than this, that is returned without measuring the other (the
+    distance is more than it either way)."""
     pymeshlab = _meshlab()
     largest = max(meshes.mesh(first).face_number(), meshes.mesh(second).face_number())
     samples = samples or max(20_000, 4 * largest)
     far = pymeshlab.PercentageValue(50)
     there = meshes.get_hausdorff_distance(
-        sampledmesh=first, targetmesh=second, samplevert=True, sampleface=True,
-        samplenum=samples, maxdist=far,
+        sampledmesh=first, targetmesh=second, samplevert=True,
+        sampleface=not first_vertices_only, samplenum=samples, maxdist=far,
     )  # fmt: skip
+    if stop_above is not None and there["max"] > stop_above:
+        return float(there["max"])
     if between is not None:
         between()
     back = meshes.get_hausdorff_distance(

@@ -31,12 +31,20 @@ FACE_COUNT_PRECISION = 0.1
 MAX_ATTEMPTS = 8
 # Tries a search usually makes (the progress expects them).
 EXPECTED_ATTEMPTS = 4
-# The first try keeps this share of the faces (scans in mm at the default accuracy keep
-# from a twentieth to a half).
+# The first try keeps this share of the faces, or FIRST_FACES_PER_SIZE faces per tolerance
+# in the surface's size (its bounding box's diagonal) when that is fewer. A surface kept at
+# a tolerance needs about that ratio of faces times a factor of its shape: from under 1 (a
+# finger's bones) to 13 (the bunny, a cow) at 0.2% to 0.4% of the size. The tries below it
+# are decimated from it, and their deviation adds to its own (their quadrics know only it),
+# so it stays well within the tolerance: at 60 the bunny's first try deviates a fifth of it
+# (at 20 a half, and the search kept 40% more faces). On scans of over 60,000 faces the
+# tries then start from thousands of faces rather than a quarter of the scan's.
 FIRST_SHARE = 0.25
+FIRST_FACES_PER_SIZE = 60.0
 # A predicted face count is aimed this share above the prediction (the deviation falls in
 # steps as faces are added, and a try that fits narrows the search more than one that
-# misses); each try lies at least this share of the bracket (in log face count) inside it.
+# misses); each try lies at least this share of the bracket (in log face count) above its
+# lower end, the most faces known to miss.
 AIM_ABOVE = 0.5 * FACE_COUNT_PRECISION
 BRACKET_MARGIN = 0.1
 # The margin counts at most this span of the bracket (a factor of 4 in face count): while
@@ -44,7 +52,8 @@ BRACKET_MARGIN = 0.1
 # a prediction far from where it points.
 MARGIN_SPAN = math.log(4.0)
 # The screening measure samples at least this many points each way (and every vertex of the
-# input): few enough to cost a small part of a full measure on a scan.
+# input): few enough to cost a small part of a full measure on a scan. From an input with as
+# many vertices, it samples only them.
 SCREEN_SAMPLES = 20_000
 
 
@@ -69,6 +78,11 @@ def simplify_surface(
     meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=surface.vertices, face_matrix=surface.faces))
     source = meshes.current_mesh_id()
     screen_samples = max(SCREEN_SAMPLES, len(surface.vertices))
+    # An input of at least SCREEN_SAMPLES vertices is screened at its vertices alone (on the
+    # bunny's tries its faces' samples found no more, and cost twice as much).
+    fine_input = len(surface.vertices) >= SCREEN_SAMPLES
+    size = float(np.linalg.norm(np.ptp(surface.vertices, axis=0)))
+    first = min(FIRST_SHARE * original, FIRST_FACES_PER_SIZE * size / tolerance_mm)
     work = _Work(original, screen_samples, on_attempt)
     # Candidates decimated from the input that fitted, kept to decimate further from:
     # (face count, mesh id).
@@ -104,10 +118,17 @@ def simplify_surface(
     while True:
         if attempts < MAX_ATTEMPTS and fits - misses > max(4, FACE_COUNT_PRECISION * fits):
             attempts += 1
-            target = next_face_count(misses, fits, tries, tolerance_mm)
+            target = next_face_count(misses, fits, tries, tolerance_mm, first)
             candidate, started_from = decimate(target)
             faces = meshes.mesh(candidate).face_number()
-            deviation = hausdorff(meshes, source, candidate, screen_samples)
+            deviation = hausdorff(
+                meshes,
+                source,
+                candidate,
+                screen_samples,
+                first_vertices_only=fine_input,
+                stop_above=tolerance_mm,
+            )
             tries.append((faces, deviation))
             work.decimated(started_from, faces)
             work.screened(attempts)
@@ -128,7 +149,13 @@ def simplify_surface(
         # The search ends on the fewest faces that fit the screen: measure it in full.
         faces, candidate = min(screened)
         screened.remove((faces, candidate))
-        deviation = hausdorff(meshes, source, candidate, between=lambda: work.measured(1 / 3))
+        deviation = hausdorff(
+            meshes,
+            source,
+            candidate,
+            between=lambda: work.measured(1 / 3),
+            stop_above=tolerance_mm,
+        )
         work.measured(2 / 3)
         if deviation <= tolerance_mm:
             best = (*arrays(candidate), deviation)
@@ -197,28 +224,34 @@ class _Work:
 
 
 def next_face_count(
-    misses: int, fits: int, tries: list[tuple[int, float]], tolerance_mm: float
+    misses: int,
+    fits: int,
+    tries: list[tuple[int, float]],
+    tolerance_mm: float,
+    first: float | None = None,
 ) -> int:
     """The next face count to try, strictly between ``misses`` (too few) and ``fits``.
 
-    The first try keeps FIRST_SHARE of the faces; later ones are predicted from the two
-    tries nearest the tolerance (deviation ~ faces^-p, p from the two, or 1 from one) and
-    aimed AIM_ABOVE above; the bracket's middle (in log face count) when the tries predict
-    nothing (zero deviations, or no fall with more faces). Each try lies at least
-    FACE_COUNT_PRECISION inside either end of the bracket (a try there that goes as predicted
-    ends the search) and BRACKET_MARGIN of it, up to MARGIN_SPAN (so that a wrong prediction
-    still narrows it).
+    The first try keeps ``first`` faces (default FIRST_SHARE of them); later ones are
+    predicted from the two tries nearest the tolerance (deviation ~ faces^-p, p from the two,
+    or 1 from one) and aimed AIM_ABOVE above; the bracket's middle (in log face count) when
+    the tries predict nothing (zero deviations, or no fall with more faces). Each try lies at
+    least FACE_COUNT_PRECISION below the fewest faces that fit: a try there that misses, as
+    a prediction just below them says it will, ends the search (a margin wider than the
+    precision made it one try more). It lies at least FACE_COUNT_PRECISION and
+    BRACKET_MARGIN of the bracket, up to MARGIN_SPAN, above the most that missed (so that a
+    wrong prediction still narrows it: while nothing has missed, that end is min_faces).
     """
     low, high = math.log(max(misses, 1)), math.log(fits)
     step = max(BRACKET_MARGIN * min(high - low, MARGIN_SPAN), math.log1p(FACE_COUNT_PRECISION))
-    lowest, highest = low + step, high - step
-    if lowest > highest:  # A bracket within twice the precision: its middle ends the search.
+    lowest, highest = low + step, high - math.log1p(FACE_COUNT_PRECISION)
+    if lowest > highest:  # A bracket narrower than its two margins: its middle ends the search.
         lowest = highest = (low + high) / 2
     measured = sorted(
         ((f, d) for f, d in tries if d > 0), key=lambda t: abs(math.log(t[1] / tolerance_mm))
     )
     if not tries:
-        guess = math.log(FIRST_SHARE * fits)
+        guess = math.log(first or FIRST_SHARE * fits)
     elif not measured:
         guess = (low + high) / 2
     else:
