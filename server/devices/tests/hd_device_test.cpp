@@ -6,8 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
@@ -341,15 +343,23 @@ TEST_F(HdDeviceTest, ASchedulerStallLeavesTheLoopStaleSamplesThenFreshOnes) {
   device->start();
   const std::vector<DeviceStatus> statuses = loop(*device, 0.15, {0.1, 0.0, 0.0});
   device->stop();
-  // The longest run of ticks without a new sample spans the stall.
+  // The longest run of ticks without a new sample spans the stall, and fresh
+  // samples come after it (not necessarily at the very last tick: on a loaded
+  // machine a tick may find no new frame yet).
   int run = 0;
   int longest = 0;
-  for (const DeviceStatus status : statuses) {
-    run = status == DeviceStatus::Stale ? run + 1 : 0;
-    longest = std::max(longest, run);
+  std::size_t longest_end = 0;
+  for (std::size_t i = 0; i < statuses.size(); ++i) {
+    run = statuses[i] == DeviceStatus::Stale ? run + 1 : 0;
+    if (run > longest) {
+      longest = run;
+      longest_end = i;
+    }
   }
   EXPECT_GE(longest, 45);
-  EXPECT_EQ(statuses.back(), DeviceStatus::Fresh);
+  EXPECT_NE(std::find(statuses.begin() + static_cast<std::ptrdiff_t>(longest_end), statuses.end(),
+                      DeviceStatus::Fresh),
+            statuses.end());
   EXPECT_EQ(std::count(statuses.begin(), statuses.end(), DeviceStatus::Lost), 0);
 }
 
