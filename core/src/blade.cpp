@@ -218,6 +218,10 @@ void Blade::cut_along_chords() {
   for (std::size_t i = 0; i < proxies_.size(); ++i) {
     const ProxyPlace& start = start_places_[i];
     const ProxyPlace& end = proxies_[i].place();
+    // Most ticks: still in the same tet, or on the same face, edge or vertex
+    // of it. Then the chord lies in that tet's closure (a tet is convex) and
+    // the point has left nothing: nothing to cut, and nothing to compute.
+    if (end.state == start.state && end.tet == start.tet && end.local == start.local) continue;
     if (start.state != ProxyState::Outside) cuts.cut_along(start.tet, start.q, end.q);
     cuts.cut_left_behind(start, end.q);
   }
