@@ -67,6 +67,7 @@ Session::Session(const SessionConfig& config, const std::function<void()>& betwe
   }
   between_stages();
   shading_ = std::make_shared<const ForceShading>(*space_);
+  cuts_ = std::make_shared<CutState>(space_);
   between_stages();
 
   std::vector<DeviceSpec> specs;
@@ -133,7 +134,7 @@ Session::Session(const SessionConfig& config, const std::function<void()>& betwe
     binding.device = make_device(*spec, context);
     binding.viewport = dynamic_cast<ViewportDevice*>(binding.device.get());
     try {
-      binding.blade = std::make_unique<Blade>(space_, blade_spec, shading_);
+      binding.blade = std::make_unique<Blade>(space_, blade_spec, shading_, cuts_);
     } catch (const std::invalid_argument& e) {
       throw SceneError("/blades/" + std::to_string(bindings_.size()), e.what());
     }

@@ -13,6 +13,7 @@
 #include "devices/device.h"
 #include "devices/device_factory.h"
 #include "hapticut/blade.h"
+#include "hapticut/cut_state.h"
 #include "hapticut/scene.h"
 #include "hapticut/space.h"
 #include "recording/recording_file.h"
@@ -90,6 +91,9 @@ class Session {
   // Bytes of a stream frame and of a recording record.
   std::size_t frame_bytes() const;
   const RecordingInfo& recording_info() const { return recording_info_; }
+  // The tets the blades have cut since the load (cut_state.h); every blade
+  // reads and marks this one, on the servo thread.
+  const CutState& cuts() const { return *cuts_; }
 
  private:
   Scene scene_;
@@ -97,6 +101,8 @@ class Session {
   std::shared_ptr<const Space> space_;
   // Built at load, shared by every blade: the settings per tick switch it on.
   std::shared_ptr<const ForceShading> shading_;
+  // The loaded scene's cut memory, shared by every blade (docs/decisions.md, "Cut memory").
+  std::shared_ptr<CutState> cuts_;
   double rate_Hz_ = 1000.0;
   bool as_fast_as_possible_ = false;
   std::vector<Binding> bindings_;

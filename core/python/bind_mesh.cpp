@@ -45,10 +45,12 @@ Material material_from_dict(const nb::dict& d) {
   m.model = model_from_name(nb::cast<std::string>(d["model"]));
   for (auto [key, value] : d) {
     const auto text = nb::cast<std::string>(nb::str(key));
-    if (text != "name" && text != "model" && !is_parameter_name(text)) {
+    if (text != "name" && text != "model" && text != "cut_to" && !is_parameter_name(text)) {
       throw std::invalid_argument("material '" + m.name + "': unknown field '" + text + "'");
     }
   }
+  // The Space checks it against the other materials (cut_to_problem).
+  if (d.contains("cut_to") && !d["cut_to"].is_none()) m.cut_to = nb::cast<std::string>(d["cut_to"]);
   for (const MaterialParameterSpec& parameter : material_model_spec(m.model).parameters) {
     const char* key = parameter.range.name.data();  // The table's names are literals.
     if (d.contains(key)) {

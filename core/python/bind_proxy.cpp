@@ -4,6 +4,7 @@
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -510,6 +511,25 @@ void bind_proxy(nb::module_& m) {
           nb::arg("pose"),
           "pose: (x, y, z, qw, qx, qy, qz), position in mm. Raises ValueError for a pose "
           "not finite, a zero quaternion or a point outside the scene's workspace.")
+      .def_prop_ro(
+          "cut_tets",
+          [](const PyBlade& b) {
+            const auto busy = claim(b);
+            const std::vector<std::int32_t> tets = b.blade.cuts().cut_tets();
+            auto out = new_array<std::int32_t>({tets.size()});
+            std::copy(tets.begin(), tets.end(), out.data());
+            return out;
+          },
+          "(k,) int32, increasing: the tets the blade has cut (docs/decisions.md, \"Cut "
+          "memory\"); a cut tet of a material with a cut_to acts as that material.",
+          nb::rv_policy::move)
+      .def(
+          "reset_cuts",
+          [](PyBlade& b) {
+            const auto busy = claim(b);
+            b.blade.reset_cuts();
+          },
+          "Uncuts every tet (reset does not: the cuts stay with the scene).")
       .def(
           "step",
           [](PyBlade& b, const nb::ndarray<const double, nb::shape<7>, nb::device::cpu>& pose,

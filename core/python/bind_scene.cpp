@@ -121,6 +121,7 @@ nb::dict document_to_dict(const SceneDocument& document) {
       item[nb::str(parameter.range.name.data(), parameter.range.name.size())] =
           material.*(parameter.field);
     }
+    item["cut_to"] = material.cut_to;
     materials.append(item);
   }
   std::vector<double> vertices;
@@ -251,6 +252,8 @@ hapticut::Material read_material(const nb::dict& item, std::size_t index) {
     const char* key = parameter.range.name.data();  // The table's names are literals.
     material.*(parameter.field) = get_or(item, key, material.*(parameter.field), field);
   }
+  // Empty or absent: a cut tet stays as it is (checked with the other materials).
+  material.cut_to = get_or(item, "cut_to", material.cut_to, field);
   return material;
 }
 

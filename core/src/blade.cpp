@@ -46,8 +46,8 @@ inline PoseCheck ends_check(const Space& space, const Vec3& a, const Vec3& b) {
 }  // namespace
 
 Blade::Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
-             std::shared_ptr<const ForceShading> shading)
-    : space_(std::move(space)), shading_(std::move(shading)) {
+             std::shared_ptr<const ForceShading> shading, std::shared_ptr<CutState> cuts)
+    : space_(std::move(space)), shading_(std::move(shading)), cuts_(std::move(cuts)) {
   if (!space_) throw std::invalid_argument("a Blade needs a Space");
   if (spec.points < 1 || spec.points > kMaxPoints) {
     throw std::invalid_argument("a blade has 1.." + std::to_string(kMaxPoints) + " points, got " +
@@ -57,6 +57,12 @@ Blade::Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
     throw std::invalid_argument("blade '" + spec.name + "': start_mm and end_mm must be finite");
   }
   if (!shading_) shading_ = std::make_shared<const ForceShading>(*space_);
+  if (!cuts_) cuts_ = std::make_shared<CutState>(space_);
+  if (&cuts_->space() != space_.get()) {
+    throw std::invalid_argument("blade '" + spec.name + "': its CutState is another scene's");
+  }
+  cuttable_materials_ = std::any_of(space_->materials().begin(), space_->materials().end(),
+                                    [](const Material& m) { return is_cuttable(m.model); });
   tool_start_ = spec.start_mm;
   tool_span_ = spec.end_mm - spec.start_mm;
   if (!is_finite(tool_span_)) {
@@ -72,12 +78,14 @@ Blade::Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
   world_points_ = tool_points_;
   proxies_.assign(tool_points_.size(), Proxy(space_));
   point_ticks_.assign(tool_points_.size(), TickResult{});
+  start_places_.assign(tool_points_.size(), ProxyPlace{});
   coupling_ = spec.coupling;
   orientation_ = spec.orientation;
   length_mm_ = norm(tool_span_);
   tool_direction_ = length_mm_ > 0.0 ? tool_span_ / length_mm_ : Vec3{1.0, 0.0, 0.0};
   if (coupling_ == BladeCoupling::Rigid) {
     rigid_ = std::make_unique<RigidEdge>(space_, fractions_, length_mm_);
+    rigid_->set_cuts(cuts_.get());
     point_forces_.assign(tool_points_.size(), Vec3{});
     resisting_materials_ =
         std::any_of(space_->materials().begin(), space_->materials().end(), [](const Material& m) {
@@ -186,11 +194,37 @@ BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& sett
   if (!settings.valid()) return reject(false);
   const PoseCheck check = place_checked(pose);
   if (check != PoseCheck::Fine) return reject(check == PoseCheck::OutOfWorkspace);
-  if (coupling_ == BladeCoupling::Rigid) return step_rigid(dt_s, settings);
+  // A rejected tick (above) moves no point, so it cuts nothing.
+  if (cuttable_materials_) {
+    for (std::size_t i = 0; i < proxies_.size(); ++i) start_places_[i] = proxies_[i].place();
+  }
+  if (coupling_ == BladeCoupling::Rigid) {
+    const BladeTick tick = step_rigid(dt_s, settings);
+    cut_along_chords();
+    return tick;
+  }
   ideal_pose_ = device_pose_;
   const BladeTick tick = step_points(dt_s, settings);
   count(tick);
+  cut_along_chords();
   return tick;
+}
+
+// A chord from outside the mesh is not walked: its way in through the
+// mesh's boundary cuts what the point leaves behind in later ticks.
+void Blade::cut_along_chords() {
+  if (!cuttable_materials_) return;
+  CutState& cuts = *cuts_;
+  for (std::size_t i = 0; i < proxies_.size(); ++i) {
+    const ProxyPlace& start = start_places_[i];
+    const ProxyPlace& end = proxies_[i].place();
+    // Most ticks: still in the same tet, or on the same face, edge or vertex
+    // of it. Then the chord lies in that tet's closure (a tet is convex) and
+    // the point has left nothing: nothing to cut, and nothing to compute.
+    if (end.state == start.state && end.tet == start.tet && end.local == start.local) continue;
+    if (start.state != ProxyState::Outside) cuts.cut_along(start.tet, start.q, end.q);
+    cuts.cut_left_behind(start, end.q);
+  }
 }
 
 BladeTick Blade::step_points(double dt_s, const RuntimeSettings& settings) {
@@ -198,6 +232,7 @@ BladeTick Blade::step_points(double dt_s, const RuntimeSettings& settings) {
   int remaining = settings.blade_budget(static_cast<int>(n));
   const int cap = settings.max_transitions_per_tick;
   const ForceShading* shading = settings.force_shading ? shading_.get() : nullptr;
+  const CutState* cuts = cuts_.get();
   BladeTick tick;
   Vec3 weighted_force;  // Sum of s_i f_i, for the torque.
   auto index = [&](std::size_t k) { return first_ + k < n ? first_ + k : first_ + k - n; };
@@ -234,7 +269,7 @@ BladeTick Blade::step_points(double dt_s, const RuntimeSettings& settings) {
       continue;
     }
     // Inline (proxy.h): most points settle in the blade's own loop, without a call.
-    proxy.tick(world_points_[i], dt_s, settings, std::min(cap, remaining), shading, true, r);
+    proxy.tick(world_points_[i], dt_s, settings, std::min(cap, remaining), shading, true, r, cuts);
     remaining -= r.transitions;
     if (r.capped) {
       ++capped_in_first_pass;
@@ -252,7 +287,7 @@ BladeTick Blade::step_points(double dt_s, const RuntimeSettings& settings) {
     // Walks on with what the budget has left, then ends the tick, still capped or not.
     if (remaining > 0) {
       const int before = r.transitions;
-      proxy.walk(p, dt_s, settings, before + remaining, shading, false, r);
+      proxy.walk(p, dt_s, settings, before + remaining, shading, false, r, cuts);
       remaining -= r.transitions - before;
     } else {
       proxy.end_tick(p, r, settings, shading);

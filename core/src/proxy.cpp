@@ -250,14 +250,14 @@ TickResult Proxy::step(const Vec3& p, double dt_s) {
 }
 
 TickResult Proxy::step(const Vec3& p, double dt_s, const RuntimeSettings& settings,
-                       const ForceShading* shading) {
+                       const ForceShading* shading, const CutState* cuts) {
   TickResult result;
   ++counters_.ticks;
   if (!is_finite(p) || !space_->in_workspace(p) || !settings.valid()) {
     reject_input(is_finite(p) && !space_->in_workspace(p), result);
     return result;
   }
-  tick(p, dt_s, settings, settings.max_transitions_per_tick, shading, false, result);
+  tick(p, dt_s, settings, settings.max_transitions_per_tick, shading, false, result, cuts);
   return result;
 }
 
@@ -269,8 +269,10 @@ void Proxy::reject_input(bool out_of_workspace, TickResult& result) {
   result.rejected = true;
 }
 
-MoveContext Proxy::context_for(const Vec3& p, double dt_s, const RuntimeSettings& settings) const {
+MoveContext Proxy::context_for(const Vec3& p, double dt_s, const RuntimeSettings& settings,
+                               const CutState* cuts) const {
   MoveContext context;
+  context.cuts = cuts;
   context.stiffness_N_per_mm = settings.stiffness_N_per_mm;
   context.tolerance_mm = space_->tolerance();
   if (space_->uses_speed() && has_last_p_ && dt_s > 0.0 && std::isfinite(dt_s)) {
@@ -282,8 +284,9 @@ MoveContext Proxy::context_for(const Vec3& p, double dt_s, const RuntimeSettings
 // Out of line, with the loop and the tick's end inline: a point the settles
 // decline makes one call (docs/decisions.md, "Build tuning and the hot path").
 void Proxy::walk(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
-                 const ForceShading* shading, bool keep_capped_open, TickResult& result) {
-  const MoveContext context = context_for(p, dt_s, settings);
+                 const ForceShading* shading, bool keep_capped_open, TickResult& result,
+                 const CutState* cuts) {
+  const MoveContext context = context_for(p, dt_s, settings, cuts);
   int transitions = result.transitions;  // A local: no store-to-load round trip per transition.
   bool capped = false;
   for (;;) {
@@ -363,7 +366,7 @@ Proxy::Outcome Proxy::step_tet(const Vec3& p, const MoveContext& context) {
   const TetMesh& mesh = space_->mesh();
   const std::int32_t t = place_.tet;
   const Vec3 q = place_.q;
-  const MoveResult moved = move(space_->material_of_tet(t), p, q, context);
+  const MoveResult moved = move(space_->material_of_tet(t, context.cuts), p, q, context);
   if (!moved.moved) return Outcome::Unchanged;
   const Exit exit = find_tet_exit(mesh, t, q, moved.q, context.tolerance_mm);
   if (exit.face < 0) return settle_at(moved.q);
@@ -382,13 +385,14 @@ Proxy::Outcome Proxy::step_face(const Vec3& p, const MoveContext& context) {
   const Vec3 q = place_.q;
   const Plane& plane = mesh.face_plane(t, face);
   const double eps = context.tolerance_mm;
-  const Material& material = space_->material_of_tet(t);
+  const Material& material = space_->material_of_tet(t, context.cuts);
   if (strictly_beyond(dot(plane.normal, p - q), eps)) {
     const std::int32_t u = mesh.neighbour(t, face);
     // Leaving the mesh keeps q (docs/method.md, repair 3).
     if (u == kNoTet) return go(ProxyState::Outside, kNoTet, 0, q);
     // A rigid neighbour refuses at once (the common case of a slide on bone).
-    if (!space_->tet_is_rigid(u) && move(space_->material_of_tet(u), p, q, context).moved) {
+    if (!space_->tet_is_rigid(u) &&
+        move(space_->material_of_tet(u, context.cuts), p, q, context).moved) {
       return go(ProxyState::Tet, u, 0, q);
     }
   } else if (move(material, p, q, context).moved) {
@@ -407,7 +411,7 @@ Proxy::Outcome Proxy::step_face(const Vec3& p, const MoveContext& context) {
   const Vec3 q = place_.q;
   const double eps = context.tolerance_mm;
   const Vec3 target = project_to_plane(p, mesh.face_plane(t, face));
-  const MoveResult moved = move(space_->material_of_tet(t), target, q, context);
+  const MoveResult moved = move(space_->material_of_tet(t, context.cuts), target, q, context);
   if (!moved.moved) return Outcome::Unchanged;
   const Exit exit = find_face_exit(mesh, t, face, q, moved.q, eps);
   if (exit.face < 0) {
@@ -468,7 +472,7 @@ Proxy::Outcome Proxy::step_edge(const Vec3& p, const MoveContext& context) {
     // A rigid tet refuses every move: it can neither take the proxy (a-1)
     // nor offer a face to slide on (a-3), so only its (a-2) test counts.
     if (space_->tet_is_rigid(entry.tet)) continue;
-    const Material& material = space_->material_of_tet(entry.tet);
+    const Material& material = space_->material_of_tet(entry.tet, context.cuts);
     if (toward && move(material, p, q, context).moved) return go(ProxyState::Tet, entry.tet, 0, q);
     const double normals_dot = dot(planes[0]->normal, planes[1]->normal);
     for (int side = 0; side < 2; ++side) {
@@ -505,7 +509,7 @@ Proxy::Outcome Proxy::step_edge(const Vec3& p, const MoveContext& context) {
   const Vec3& direction = mesh.edge_direction(e);
   const Vec3& o0 = mesh.vertex(ends[0]);
   const MoveResult moved =
-      move(space_->material_of_tet(t), project_to_line(p, o0, direction), q, context);
+      move(space_->material_of_tet(t, context.cuts), project_to_line(p, o0, direction), q, context);
   if (!moved.moved) return Outcome::Unchanged;
   if (beyond_edge_start(moved.q, o0, direction)) {
     return go(ProxyState::Vertex, t, local_index_of(mesh.tet(t), ends[0]), o0);
@@ -562,7 +566,7 @@ Proxy::Outcome Proxy::step_vertex(const Vec3& p, const MoveContext& context) {
     any_toward = any_toward || toward;
     // A rigid tet refuses every move: no (a-1) tet, no (a-3) face or edge.
     if (space_->tet_is_rigid(entry.tet)) continue;
-    const Material& material = space_->material_of_tet(entry.tet);
+    const Material& material = space_->material_of_tet(entry.tet, context.cuts);
     if (toward && move(material, p, q, context).moved) return go(ProxyState::Tet, entry.tet, 0, q);
     for (int m = 0; m < 3; ++m) {
       // Eq. (12) on p' = p - n_m sd_m(p), without forming p' unless it wins:

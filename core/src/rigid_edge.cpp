@@ -108,8 +108,9 @@ void RigidEdge::set_walls(std::size_t i, const ProxyPlace& place, const Vec3& de
 ProbeWalls RigidEdge::membrane_walls(const ProxyPlace& place, const Vec3& device_point,
                                      std::int32_t& start_tet) const {
   const Space& space = *space_;
-  const auto is_membrane = [&space](std::int32_t t) {
-    return t != kNoTet && space.tet_model(t) == MaterialModel::Membrane;
+  const CutState* cuts = cuts_;
+  const auto is_membrane = [&space, cuts](std::int32_t t) {
+    return t != kNoTet && space.tet_model(t, cuts) == MaterialModel::Membrane;
   };
   const bool constrained = place.state == ProxyState::Face || place.state == ProxyState::Edge ||
                            place.state == ProxyState::Vertex;
@@ -176,7 +177,7 @@ void RigidEdge::restart_tick() {
 void RigidEdge::add_contact(double fraction, const Plane& plane, std::int32_t wall_tet,
                             const ContactFeature& feature) {
   if (wall_tet != kNoTet) {
-    const Material& material = space_->material_of_tet(wall_tet);
+    const Material& material = space_->material_of_tet(wall_tet, cuts_);
     contact_static_friction_ = std::max(contact_static_friction_, material.static_friction);
     contact_dynamic_friction_ = std::max(contact_dynamic_friction_, material.dynamic_friction);
   }
@@ -222,7 +223,7 @@ bool RigidEdge::probe_motion(const EdgePose& edge, double& advance, bool add_con
       const Vec3 a = k == 0 ? ideal_points_[i] : trial_points_[i];
       const std::int32_t a_tet = k == 0 ? ideal_tets_[i] : trial_tets_[i];
       trial_points_[i] = last.point(fractions_[i], length_mm_);
-      const SegmentProbe probe = probe_segment(space, a_tet, a, trial_points_[i], walls_[i]);
+      const SegmentProbe probe = probe_segment(space, a_tet, a, trial_points_[i], walls_[i], cuts_);
       if (probe.hit) {
         free = false;
         const double at = from + (to - from) * probe.fraction;
@@ -258,12 +259,12 @@ bool RigidEdge::probe_motion(const EdgePose& edge, double& advance, bool add_con
             ? ProbeWalls::RigidAndMembrane
             : ProbeWalls::Rigid;
     const SegmentProbe ahead =
-        probe_segment(space, trial_tets_[i], trial_points_[i], trial_points_[i + 1], walls);
+        probe_segment(space, trial_tets_[i], trial_points_[i], trial_points_[i + 1], walls, cuts_);
     if (!ahead.hit) continue;
     free = false;
     if (!add_contacts) return false;
-    const SegmentProbe back =
-        probe_segment(space, trial_tets_[i + 1], trial_points_[i + 1], trial_points_[i], walls);
+    const SegmentProbe back = probe_segment(space, trial_tets_[i + 1], trial_points_[i + 1],
+                                            trial_points_[i], walls, cuts_);
     if (ahead.exhausted || !back.hit || back.exhausted) continue;
     const double gap = fractions_[i + 1] - fractions_[i];
     EdgeContact contact;

@@ -115,9 +115,13 @@ Material read_material(const Json& object, const Path& path, NameRegistry& names
     }
     material.*(parameter->field) = read_in_range(*value, parameter_path, parameter->range);
   }
+  // Checked against the other materials once all are read (read_materials).
+  if (const Json* cut_to = find(object, "cut_to")) {
+    material.cut_to = read_name(*cut_to, Path(path, "cut_to"));
+  }
   for (auto it = object.begin(); it != object.end(); ++it) {
     const bool known =
-        it.key() == "name" || it.key() == "model" ||
+        it.key() == "name" || it.key() == "model" || it.key() == "cut_to" ||
         std::any_of(material_parameters().begin(), material_parameters().end(),
                     [&](const MaterialParameterSpec& p) { return p.range.name == it.key(); });
     if (!known) fail(Path(path, it.key()), "unknown field");
@@ -134,6 +138,10 @@ void read_materials(const Json& root, const Path& root_path, Scene& scene) {
   scene.materials.reserve(materials.size());
   for (std::size_t i = 0; i < materials.size(); ++i) {
     scene.materials.push_back(read_material(materials[i], Path(path, i), names));
+  }
+  for (std::size_t i = 0; i < scene.materials.size(); ++i) {
+    const std::string problem = cut_to_problem(scene.materials, i);
+    if (!problem.empty()) fail(Path(Path(path, i), "cut_to"), problem);
   }
 }
 

@@ -39,6 +39,7 @@ Json material_tree(const Material& material) {
   for (const MaterialParameterSpec& parameter : material_model_spec(material.model).parameters) {
     tree[std::string(parameter.range.name)] = material.*(parameter.field);
   }
+  if (!material.cut_to.empty()) tree["cut_to"] = material.cut_to;
   return tree;
 }
 

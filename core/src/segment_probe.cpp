@@ -37,8 +37,8 @@ bool first_entry(const TetMesh& mesh, const Vec3& x, const Vec3& b, double eps, 
   return true;
 }
 
-bool is_wall(const Space& space, std::int32_t t, ProbeWalls walls) {
-  const MaterialModel model = space.tet_model(t);
+bool is_wall(const Space& space, std::int32_t t, ProbeWalls walls, const CutState* cuts) {
+  const MaterialModel model = space.tet_model(t, cuts);
   return model == MaterialModel::Rigid ||
          (walls == ProbeWalls::RigidAndMembrane && model == MaterialModel::Membrane);
 }
@@ -46,7 +46,7 @@ bool is_wall(const Space& space, std::int32_t t, ProbeWalls walls) {
 }  // namespace
 
 SegmentProbe probe_segment(const Space& space, std::int32_t start_tet, const Vec3& a, const Vec3& b,
-                           ProbeWalls walls) {
+                           ProbeWalls walls, const CutState* cuts) {
   const TetMesh& mesh = space.mesh();
   const double eps = space.tolerance();
   SegmentProbe result;
@@ -64,7 +64,7 @@ SegmentProbe probe_segment(const Space& space, std::int32_t start_tet, const Vec
       s += (1.0 - s) * h;
       x = x + (b - x) * h;
       const std::int32_t u = mesh.boundary_faces()[face].tet;
-      if (is_wall(space, u, walls)) {
+      if (is_wall(space, u, walls, cuts)) {
         result.hit = true;
         result.fraction = s;
         result.contact = mesh.boundary_plane(face);  // Outward: out of the rigid tet.
@@ -96,7 +96,7 @@ SegmentProbe probe_segment(const Space& space, std::int32_t start_tet, const Vec
     s += (1.0 - s) * exit_h;
     x = x + (b - x) * exit_h;
     const std::int32_t u = mesh.neighbour(t, exit_face);
-    if (u != kNoTet && is_wall(space, u, walls)) {
+    if (u != kNoTet && is_wall(space, u, walls, cuts)) {
       result.hit = true;
       result.fraction = s;
       const Plane& face = planes[exit_face];

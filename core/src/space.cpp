@@ -32,8 +32,9 @@ Space::Space(Key /*key*/, TetMesh mesh, std::vector<Material> materials, EngineS
   check_in_range(setting_range::kCappedTickForce, settings_.capped_tick_force_N,
                  "capped_tick_force_N");
   for (const Material& material : materials_) validate_material(material);
+  cut_variants_ = hapticut::cut_variants(materials_);
   const auto material_count = static_cast<std::int32_t>(materials_.size());
-  models_.resize(mesh_.tet_count());
+  models_.resize(2 * static_cast<std::size_t>(mesh_.tet_count()));
   for (std::int32_t t = 0; t < mesh_.tet_count(); ++t) {
     if (mesh_.material(t) >= material_count) {
       throw MeshError("tet " + std::to_string(t) + " refers to material " +
@@ -41,7 +42,9 @@ Space::Space(Key /*key*/, TetMesh mesh, std::vector<Material> materials, EngineS
                           std::to_string(material_count) + " materials)",
                       t);
     }
-    models_[t] = materials_[mesh_.material(t)].model;
+    const std::int32_t own = mesh_.material(t);
+    models_[2 * static_cast<std::size_t>(t)] = materials_[own].model;
+    models_[2 * static_cast<std::size_t>(t) + 1] = materials_[cut_variants_[own]].model;
   }
   for (const Material& m : materials_)
     uses_speed_ = uses_speed_ || m.model == MaterialModel::Viscous;

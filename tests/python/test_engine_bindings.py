@@ -127,3 +127,34 @@ def test_straight_stroke_samples_at_the_rate():
     np.testing.assert_allclose(poses[:, 3:], [[1, 0, 0, 0]] * 1001)
     with pytest.raises(ValueError):
         engine.straight_stroke([0, 0, 0], [1, 0, 0], speed_mm_per_s=0)
+
+
+def test_a_blade_remembers_its_cut_until_reset_cuts():
+    # Flesh (drag 4 mm) cut to a tenth of its drag, in a slab 10 < x < 20 (docs/decisions.md,
+    # "Cut memory"); one point through it and back out, twice, then once more after reset_cuts.
+    flesh = {**DRAG, "drag_distance_mm": 4.0, "cut_to": "flesh_cut"}
+    flesh_cut = {**DRAG, "name": "flesh_cut", "drag_distance_mm": 0.4}
+    vertices, tets = _core.grid_mesh([0, 10, 20, 30], [0, 10, 20, 30], [0, 10, 20, 30], 0.2, 5)
+    centres = vertices[tets].mean(axis=1)
+    labels = np.where((centres[:, 0] > 10) & (centres[:, 0] < 20), 1, 0).astype(np.int32)
+    space = _core.Space(vertices, tets, labels, [FREE, flesh, flesh_cut])
+    blade = _core.Blade(space, [0, 0, 0], [0, 0, 0], 1, coupling="independent")
+    path = np.linspace([2, 13.3, 14.1], [28, 13.3, 14.1], 2600)
+    poses = np.ascontiguousarray(np.hstack([path, np.tile([1.0, 0, 0, 0], (len(path), 1))]))
+
+    # Deep in the slab (15 < x < 19): the first stroke's point slid along the slab's jittered
+    # face before it went in, so the slit strays from the line near the entry.
+    deep = (path[:, 0] > 15) & (path[:, 0] < 19)
+
+    def stroke() -> float:
+        blade.reset(poses[0])
+        return float(np.linalg.norm(blade.run(poses, 0.001)["force_N"], axis=1)[deep].max())
+
+    assert stroke() == pytest.approx(0.1 * 4.0, abs=0.02)
+    cut = blade.cut_tets
+    assert len(cut) > 0 and set(labels[cut].tolist()) == {1}
+    assert stroke() <= 0.1 * 0.4 + 1e-9  # Through its own slit: the cut variant.
+    blade.reset_cuts()
+    assert len(blade.cut_tets) == 0
+    assert stroke() == pytest.approx(0.1 * 4.0, abs=0.02)
+    np.testing.assert_array_equal(blade.cut_tets, cut)  # The same stroke, the same cut.

@@ -91,7 +91,7 @@ def _schema_bounds(prop: dict) -> tuple[float, bool, float]:
 def test_schema_material_parameters_agree_with_the_table():
     material = SCHEMA["$defs"]["material"]
     assert material["properties"]["model"]["enum"] == [m["name"] for m in TABLE["models"]]
-    parameter_properties = set(material["properties"]) - {"name", "model"}
+    parameter_properties = set(material["properties"]) - {"name", "model", "cut_to"}
     assert parameter_properties == set(PARAMETER_RANGES)
     for name, row in PARAMETER_RANGES.items():
         prop = material["properties"][name]
@@ -105,7 +105,9 @@ def test_schema_material_parameters_agree_with_the_table():
         then = rules[model]
         assert sorted(then.get("required", [])) == sorted(k for k, req in takes.items() if req)
         forbidden = {k for k, v in then.get("properties", {}).items() if v is False}
-        assert forbidden == set(PARAMETER_RANGES) - set(takes), model
+        # cut_to: only the cuttable models (drag, viscous, membrane) take one.
+        assert forbidden - {"cut_to"} == set(PARAMETER_RANGES) - set(takes), model
+        assert ("cut_to" in forbidden) == (model in ("free", "rigid")), model
 
 
 def test_schema_settings_agree_with_the_engine_ranges():

@@ -359,6 +359,45 @@ def test_schema_rejects_what_it_can_express(schema_validator, name):
     assert not schema_validator.is_valid(apply_patch(example_tree(), case["patch"]))
 
 
+# --- Cut memory (docs/decisions.md, "Cut memory") --------------------------------------------
+
+
+def _with_cut_to(example: Scene, cut_to: str) -> Scene:
+    flesh_cut = Material("flesh_cut", "drag", drag_distance_mm=0.1)
+    materials = [example.materials[0], Material("flesh", "drag", 1.0, cut_to=cut_to), flesh_cut]
+    return Scene(materials, example.vertices, example.tets, example.tet_materials, example.blades)
+
+
+@pytest.mark.parametrize("encoding", [JSON, MSGPACK])
+def test_cut_to_round_trips(example: Scene, encoding):
+    scene = _with_cut_to(example, "flesh_cut")
+    again = parse_scene(serialize_scene(scene, encoding), encoding)
+    assert [m.cut_to for m in again.materials] == ["", "flesh_cut", ""]
+    assert again == scene
+
+
+@pytest.mark.parametrize("encoding", [JSON, MSGPACK])
+def test_a_bad_cut_to_names_the_material(example: Scene, encoding):
+    with pytest.raises(SceneError, match="^/materials/1/cut_to: material 'flesh': cut_to names"):
+        serialize_scene(_with_cut_to(example, "gristle"), encoding)
+    tree = example_tree()
+    tree["materials"][1]["cut_to"] = "flesh"
+    assert error_of(encode(tree, encoding), encoding) == (
+        "/materials/1/cut_to: material 'flesh': cut_to makes a cycle ('flesh' -> 'flesh')"
+    )
+
+
+def test_the_engine_takes_cut_to_from_a_scene(example: Scene):
+    from hapticut.engine import space_from_scene
+
+    space_from_scene(_with_cut_to(example, "flesh_cut"))
+    with pytest.raises(ValueError, match="cut_to 'air'"):
+        bad = _with_cut_to(example, "flesh_cut")
+        bad.materials[1] = Material("flesh", "drag", 1.0, cut_to="air")
+        bad.materials[0] = Material("air", "rigid")
+        space_from_scene(bad)
+
+
 # --- Dicts and size --------------------------------------------------------------------------
 
 
@@ -373,6 +412,7 @@ def test_scene_dict_round_trip(example: Scene):
         "break_force_N",
         "static_friction",
         "dynamic_friction",
+        "cut_to",
     }
     assert scene_from_dict(as_dict) == example
     assert scene_from_dict(json.loads(json.dumps(as_dict, default=np.ndarray.tolist))) == example

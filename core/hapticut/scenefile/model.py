@@ -75,6 +75,9 @@ class Material:
     # rigid: friction at a rigid blade's contacts, static and dynamic (0: frictionless).
     static_friction: float = _default(PARAMETER_RANGES, "static_friction")
     dynamic_friction: float = _default(PARAMETER_RANGES, "dynamic_friction")
+    # drag, viscous, membrane: the material (by name) a tet of this one acts as once a blade
+    # has cut it; "" (the default): a cut tet stays as it is (docs/scene-format.md).
+    cut_to: str = ""
 
 
 BLADE_COUPLINGS = ("rigid", "independent")

@@ -16,6 +16,7 @@
 #include <span>
 #include <vector>
 
+#include "hapticut/cut_state.h"
 #include "hapticut/edge_fit.h"
 #include "hapticut/force_shading.h"
 #include "hapticut/pose.h"
@@ -103,15 +104,21 @@ class Blade {
 
   // Throws std::invalid_argument naming the value when spec.points is outside
   // 1..kMaxPoints or an end is not finite. Builds its own ForceShading from
-  // the Space unless one is given (shared between blades of one Space).
+  // the Space unless one is given (shared between blades of one Space), and
+  // its own CutState unless one is given (shared between the blades of one
+  // loaded scene: what one cuts, the others find cut; made for this Space).
   Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
-        std::shared_ptr<const ForceShading> shading = nullptr);
+        std::shared_ptr<const ForceShading> shading = nullptr,
+        std::shared_ptr<CutState> cuts = nullptr);
   Blade(const Space& space, const BladeSpec& spec) : Blade(owner_of(space), spec) {}
 
   // Places every proxy (may allocate). Throws std::invalid_argument for a pose
-  // Blade::step would reject.
+  // Blade::step would reject. The cut tets stay cut (reset_cuts uncuts them).
   void reset(const Pose& pose);
   // One tick with the Space's settings, or with the given ones. Never allocates.
+  // The tick reads the materials through the cut state as it was when the
+  // tick began; at its end every point cuts what it has passed and left
+  // (cut_state.h, the rule for cutting), which later ticks feel.
   BladeTick step(const Pose& pose, double dt_s);
   BladeTick step(const Pose& pose, double dt_s, const RuntimeSettings& settings);
   // Whether step and reset would take this pose, and why not: the same check
@@ -130,6 +137,10 @@ class Blade {
   int point_count() const { return static_cast<int>(proxies_.size()); }
   const Space& space() const { return *space_; }
   const ForceShading& shading() const { return *shading_; }
+  // The cut tets this blade reads and marks (shared with the scene's other blades).
+  const CutState& cuts() const { return *cuts_; }
+  // Uncuts every tet of the shared cut state (cut_state.h). Never allocates.
+  void reset_cuts() { cuts_->reset_cuts(); }
   const std::vector<Vec3>& tool_points() const { return tool_points_; }
   const std::vector<Vec3>& world_points() const { return world_points_; }
   const std::vector<Proxy>& proxies() const { return proxies_; }
@@ -169,9 +180,16 @@ class Blade {
   EdgePose device_edge() const;
   void update_ideal_pose(const Pose& device);
   void place_proxies_on_ideal(const RuntimeSettings& settings);
+  // The rule for cutting (cut_state.h): what each point left behind over the
+  // tick, from start_places_ to its place now.
+  void cut_along_chords();
 
   std::shared_ptr<const Space> space_;
   std::shared_ptr<const ForceShading> shading_;
+  std::shared_ptr<CutState> cuts_;
+  // Whether the Space has a cuttable material (drag, viscous, membrane): only
+  // then do the points look for tets to cut.
+  bool cuttable_materials_ = true;
   Vec3 tool_start_;  // The segment's start and its span (end - start), in the tool frame.
   Vec3 tool_span_;
   std::vector<double> fractions_;  // s_i: point i is tool_start_ + s_i tool_span_.
@@ -182,7 +200,8 @@ class Blade {
   Vec3 world_span_;
   std::vector<Proxy> proxies_;
   std::vector<TickResult> point_ticks_;
-  std::size_t first_ = 0;  // Where the next tick starts: the budget's round robin.
+  std::vector<ProxyPlace> start_places_;  // The points' places when this tick began.
+  std::size_t first_ = 0;                 // Where the next tick starts: the budget's round robin.
   std::uint64_t tick_index_ = 0;
   BladeTick last_tick_;
   BladeCounters counters_;

@@ -6,11 +6,14 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "hapticut/parameter_range.h"
 #include "hapticut/vec3.h"
 
 namespace hapticut {
+
+class CutState;
 
 // The move function a material applies (docs/method.md, "The material's move
 // function"). Names match the scene file's "model" strings.
@@ -27,6 +30,11 @@ struct Material {
   // Rigid: friction at a rigid blade's contacts, static and dynamic.
   double static_friction = material_range::kStaticFriction.default_value;
   double dynamic_friction = material_range::kDynamicFriction.default_value;
+  // Cut memory (docs/decisions.md, "Cut memory"): the name of the material of
+  // the scene a tet of this one acts as once a blade has cut it; empty: a cut
+  // tet stays as it is. Only a cuttable material (drag, viscous, membrane) has
+  // one, and it names a material that is not rigid (cut_to_problem).
+  std::string cut_to{};
 };
 
 // What a move may depend on besides p' and q; fixed for the whole tick so a
@@ -36,6 +44,10 @@ struct MoveContext {
   double stiffness_N_per_mm = setting_range::kStiffness.default_value;
   double target_speed_mm_per_s = 0.0;  // Speed of the device point this tick (viscous).
   double tolerance_mm = 1e-9;          // docs/method.md, repair 5: not moved if |p'-q| < D + eps.
+  // The tets cut so far (cut_state.h), for the walk's lookup of the material
+  // a tet acts as (Space::material_of_tet); null: nothing is cut. The move
+  // function itself does not read it.
+  const CutState* cuts = nullptr;
 };
 
 struct MoveResult {
@@ -64,6 +76,24 @@ inline MoveResult move(const Material& material, const Vec3& target, const Vec3&
 double lag_distance_mm(const Material& material, const MoveContext& context);
 
 inline bool is_rigid(const Material& material) { return material.model == MaterialModel::Rigid; }
+
+// Whether a blade cuts a tet of this model (and a cut_to is allowed on it):
+// the materials that resist without being rigid. As core/hapticut/cut_surface.py's
+// CUTTABLE_MODELS.
+inline bool is_cuttable(MaterialModel model) {
+  return model == MaterialModel::Drag || model == MaterialModel::Viscous ||
+         model == MaterialModel::Membrane;
+}
+
+// Why material `index`'s cut_to is wrong among `materials`, or "" when it is
+// fine (empty, or on a cuttable material naming a material of the list that
+// is not rigid, and following cut_to from there never leads back to it). The
+// scene reader puts the reason under the field's path; Space::create throws it.
+std::string cut_to_problem(const std::vector<Material>& materials, std::size_t index);
+// For each material, the index of the material its tets act as once cut (its
+// own index when it has no cut_to). Throws std::invalid_argument naming the
+// material for the first cut_to_problem.
+std::vector<std::int32_t> cut_variants(const std::vector<Material>& materials);
 
 // Throws std::invalid_argument naming the material, the parameter and the value
 // unless every parameter of its model is in the table's range

@@ -90,11 +90,14 @@ class alignas(64) Proxy {
   // more would still change something. On a capped tick the proxy keeps its
   // valid place (and catches up next tick) and the force of the last finished
   // tick is held, no jump; from the second unfinished tick in a row on, the
-  // held force is limited to capped_tick_force_N.
+  // held force is limited to capped_tick_force_N. `cuts`, when given, are the
+  // tets cut so far: a cut tet acts as its material's cut variant
+  // (Space::material_of_tet); the proxy reads them, a Blade marks them.
   TickResult step(const Vec3& p, double dt_s);
   TickResult step(const Vec3& p, double dt_s, const RuntimeSettings& settings,
-                  const ForceShading* shading = nullptr);
-  // A single transition of Table 1 (one pass of (a) then (b) for the current state).
+                  const ForceShading* shading = nullptr, const CutState* cuts = nullptr);
+  // A single transition of Table 1 (one pass of (a) then (b) for the current
+  // state), with the cut tets context.cuts names.
   Transition transition(const Vec3& p, const MoveContext& context);
 
   const ProxyPlace& place() const { return place_; }
@@ -142,9 +145,11 @@ class alignas(64) Proxy {
   // (the Blade then walks on with what its budget has left, and ends it).
   void reject_input(bool out_of_workspace, TickResult& result);
   // A point's tick (inline, defined below, so the blade's loop has it without
-  // a call): the first settle that takes it, else walk.
+  // a call): the first settle that takes it, else walk. Every piece reads the
+  // materials through `cuts` (null: nothing cut), fixed for the tick.
   void tick(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
-            const ForceShading* shading, bool keep_capped_open, TickResult& result);
+            const ForceShading* shading, bool keep_capped_open, TickResult& result,
+            const CutState* cuts = nullptr);
   // The settles: the ticks most points make, inline (defined below). Each one
   // decides whether its tick ends after one move within the proxy's place;
   // when it does, it makes that move and ends the tick with the same place,
@@ -156,12 +161,14 @@ class alignas(64) Proxy {
   //
   // A TET proxy whose material moves it (free, drag, membrane) to a q' still
   // inside its tet stays there (step_tet's settle). Declines a viscous material.
-  bool settle_in_tet(const Vec3& p, const RuntimeSettings& settings, int limit, TickResult& result);
+  bool settle_in_tet(const Vec3& p, const RuntimeSettings& settings, int limit, TickResult& result,
+                     const CutState* cuts = nullptr);
   // A FACE proxy pressed against bone: p strictly beyond the face, the
   // neighbour rigid, the slide's end inside the face and off its edges
   // (step_face's settle). Declines a viscous material and a shaded force.
   bool settle_on_bone(const Vec3& p, const RuntimeSettings& settings, int limit,
-                      const ForceShading* shading, TickResult& result);
+                      const ForceShading* shading, TickResult& result,
+                      const CutState* cuts = nullptr);
   // An OUTSIDE proxy in free air beside the mesh: q -> p lies wholly beyond
   // one face of the entry box, so q follows p (step_outside's first test,
   // then the walk's probe that finds nothing more to do). Declines a shaded force.
@@ -171,8 +178,10 @@ class alignas(64) Proxy {
   // `limit` in all this tick, then end_tick, unless the walk is capped and
   // `keep_capped_open`.
   void walk(const Vec3& p, double dt_s, const RuntimeSettings& settings, int limit,
-            const ForceShading* shading, bool keep_capped_open, TickResult& result);
-  MoveContext context_for(const Vec3& p, double dt_s, const RuntimeSettings& settings) const;
+            const ForceShading* shading, bool keep_capped_open, TickResult& result,
+            const CutState* cuts = nullptr);
+  MoveContext context_for(const Vec3& p, double dt_s, const RuntimeSettings& settings,
+                          const CutState* cuts) const;
   // The end of every tick walked or settled (inline, defined below): the
   // counters, p, and the force, eq. (15), or the held force when capped.
   void end_tick(const Vec3& p, TickResult& result, const RuntimeSettings& settings,
@@ -290,10 +299,10 @@ class alignas(64) Proxy {
 // step_tet's (b-2): the material's move, no exit plane strictly crossed.
 [[gnu::always_inline]] inline bool Proxy::settle_in_tet(const Vec3& p,
                                                         const RuntimeSettings& settings, int limit,
-                                                        TickResult& result) {
+                                                        TickResult& result, const CutState* cuts) {
   if (place_.state != ProxyState::Tet || result.transitions != 0 || limit < 1) return false;
   const std::int32_t t = place_.tet;
-  const MaterialModel model = space_->tet_model(t);
+  const MaterialModel model = space_->tet_model(t, cuts);
   if (model == MaterialModel::Viscous) return false;  // Its move needs the tick's speed.
   const double eps = space_->tolerance();
   MoveResult moved{true, p};
@@ -301,7 +310,7 @@ class alignas(64) Proxy {
     MoveContext context;
     context.stiffness_N_per_mm = settings.stiffness_N_per_mm;
     context.tolerance_mm = eps;
-    moved = move(space_->material_of_tet(t), p, place_.q, context);
+    moved = move(space_->material_of_tet(t, cuts), p, place_.q, context);
   }
   if (moved.moved) {
     const Plane* planes = &space_->mesh().face_plane(t, 0);
@@ -321,7 +330,7 @@ class alignas(64) Proxy {
 [[gnu::always_inline]] inline bool Proxy::settle_on_bone(const Vec3& p,
                                                          const RuntimeSettings& settings, int limit,
                                                          const ForceShading* shading,
-                                                         TickResult& result) {
+                                                         TickResult& result, const CutState* cuts) {
   if (place_.state != ProxyState::Face || result.transitions != 0 || limit < 1) return false;
   if (shading != nullptr && settings.force_shading) return false;
   const TetMesh& mesh = space_->mesh();
@@ -333,7 +342,7 @@ class alignas(64) Proxy {
   if (!strictly_beyond(dot(planes[face].normal, p - q), eps)) return false;
   const std::int32_t u = mesh.neighbour(t, face);
   if (u == kNoTet || !space_->tet_is_rigid(u)) return false;
-  const MaterialModel model = space_->tet_model(t);
+  const MaterialModel model = space_->tet_model(t, cuts);
   if (model == MaterialModel::Viscous) return false;  // Its move needs the tick's speed.
   const Vec3 target = project_to_plane(p, planes[face]);
   MoveResult moved{true, target};
@@ -341,7 +350,7 @@ class alignas(64) Proxy {
     MoveContext context;
     context.stiffness_N_per_mm = settings.stiffness_N_per_mm;
     context.tolerance_mm = eps;
-    moved = move(space_->material_of_tet(t), target, q, context);
+    moved = move(space_->material_of_tet(t, cuts), target, q, context);
   }
   if (moved.moved) {
     bool reaches = false;
@@ -370,13 +379,13 @@ class alignas(64) Proxy {
 [[gnu::always_inline]] inline void Proxy::tick(const Vec3& p, double dt_s,
                                                const RuntimeSettings& settings, int limit,
                                                const ForceShading* shading, bool keep_capped_open,
-                                               TickResult& result) {
-  if (settle_in_tet(p, settings, limit, result) ||
-      settle_on_bone(p, settings, limit, shading, result) ||
+                                               TickResult& result, const CutState* cuts) {
+  if (settle_in_tet(p, settings, limit, result, cuts) ||
+      settle_on_bone(p, settings, limit, shading, result, cuts) ||
       settle_in_air(p, settings, limit, shading, result)) {
     return;
   }
-  walk(p, dt_s, settings, limit, shading, keep_capped_open, result);
+  walk(p, dt_s, settings, limit, shading, keep_capped_open, result, cuts);
 }
 
 }  // namespace hapticut

@@ -54,6 +54,9 @@ class RigidEdge {
   // it resists as a target). May start the sample's walks in the tet outside
   // the membrane it lies on.
   void set_walls(std::size_t i, const ProxyPlace& place, const Vec3& device_point);
+  // The tets cut so far (cut_state.h; null: none): the walls and the
+  // contacts' friction read the material a tet acts as through them.
+  void set_cuts(const CutState* cuts) { cuts_ = cuts; }
 
   // Keeps the verified pose as the tick's first (friction and a restart go back to it).
   void begin_tick();
@@ -166,6 +169,7 @@ class RigidEdge {
   void roll_on_support(bool locked);
 
   std::shared_ptr<const Space> space_;  // Shared ownership (space.h, "Who owns a Space").
+  const CutState* cuts_ = nullptr;      // The Blade's, set_cuts.
   std::vector<double> fractions_;
   double length_mm_ = 0.0;
   EdgePose ideal_edge_;

@@ -44,8 +44,10 @@ enum class ProbeWalls : std::uint8_t { Rigid, RigidAndMembrane };
 
 // start_tet must hold a (within the tolerance) and not be a wall, or be kNoTet
 // with a outside the mesh.
+// A membrane wall is a tet whose material acts as a membrane now, through `cuts`
+// (Space::material_of_tet).
 SegmentProbe probe_segment(const Space& space, std::int32_t start_tet, const Vec3& a, const Vec3& b,
-                           ProbeWalls walls = ProbeWalls::Rigid);
+                           ProbeWalls walls = ProbeWalls::Rigid, const CutState* cuts = nullptr);
 
 // The tet a point lies in for the probe: a non-rigid tet holding it, kNoTet
 // outside the mesh; `inside_rigid` when only rigid tets hold it.

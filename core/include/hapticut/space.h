@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "hapticut/aabb_tree.h"
+#include "hapticut/cut_state.h"
 #include "hapticut/geometry.h"
 #include "hapticut/material.h"
 #include "hapticut/parameter_range.h"
@@ -86,14 +87,30 @@ class Space : public std::enable_shared_from_this<Space> {
 
   const TetMesh& mesh() const { return mesh_; }
   const std::vector<Material>& materials() const { return materials_; }
-  const Material& material_of_tet(std::int32_t t) const { return materials_[mesh_.material(t)]; }
-  // The model of tet t's material, one byte a tet: the walk asks it per step.
-  MaterialModel tet_model(std::int32_t t) const { return models_[t]; }
-  bool tet_is_rigid(std::int32_t t) const { return models_[t] == MaterialModel::Rigid; }
-  // TetMesh::prefetch_tet and the tet's model byte.
+  // The material tet t acts as now (docs/decisions.md, "Cut memory"): its
+  // own, or, once `cuts` has it cut, its material's cut variant (cut_to; the
+  // material itself without one). cuts null: nothing is cut. The one
+  // definition the walk, the rigid edge's walls and its probes ask.
+  const Material& material_of_tet(std::int32_t t, const CutState* cuts) const {
+    const std::int32_t own = mesh_.material(t);
+    return materials_[cut_byte(t, cuts) != 0 ? cut_variants_[own] : own];
+  }
+  // The model of the material tet t acts as now, from two bytes a tet (its
+  // own model's, its cut variant's), side by side: the walk asks it per step.
+  MaterialModel tet_model(std::int32_t t, const CutState* cuts) const {
+    return models_[2 * static_cast<std::size_t>(t) + cut_byte(t, cuts)];
+  }
+  // The model of tet t's own material, cut or not (what decides that it is cut).
+  MaterialModel own_model(std::int32_t t) const { return models_[2 * static_cast<std::size_t>(t)]; }
+  // Whether tet t is bone. A cut never changes it: no rigid material has a
+  // cut_to, and none is one (cut_to_problem).
+  bool tet_is_rigid(std::int32_t t) const { return own_model(t) == MaterialModel::Rigid; }
+  // For each material, the index of its cut variant (its own without a cut_to).
+  const std::vector<std::int32_t>& cut_variants() const { return cut_variants_; }
+  // TetMesh::prefetch_tet and the tet's model bytes.
   void prefetch_tet(std::int32_t t) const {
     mesh_.prefetch_tet(t);
-    __builtin_prefetch(&models_[t]);
+    __builtin_prefetch(&models_[2 * static_cast<std::size_t>(t)]);
   }
   // prefetch_tet for every tet round tet t's local edge, all at once: the EDGE
   // step's loop over the fan would wait for each in turn (its branches depend
@@ -117,9 +134,15 @@ class Space : public std::enable_shared_from_this<Space> {
   bool in_workspace(const Vec3& p) const { return box_holds(workspace_, p); }
 
  private:
+  static std::size_t cut_byte(std::int32_t t, const CutState* cuts) {
+    return cuts != nullptr ? cuts->cut(t) : 0;
+  }
+
   TetMesh mesh_;
   std::vector<Material> materials_;
+  // Two a tet: models_[2 t] its own material's, models_[2 t + 1] its cut variant's.
   std::vector<MaterialModel> models_;
+  std::vector<std::int32_t> cut_variants_;
   bool uses_speed_ = false;
   EngineSettings settings_;
   RuntimeSettings runtime_settings_;

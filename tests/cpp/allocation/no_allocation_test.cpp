@@ -92,8 +92,9 @@ namespace {
 
 constexpr double kDt = 0.001;
 
-// A jittered grid with every material model: free, drag, rigid, viscous, membrane.
-std::shared_ptr<const Space> mixed_space() {
+// A jittered grid with every material model: free, drag, rigid, viscous, membrane;
+// with cut memory, flesh cut to fat and skin cut to air (docs/decisions.md, "Cut memory").
+std::shared_ptr<const Space> mixed_space(bool cut_memory = false) {
   const MeshData mesh = grid_mesh({0, 10, 20, 30, 40}, {0, 10, 20, 30}, {0, 10, 20, 30}, 0.3, 7);
   std::vector<Material> materials{{"air", MaterialModel::Free},
                                   {"flesh", MaterialModel::Drag},
@@ -103,6 +104,10 @@ std::shared_ptr<const Space> mixed_space() {
   materials[1].drag_distance_mm = 1.0;
   materials[3].viscosity_N_s_per_mm = 0.001;
   materials[4].break_force_N = 0.5;
+  if (cut_memory) {
+    materials[1].cut_to = "fat";
+    materials[4].cut_to = "air";
+  }
   std::vector<std::int32_t> labels(mesh.tets.size());
   std::mt19937 random(11);
   for (auto& label : labels) label = static_cast<std::int32_t>(random() % 5);
@@ -235,6 +240,32 @@ TEST(NoAllocation, TenThousandRigidBladeTicksOnTheRigidSphere) {
       load_scene(std::string(HAPTICUT_EXAMPLES_DIR) + "/sphere80.hapticut.msgpack"));
   // Lower: onto the sphere. Bone and air only: the points do not tick.
   run_blade(space, {{0, 0, 32}, {}}, 30.0, BladeCoupling::Rigid, false);
+}
+
+// Cut tets read through the cut byte, chords cut every tick, the cuts reset.
+TEST(NoAllocation, BladeTicksWithCutToAndResetCuts) {
+  for (BladeCoupling coupling : {BladeCoupling::Independent, BladeCoupling::Rigid}) {
+    const auto space = mixed_space(true);
+    BladeSpec spec{"b", {-20, 0, 0}, {20, 0, 0}, 50};
+    spec.coupling = coupling;
+    Blade blade(space, spec);
+    const Pose start{{20, 15, 32}, {}};
+    blade.reset(start);
+    std::int64_t cut = 0;
+    const std::uint64_t count = allocations_of([&] {
+      for (int round = 0; round < 2; ++round) {
+        for (int k = 0; k < 3000; ++k) {
+          const double s = std::sin(k * 0.002);
+          blade.step({start.position_mm + Vec3{0, 14.0 * s, -7.0 * std::abs(s)}, {}}, kDt);
+        }
+        cut = std::max(cut, blade.cuts().cut_count());
+        blade.reset_cuts();
+      }
+    });
+    EXPECT_EQ(count, 0u);
+    EXPECT_GT(cut, 0);  // The cutting ran.
+    EXPECT_EQ(blade.cuts().cut_count(), 0);
+  }
 }
 
 TEST(NoAllocation, TheCounterSeesAnAllocation) {

@@ -1,0 +1,126 @@
+#include "hapticut/cut_state.h"
+
+#include <algorithm>
+#include <limits>
+#include <stdexcept>
+
+#include "hapticut/proxy_place.h"
+#include "hapticut/space.h"
+
+namespace hapticut {
+
+CutState::CutState(std::shared_ptr<const Space> space) : space_(std::move(space)) {
+  if (!space_) throw std::invalid_argument("a CutState needs a Space");
+  cut_.assign(static_cast<std::size_t>(space_->mesh().tet_count()), 0);
+}
+
+bool CutState::cut_if_inside(std::int32_t t, const Vec3& x) {
+  if (cut_[t] != 0) return false;
+  // The tet's own material decides: a tet of flesh whose cut variant is free
+  // is still flesh that the blade cut.
+  if (!is_cuttable(space_->own_model(t))) return false;
+  // Inside by more than the tolerance: a point resting on a membrane's outer
+  // face (a rigid blade's ideal point, seated in the membrane's tet) touches
+  // the skin without opening it.
+  if (!(space_->mesh().outside_distance(t, x) < -space_->tolerance())) return false;
+  cut_[t] = 1;
+  ++cut_count_;
+  return true;
+}
+
+// The walk of segment_probe.cpp's probe_segment, without walls: in each tet
+// the face the chord leaves by first (only a plane it strictly exits
+// counts); the piece of the chord inside the tet is inside it exactly when
+// its middle is (a tet is convex), so a piece along a face cuts neither side.
+int CutState::cut_along(std::int32_t start_tet, const Vec3& a, const Vec3& b) {
+  const TetMesh& mesh = space_->mesh();
+  const double eps = space_->tolerance();
+  int newly_cut = 0;
+  std::int32_t t = start_tet;
+  Vec3 x = a;
+  for (int step = 0; t >= 0 && t < mesh.tet_count() && step < kMaxChordTets; ++step) {
+    const Plane* planes = &mesh.face_plane(t, 0);
+    int exit_face = -1;
+    double exit_h = std::numeric_limits<double>::infinity();
+    for (int f = 0; f < 4; ++f) {
+      const double d0 = planes[f].signed_distance(x);
+      const double d1 = planes[f].signed_distance(b);
+      if (!(d1 > eps && d1 > d0)) continue;
+      const double h = d0 >= 0.0 ? 0.0 : d0 / (d0 - d1);
+      if (h < exit_h) {
+        exit_h = h;
+        exit_face = f;
+      }
+    }
+    if (exit_face < 0) break;  // b is in t: the point has not left it.
+    const Vec3 leave = x + (b - x) * exit_h;
+    if (mesh.outside_distance(t, b) > eps) newly_cut += cut_if_inside(t, (x + leave) * 0.5) ? 1 : 0;
+    x = leave;
+    t = mesh.neighbour(t, exit_face);
+  }
+  return newly_cut;
+}
+
+int CutState::cut_left_behind(const ProxyPlace& place, const Vec3& now) {
+  if (place.state == ProxyState::Outside) return 0;
+  const std::int32_t owner = place.tet;
+  if (owner < 0 || owner >= static_cast<std::int32_t>(cut_.size())) return 0;
+  const MaterialModel owner_model = space_->own_model(owner);
+  if (!is_cuttable(owner_model)) return 0;
+  const TetMesh& mesh = space_->mesh();
+  const double eps = space_->tolerance();
+  int newly_cut = 0;
+  // A membrane only from inside: a point held on a face, edge or vertex of
+  // its own tet went in (the walk enters a membrane only by breaking it);
+  // a TET point on the membrane tet's face (a rigid blade's point seated on
+  // the skin it rests on) has not broken it.
+  const bool owner_cut = owner_model != MaterialModel::Membrane || place.state != ProxyState::Tet ||
+                         mesh.outside_distance(owner, place.q) < -eps;
+  if (cut_[owner] == 0 && owner_cut && mesh.outside_distance(owner, now) > eps) {
+    cut_[owner] = 1;
+    ++newly_cut;
+  }
+  const auto touched = [&](std::int32_t t) {
+    if (t == kNoTet || cut_[t] != 0) return;
+    const MaterialModel model = space_->own_model(t);
+    if ((model == MaterialModel::Drag || model == MaterialModel::Viscous) &&
+        mesh.outside_distance(t, now) > eps) {
+      cut_[t] = 1;
+      ++newly_cut;
+    }
+  };
+  switch (place.state) {
+    case ProxyState::Face:
+      touched(mesh.neighbour(owner, place.local));
+      break;
+    case ProxyState::Edge:
+      for (const EdgeFanEntry& entry : mesh.edge_fan_of(owner, place.local)) touched(entry.tet);
+      break;
+    case ProxyState::Vertex:
+      for (const VertexFanEntry& entry : mesh.vertex_fan(mesh.tet(owner)[place.local])) {
+        touched(entry.tet);
+      }
+      break;
+    case ProxyState::Tet:
+    case ProxyState::Outside:
+      break;
+  }
+  cut_count_ += newly_cut;
+  return newly_cut;
+}
+
+void CutState::reset_cuts() {
+  std::fill(cut_.begin(), cut_.end(), std::uint8_t{0});
+  cut_count_ = 0;
+}
+
+std::vector<std::int32_t> CutState::cut_tets() const {
+  std::vector<std::int32_t> tets;
+  tets.reserve(static_cast<std::size_t>(cut_count_));
+  for (std::size_t t = 0; t < cut_.size(); ++t) {
+    if (cut_[t] != 0) tets.push_back(static_cast<std::int32_t>(t));
+  }
+  return tets;
+}
+
+}  // namespace hapticut
