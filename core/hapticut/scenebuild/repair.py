@@ -262,13 +262,15 @@ def hausdorff(
     between=None,
     first_vertices_only: bool = False,
     stop_above: float | None = None,
+    back_from: float | None = None,
 ) -> float:
     """Symmetric Hausdorff distance between two meshes of a MeshSet (vertex + face samples);
     between() is called after the first of its two ways (each way costs seconds on a scan).
     first_vertices_only: the first way samples the first mesh's vertices alone (a screen on
     a scan, whose vertices lie closer together than face samples would). stop_above: when
     the first way finds more than this, that is returned without measuring the other (the
-    distance is more than it either way)."""
+    distance is more than it either way). back_from: the other way is measured only when the
+    first found more than this (math.inf: the first way alone, a one-sided distance)."""
     pymeshlab = _meshlab()
     largest = max(meshes.mesh(first).face_number(), meshes.mesh(second).face_number())
     samples = samples or max(20_000, 4 * largest)
@@ -278,6 +280,8 @@ def hausdorff(
         sampleface=not first_vertices_only, samplenum=samples, maxdist=far,
     )  # fmt: skip
     if stop_above is not None and there["max"] > stop_above:
+        return float(there["max"])
+    if back_from is not None and there["max"] <= back_from:
         return float(there["max"])
     if between is not None:
         between()
