@@ -204,7 +204,8 @@ def repair_surface(
                 (~keep).sum()
             )
             meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=v, face_matrix=f[keep]))
-    count("removed_faces_at_non_manifold_edges", "meshing_repair_non_manifold_edges")
+    if _most_edge_uses(meshes.current_mesh().face_matrix()) > 2:  # Else it has none to do.
+        count("removed_faces_at_non_manifold_edges", "meshing_repair_non_manifold_edges")
     count("split_non_manifold_vertices", "meshing_repair_non_manifold_vertices")
     count("removed_unreferenced_vertices", "meshing_remove_unreferenced_vertices")
     topology = meshes.get_topological_measures()
@@ -236,7 +237,8 @@ def repair_surface(
             f"{max_hole_edges} edges (close them in the modeller, or allow larger holes)",
         )
     before_orientation = meshes.current_mesh().face_matrix().copy()
-    meshes.meshing_re_orient_faces_coherently()
+    if _most_edge_uses(before_orientation, directed=True) > 1:  # Else coherent already.
+        meshes.meshing_re_orient_faces_coherently()
     mesh = meshes.current_mesh()
     out_vertices = np.asarray(mesh.vertex_matrix(), dtype=np.float64)
     out_faces = np.asarray(mesh.face_matrix(), dtype=np.int32)
@@ -252,6 +254,20 @@ def repair_surface(
         out_faces = out_faces[:, ::-1].copy()
         repairs["inverted_inside_out"] = 1
     return Surface(out_vertices, out_faces), repairs
+
+
+def _most_edge_uses(faces: np.ndarray, directed: bool = False) -> int:
+    """How many faces use the edge most used (directed: run in the same direction, which
+    two faces of a coherently oriented manifold never do). Cheaper than pymeshlab's filters
+    on a scan, which then need not run: a mesh with none above 2 has no non-manifold edge."""
+    if len(faces) == 0:
+        return 0
+    edges = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2).astype(np.int64)
+    if not directed:
+        edges = np.sort(edges, axis=1)
+    keys = np.sort(edges[:, 0] * (int(faces.max()) + 1) + edges[:, 1])
+    starts = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1], True])
+    return int(np.diff(starts).max())
 
 
 def hausdorff(
