@@ -213,3 +213,29 @@ def test_a_scans_first_decimation_skips_the_normal_check_unless_a_face_crosses(
     assert (decimations[1][1] == first) == crosses
     assert made[-1][1] is None and made[-1][2] == deviation <= 0.3
     assert len(simple.faces) <= 1.25 * len(careful.faces)
+
+
+def test_a_try_just_below_a_candidate_that_fitted_is_decimated_from_it(monkeypatch):
+    """A try at most CHAIN_SHARE below a candidate that fitted the screen starts from that
+    candidate (a few collapses); the surface kept is still measured in full against the
+    input, within the tolerance."""
+    import pymeshlab
+
+    vertices, faces = icosphere(30.0, 5)  # 20480 faces
+    decimations = []
+    original = pymeshlab.MeshSet.meshing_decimation_quadric_edge_collapse
+
+    def recording(self, **options):
+        decimations.append((self.current_mesh().face_number(), options["targetfacenum"]))
+        return original(self, **options)
+
+    monkeypatch.setattr(pymeshlab.MeshSet, "meshing_decimation_quadric_edge_collapse", recording)
+    made = measures(monkeypatch)
+    simple, _, deviation = simplify_surface(Surface(vertices, faces), 0.2)
+    first = made[0][0]  # The input's one decimation: the tries below start from it.
+    chained = [(start, target) for start, target in decimations if start not in (20480, first)]
+    assert chained and all(target * (1 + simplify.CHAIN_SHARE) >= s for s, target in chained)
+    fitted = {f for f, samples, d in made if samples is not None and d <= 0.2}
+    assert {start for start, _ in chained} <= fitted
+    assert made[-1][1] is None and made[-1][0] == len(simple.faces)
+    assert made[-1][2] == deviation <= 0.2
