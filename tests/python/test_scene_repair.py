@@ -59,6 +59,37 @@ def test_an_inside_out_mesh_is_turned_and_reported():
     assert signed_volume(surface.vertices, surface.faces) > 0
 
 
+def test_faces_run_against_their_neighbours_are_turned_and_a_coherent_mesh_left(monkeypatch):
+    """Orientation is made coherent when two faces run an edge the same way (the faces
+    turned are counted); a coherent mesh, and one without a non-manifold edge, skip
+    pymeshlab's filters (counted by their edge uses, cheaper on a scan): nothing changes."""
+    import pymeshlab
+
+    called = []
+    for name in ("meshing_re_orient_faces_coherently", "meshing_repair_non_manifold_edges"):
+        real = getattr(pymeshlab.MeshSet, name)
+
+        def recording(self, *args, real=real, name=name, **kwargs):
+            called.append(name)
+            return real(self, *args, **kwargs)
+
+        monkeypatch.setattr(pymeshlab.MeshSet, name, recording)
+    vertices, faces = icosphere(10.0, 2)
+    surface, repairs = repair_surface("ball", vertices, faces, MAX_HOLE)
+    assert called == [] and repairs == {}
+    assert np.array_equal(surface.faces, faces) and np.array_equal(surface.vertices, vertices)
+    turned = faces.copy()
+    turned[[3, 7]] = turned[[3, 7], ::-1]
+    surface, repairs = repair_surface("ball", vertices, turned, MAX_HOLE)
+    assert called == ["meshing_re_orient_faces_coherently"]
+    assert repairs == {"reoriented_faces": 2}
+
+    def directed(f):
+        return {tuple(e) for e in f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2).tolist()}
+
+    assert directed(surface.faces) == directed(faces)  # Each face as it was, in any rotation.
+
+
 def test_small_holes_are_closed_and_large_ones_refused():
     vertices, faces = icosphere(10.0, 2)
     punched = faces[~np.any(faces == 0, axis=1)]  # the faces around vertex 0 gone: a small hole

@@ -144,3 +144,98 @@ def test_a_candidate_that_misses_in_full_is_a_miss(monkeypatch):
     missed = min(f for f, _, d in full if d > 0.5)
     assert len(simple.faces) > missed
     assert 0 < deviation <= 0.5 and full[-1][:3:2] == (len(simple.faces), deviation)
+
+
+def test_a_screen_below_its_share_of_the_tolerance_measures_one_way(monkeypatch):
+    """The screen's way back (candidate to input) is measured only when the way from the
+    input finds more than SCREEN_BACK_SHARE of the tolerance; the full measure always both."""
+    import pymeshlab
+
+    meshes = pymeshlab.MeshSet()
+    for radius in (30.0, 30.5):
+        vertices, faces = icosphere(radius, 2)
+        meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=vertices, face_matrix=faces))
+    called = []
+    one = simplify.hausdorff(meshes, 0, 1, between=lambda: called.append(1), back_from=1.0)
+    assert one == pytest.approx(0.5, abs=0.05) and not called
+    both = simplify.hausdorff(meshes, 0, 1, between=lambda: called.append(1), back_from=0.2)
+    assert both == pytest.approx(0.5, abs=0.05) and called == [1]
+
+    vertices, faces = icosphere(30.0, 4)
+    made = []
+    real = simplify.hausdorff
+
+    def recording(meshes, first, second, samples=None, between=None, **screen):
+        deviation = real(meshes, first, second, samples, between, **screen)
+        made.append((first, samples, screen.get("back_from"), deviation))
+        return deviation
+
+    monkeypatch.setattr(simplify, "hausdorff", recording)
+    simple, _, deviation = simplify_surface(Surface(vertices, faces), 0.5)
+    screens = [m for m in made if m[1] is not None]
+    from_input = [m for m in screens if m[0] == 0]
+    back = [m for m in screens if m[0] != 0]
+    assert from_input and all(m[2] is not None for m in screens)
+    near = [m for m in from_input if simplify.SCREEN_BACK_SHARE * 0.5 < m[3] <= 0.5]
+    assert len(back) == len(near)
+    assert made[-1][1] is None and made[-1][3] == deviation <= 0.5
+
+
+@pytest.mark.parametrize("crosses", [False, True])
+def test_a_scans_first_decimation_skips_the_normal_check_unless_a_face_crosses(
+    monkeypatch, crosses
+):
+    """On an input of SCREEN_SAMPLES vertices or more, the first decimation keeps no check
+    that faces do not flip (the dearest step of the search); one that made a face cross
+    another is decimated again with it. Either way the surface kept is measured in full
+    within the tolerance, with about the faces of a search that checked every decimation."""
+    vertices, faces = icosphere(30.0, 4)  # 2562 vertices
+    surface = Surface(vertices, faces)
+    careful, _, _ = simplify_surface(surface, 0.3)
+    monkeypatch.setattr(simplify, "SCREEN_SAMPLES", 2_000)
+    checks = []
+    monkeypatch.setattr(simplify, "_crosses_itself", lambda meshes: checks.append(1) or crosses)
+    decimations = []
+    import pymeshlab
+
+    original = pymeshlab.MeshSet.meshing_decimation_quadric_edge_collapse
+
+    def recording(self, **options):
+        decimations.append((options["preservenormal"], options["targetfacenum"]))
+        return original(self, **options)
+
+    monkeypatch.setattr(pymeshlab.MeshSet, "meshing_decimation_quadric_edge_collapse", recording)
+    made = measures(monkeypatch)
+    simple, _, deviation = simplify_surface(surface, 0.3)
+    first = decimations[0][1]
+    assert decimations[0] == (False, first) and checks == [1]
+    assert all(check for check, _ in decimations[1:])
+    assert (decimations[1][1] == first) == crosses
+    assert made[-1][1] is None and made[-1][2] == deviation <= 0.3
+    assert len(simple.faces) <= 1.25 * len(careful.faces)
+
+
+def test_a_try_just_below_a_candidate_that_fitted_is_decimated_from_it(monkeypatch):
+    """A try at most CHAIN_SHARE below a candidate that fitted the screen starts from that
+    candidate (a few collapses); the surface kept is still measured in full against the
+    input, within the tolerance."""
+    import pymeshlab
+
+    vertices, faces = icosphere(30.0, 5)  # 20480 faces
+    decimations = []
+    original = pymeshlab.MeshSet.meshing_decimation_quadric_edge_collapse
+
+    def recording(self, **options):
+        decimations.append((self.current_mesh().face_number(), options["targetfacenum"]))
+        return original(self, **options)
+
+    monkeypatch.setattr(pymeshlab.MeshSet, "meshing_decimation_quadric_edge_collapse", recording)
+    made = measures(monkeypatch)
+    simple, _, deviation = simplify_surface(Surface(vertices, faces), 0.2)
+    first = made[0][0]  # The input's one decimation: the tries below start from it.
+    chained = [(start, target) for start, target in decimations if start not in (20480, first)]
+    assert chained and all(target * (1 + simplify.CHAIN_SHARE) >= s for s, target in chained)
+    fitted = {f for f, samples, d in made if samples is not None and d <= 0.2}
+    assert {start for start, _ in chained} <= fitted
+    assert made[-1][1] is None and made[-1][0] == len(simple.faces)
+    assert made[-1][2] == deviation <= 0.2

@@ -204,7 +204,8 @@ def repair_surface(
                 (~keep).sum()
             )
             meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=v, face_matrix=f[keep]))
-    count("removed_faces_at_non_manifold_edges", "meshing_repair_non_manifold_edges")
+    if _most_edge_uses(meshes.current_mesh().face_matrix()) > 2:  # Else it has none to do.
+        count("removed_faces_at_non_manifold_edges", "meshing_repair_non_manifold_edges")
     count("split_non_manifold_vertices", "meshing_repair_non_manifold_vertices")
     count("removed_unreferenced_vertices", "meshing_remove_unreferenced_vertices")
     topology = meshes.get_topological_measures()
@@ -236,7 +237,8 @@ def repair_surface(
             f"{max_hole_edges} edges (close them in the modeller, or allow larger holes)",
         )
     before_orientation = meshes.current_mesh().face_matrix().copy()
-    meshes.meshing_re_orient_faces_coherently()
+    if _most_edge_uses(before_orientation, directed=True) > 1:  # Else coherent already.
+        meshes.meshing_re_orient_faces_coherently()
     mesh = meshes.current_mesh()
     out_vertices = np.asarray(mesh.vertex_matrix(), dtype=np.float64)
     out_faces = np.asarray(mesh.face_matrix(), dtype=np.int32)
@@ -254,6 +256,20 @@ def repair_surface(
     return Surface(out_vertices, out_faces), repairs
 
 
+def _most_edge_uses(faces: np.ndarray, directed: bool = False) -> int:
+    """How many faces use the edge most used (directed: run in the same direction, which
+    two faces of a coherently oriented manifold never do). Cheaper than pymeshlab's filters
+    on a scan, which then need not run: a mesh with none above 2 has no non-manifold edge."""
+    if len(faces) == 0:
+        return 0
+    edges = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2).astype(np.int64)
+    if not directed:
+        edges = np.sort(edges, axis=1)
+    keys = np.sort(edges[:, 0] * (int(faces.max()) + 1) + edges[:, 1])
+    starts = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1], True])
+    return int(np.diff(starts).max())
+
+
 def hausdorff(
     meshes,
     first: int,
@@ -262,13 +278,15 @@ def hausdorff(
     between=None,
     first_vertices_only: bool = False,
     stop_above: float | None = None,
+    back_from: float | None = None,
 ) -> float:
     """Symmetric Hausdorff distance between two meshes of a MeshSet (vertex + face samples);
     between() is called after the first of its two ways (each way costs seconds on a scan).
     first_vertices_only: the first way samples the first mesh's vertices alone (a screen on
     a scan, whose vertices lie closer together than face samples would). stop_above: when
     the first way finds more than this, that is returned without measuring the other (the
-    distance is more than it either way)."""
+    distance is more than it either way). back_from: the other way is measured only when the
+    first found more than this (math.inf: the first way alone, a one-sided distance)."""
     pymeshlab = _meshlab()
     largest = max(meshes.mesh(first).face_number(), meshes.mesh(second).face_number())
     samples = samples or max(20_000, 4 * largest)
@@ -278,6 +296,8 @@ def hausdorff(
         sampleface=not first_vertices_only, samplenum=samples, maxdist=far,
     )  # fmt: skip
     if stop_above is not None and there["max"] > stop_above:
+        return float(there["max"])
+    if back_from is not None and there["max"] <= back_from:
         return float(there["max"])
     if between is not None:
         between()
