@@ -1,4 +1,4 @@
-// Cut memory (docs/decisions.md, "Cut memory"; issue #43): tissue once cut
+// Cut memory (docs/decisions.md, "Cut memory"): tissue once cut
 // stays cut. A blade drawn back through its own slit feels the material's cut
 // variant (cut_to), a stroke beside it the uncut material; skin opened once
 // is not broken again; the cut set follows from the stroke alone; the scene
