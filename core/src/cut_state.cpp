@@ -1,11 +1,11 @@
 #include "hapticut/cut_state.h"
 
 #include <algorithm>
-#include <limits>
 #include <stdexcept>
 
 #include "hapticut/proxy_place.h"
 #include "hapticut/space.h"
+#include "hapticut/tet_mesh.h"
 
 namespace hapticut {
 
@@ -39,24 +39,12 @@ int CutState::cut_along(std::int32_t start_tet, const Vec3& a, const Vec3& b) {
   std::int32_t t = start_tet;
   Vec3 x = a;
   for (int step = 0; t >= 0 && t < mesh.tet_count() && step < kMaxChordTets; ++step) {
-    const Plane* planes = &mesh.face_plane(t, 0);
-    int exit_face = -1;
-    double exit_h = std::numeric_limits<double>::infinity();
-    for (int f = 0; f < 4; ++f) {
-      const double d0 = planes[f].signed_distance(x);
-      const double d1 = planes[f].signed_distance(b);
-      if (!(d1 > eps && d1 > d0)) continue;
-      const double h = d0 >= 0.0 ? 0.0 : d0 / (d0 - d1);
-      if (h < exit_h) {
-        exit_h = h;
-        exit_face = f;
-      }
-    }
-    if (exit_face < 0) break;  // b is in t: the point has not left it.
-    const Vec3 leave = x + (b - x) * exit_h;
+    const TetExit exit = first_exit(mesh, t, x, b, eps);
+    if (exit.face < 0) break;  // b is in t: the point has not left it.
+    const Vec3 leave = x + (b - x) * exit.fraction;
     if (mesh.outside_distance(t, b) > eps) newly_cut += cut_if_inside(t, (x + leave) * 0.5) ? 1 : 0;
     x = leave;
-    t = mesh.neighbour(t, exit_face);
+    t = mesh.neighbour(t, exit.face);
   }
   return newly_cut;
 }

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <limits>
 
+#include "hapticut/tet_mesh.h"
+
 namespace hapticut {
 
 namespace {
@@ -74,36 +76,24 @@ SegmentProbe probe_segment(const Space& space, std::int32_t start_tet, const Vec
       t = u;
       continue;
     }
-    // The face the segment leaves t through first (docs/method.md, repair 1: only a plane it
-    // strictly exits counts; the hit is at 0 when x already lies on it).
-    const Plane* planes = &mesh.face_plane(t, 0);
-    int exit_face = -1;
-    double exit_h = std::numeric_limits<double>::infinity();
-    for (int f = 0; f < 4; ++f) {
-      const double d0 = planes[f].signed_distance(x);
-      const double d1 = planes[f].signed_distance(b);
-      if (!(d1 > eps && d1 > d0)) continue;
-      const double h = d0 >= 0.0 ? 0.0 : d0 / (d0 - d1);
-      if (h < exit_h) {
-        exit_h = h;
-        exit_face = f;
-      }
-    }
-    if (exit_face < 0) {
+    // The face the segment leaves t through first (the hit is at 0 when x
+    // already lies on it).
+    const TetExit exit = first_exit(mesh, t, x, b, eps);
+    if (exit.face < 0) {
       result.end_tet = t;
       return result;
     }
-    s += (1.0 - s) * exit_h;
-    x = x + (b - x) * exit_h;
-    const std::int32_t u = mesh.neighbour(t, exit_face);
+    s += (1.0 - s) * exit.fraction;
+    x = x + (b - x) * exit.fraction;
+    const std::int32_t u = mesh.neighbour(t, exit.face);
     if (u != kNoTet && is_wall(space, u, walls, cuts)) {
       result.hit = true;
       result.fraction = s;
-      const Plane& face = planes[exit_face];
+      const Plane& face = mesh.face_plane(t, exit.face);
       result.contact = Plane{face.normal * -1.0, -face.offset};
       result.wall_tet = u;
       result.owner_tet = t;
-      result.owner_face = static_cast<std::int8_t>(exit_face);
+      result.owner_face = static_cast<std::int8_t>(exit.face);
       return result;
     }
     t = u;

@@ -12,6 +12,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -250,5 +251,31 @@ bool lies_in_mesh_interior(const TetMesh& mesh, const Vec3& x, double margin);
 
 // The box of the mesh's vertices grown by pad on every side.
 Aabb mesh_box(const TetMesh& mesh, double pad);
+
+// Where the straight move x -> b leaves tet t first: the face and the fraction
+// of the move (docs/method.md, repair 1: only a plane it strictly exits, by
+// more than eps, counts; the fraction is 0 when x already lies on it). face is
+// -1 when b lies in t.
+struct TetExit {
+  int face = -1;
+  double fraction = 0.0;
+};
+inline TetExit first_exit(const TetMesh& mesh, std::int32_t t, const Vec3& x, const Vec3& b,
+                          double eps) {
+  const Plane* planes = &mesh.face_plane(t, 0);
+  TetExit exit;
+  double least = std::numeric_limits<double>::infinity();
+  for (int f = 0; f < 4; ++f) {
+    const double d0 = planes[f].signed_distance(x);
+    const double d1 = planes[f].signed_distance(b);
+    if (!(d1 > eps && d1 > d0)) continue;
+    const double h = d0 >= 0.0 ? 0.0 : d0 / (d0 - d1);
+    if (h < least) {
+      least = h;
+      exit = {f, h};
+    }
+  }
+  return exit;
+}
 
 }  // namespace hapticut
