@@ -92,14 +92,20 @@ def test_a_flat_surface_keeps_its_few_faces_and_tells_its_progress():
     assert seen == sorted(seen) and 0 < len(seen) <= simplify.MAX_ATTEMPTS
 
 
-def test_a_way_that_finds_more_than_the_limit_ends_the_measure():
-    """A screen or full measure whose first way misses does not measure the second."""
+def concentric_spheres(*radii: float):
+    """A MeshSet of icospheres about one centre: their Hausdorff distance is the radii's gap."""
     import pymeshlab
 
     meshes = pymeshlab.MeshSet()
-    for radius in (30.0, 31.0):
+    for radius in radii:
         vertices, faces = icosphere(radius, 2)
         meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=vertices, face_matrix=faces))
+    return meshes
+
+
+def test_a_way_that_finds_more_than_the_limit_ends_the_measure():
+    """A screen or full measure whose first way misses does not measure the second."""
+    meshes = concentric_spheres(30.0, 31.0)
     called = []
     stopped = simplify.hausdorff(meshes, 0, 1, between=lambda: called.append(1), stop_above=0.5)
     assert stopped == pytest.approx(1.0, abs=0.05) and not called
@@ -149,12 +155,7 @@ def test_a_candidate_that_misses_in_full_is_a_miss(monkeypatch):
 def test_a_screen_below_its_share_of_the_tolerance_measures_one_way(monkeypatch):
     """The screen's way back (candidate to input) is measured only when the way from the
     input finds more than SCREEN_BACK_SHARE of the tolerance; the full measure always both."""
-    import pymeshlab
-
-    meshes = pymeshlab.MeshSet()
-    for radius in (30.0, 30.5):
-        vertices, faces = icosphere(radius, 2)
-        meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=vertices, face_matrix=faces))
+    meshes = concentric_spheres(30.0, 30.5)
     called = []
     one = simplify.hausdorff(meshes, 0, 1, between=lambda: called.append(1), back_from=1.0)
     assert one == pytest.approx(0.5, abs=0.05) and not called
