@@ -280,9 +280,9 @@ def test_the_bunny_scan_is_repaired_meshed_and_labelled():
 
 def test_a_scan_at_default_settings_models_the_air_only_as_far_as_needed():
     """The bunny scan, 100 mm long, built with the defaults: the air is modelled only as far
-    as the scene needs it, about half the tets (fTetWild's builds vary by a few percent
-    either side), not the most of them an evenly fine enclosure would give; the share is in
-    the report."""
+    as the scene needs it (docs/decisions.md), about half the tets, fTetWild's builds a few
+    percent either side; an air that clearly outnumbers the body fails. The share is in the
+    report."""
     vertices, faces = read_surface(bunny_path())
     vertices = (vertices - vertices.mean(axis=0)) * (100.0 / float(np.ptp(vertices, axis=0).max()))
     scene = build([Region("bunny", vertices, faces, BONE)])
