@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 from build_test_support import icosphere
 from hapticut.scenebuild import simplify
@@ -195,7 +196,9 @@ def test_a_scans_first_decimation_skips_the_normal_check_unless_a_face_crosses(
     careful, _, _ = simplify_surface(surface, 0.3)
     monkeypatch.setattr(simplify, "SCREEN_SAMPLES", 2_000)
     checks = []
-    monkeypatch.setattr(simplify, "_crosses_itself", lambda meshes: checks.append(1) or crosses)
+    monkeypatch.setattr(
+        simplify, "crossing_faces", lambda meshes: checks.append(1) or np.array([crosses])
+    )
     decimations = []
     import pymeshlab
 

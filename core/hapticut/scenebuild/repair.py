@@ -360,6 +360,13 @@ def distance_to_surfaces(points: np.ndarray, surfaces: list[Surface], max_mm: fl
 
 def self_intersecting_faces(surfaces: list[Surface]) -> np.ndarray:
     """(f,) bool over the surfaces' faces, concatenated: faces that cross another face."""
-    meshes = _merged_meshset(surfaces)
+    return crossing_faces(_merged_meshset(surfaces))
+
+
+def crossing_faces(meshes) -> np.ndarray:
+    """(f,) bool over the faces of a MeshSet's current mesh: faces that cross another face
+    (the mesh's selection cleared again)."""
     meshes.compute_selection_by_self_intersections_per_face()
-    return np.asarray(meshes.current_mesh().face_selection_array(), dtype=bool)
+    crossing = np.asarray(meshes.current_mesh().face_selection_array(), dtype=bool)
+    meshes.set_selection_none()
+    return crossing

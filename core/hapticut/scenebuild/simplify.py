@@ -26,7 +26,7 @@ from collections.abc import Callable
 import numpy as np
 
 from .geometry import Surface, signed_volume
-from .repair import _meshlab, hausdorff
+from .repair import _meshlab, crossing_faces, hausdorff
 
 # The search stops when the fewest faces known to fit and the most known not to lie within
 # this share of each other: a few faces more change little of what fTetWild makes of them.
@@ -124,7 +124,7 @@ def simplify_surface(
                 planarquadric=True,
                 qualitythr=0.3,
             )
-            if check_normals or not _crosses_itself(meshes):
+            if check_normals or not crossing_faces(meshes).any():
                 break
             meshes.delete_current_mesh()
         return meshes.current_mesh_id(), start_faces
@@ -198,14 +198,6 @@ def simplify_surface(
         original,
         deviation,
     )
-
-
-def _crosses_itself(meshes) -> bool:
-    """Whether a face of the MeshSet's current mesh crosses another (its selection cleared)."""
-    meshes.compute_selection_by_self_intersections_per_face()
-    crossing = meshes.current_mesh().selected_face_number() > 0
-    meshes.set_selection_none()
-    return crossing
 
 
 class _Work:
