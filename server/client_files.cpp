@@ -131,6 +131,21 @@ std::string below_directory(const std::string& directory, const std::string& res
                         " (--record-dir); give a name relative to it");
 }
 
+// The `size` bytes of an open file (fewer when it shrank since its fstat).
+std::vector<std::uint8_t> read_whole(int fd, std::uint64_t size, const std::string& path) {
+  std::vector<std::uint8_t> bytes(size);
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::read(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) refuse_errno(path, errno);
+    if (n == 0) break;
+    done += static_cast<std::size_t>(n);
+  }
+  bytes.resize(done);
+  return bytes;
+}
+
 }  // namespace
 
 int open_regular_file(const std::string& path, std::uint64_t max_bytes, std::uint64_t& size,
@@ -154,17 +169,7 @@ std::vector<std::uint8_t> read_regular_file(const std::string& path, std::uint64
                                             const char* limit_source) {
   std::uint64_t size = 0;
   Descriptor fd(open_regular_file(path, max_bytes, size, limit_source));
-  std::vector<std::uint8_t> bytes(size);
-  std::size_t done = 0;
-  while (done < bytes.size()) {
-    const ssize_t n = ::read(fd.get(), bytes.data() + done, bytes.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) refuse_errno(path, errno);
-    if (n == 0) break;  // Shrunk since fstat: what is there.
-    done += static_cast<std::size_t>(n);
-  }
-  bytes.resize(done);
-  return bytes;
+  return read_whole(fd.get(), size, path);
 }
 
 std::string default_recording_directory() {
@@ -177,10 +182,15 @@ std::string default_recording_directory() {
   return "hapticut-recordings";
 }
 
-std::FILE* create_recording_file(const std::string& directory, const std::string& requested,
-                                 std::string& full_path) {
+namespace {
+
+// The descriptor of the directory that holds the file `requested` names
+// below `directory` (made when `make` is set), each step opened with
+// O_NOFOLLOW from its parent; `leaf` gets the file's name, `full_path` its path.
+int parent_below(const std::string& directory, const std::string& requested, bool make,
+                 std::string& leaf, std::string& full_path) {
   if (requested.empty()) refuse(requested, "no file name");
-  make_directories(directory);
+  if (make) make_directories(directory);
   char resolved_text[PATH_MAX];
   if (::realpath(directory.c_str(), resolved_text) == nullptr) {
     refuse(directory, std::string("the recording directory: ") + std::strerror(errno));
@@ -202,15 +212,47 @@ std::FILE* create_recording_file(const std::string& directory, const std::string
     }
     parent.reset(next);
   }
-  full_path += "/" + steps.back();
+  leaf = steps.back();
+  full_path += "/" + leaf;
+  return parent.release();
+}
+
+}  // namespace
+
+std::FILE* create_recording_file(const std::string& directory, const std::string& requested,
+                                 std::string& full_path) {
+  std::string leaf;
+  Descriptor parent(parent_below(directory, requested, true, leaf, full_path));
   Descriptor fd(
-      ::openat(parent.get(), steps.back().c_str(),
+      ::openat(parent.get(), leaf.c_str(),
                O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_NONBLOCK | O_NOCTTY | O_CLOEXEC, 0644));
   if (fd.get() < 0) {
     refuse(full_path, errno == EEXIST ? std::string("already exists (recordings never overwrite)")
                                       : std::string(std::strerror(errno)));
   }
   return blocking_stream(fd, full_path, "wb");
+}
+
+std::vector<std::uint8_t> read_recording_directory_file(const std::string& directory,
+                                                        const std::string& requested,
+                                                        std::uint64_t max_bytes,
+                                                        std::string& full_path) {
+  std::string leaf;
+  Descriptor parent(parent_below(directory, requested, false, leaf, full_path));
+  Descriptor fd(::openat(parent.get(), leaf.c_str(),
+                         O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_NOCTTY | O_CLOEXEC));
+  if (fd.get() < 0) {
+    refuse(full_path, errno == ELOOP ? std::string("a symbolic link (not followed)")
+                                     : std::string(std::strerror(errno)));
+  }
+  struct stat info {};
+  if (::fstat(fd.get(), &info) != 0) refuse_errno(full_path, errno);
+  require_regular(full_path, info);
+  const auto size = static_cast<std::uint64_t>(info.st_size);
+  if (size > max_bytes) {
+    refuse(full_path, size_text(size) + " is over the limit of " + size_text(max_bytes));
+  }
+  return read_whole(fd.get(), size, full_path);
 }
 
 std::FILE* open_operator_recording(const std::string& path) {

@@ -44,6 +44,15 @@ std::string default_recording_directory();
 std::FILE* create_recording_file(const std::string& directory, const std::string& requested,
                                  std::string& full_path);
 
+// The whole of a regular file of at most max_bytes that `requested` names in
+// `directory`, by the same rules as create_recording_file (no "." or "..", no
+// symbolic link on the way or at the end, never waits to open); `full_path`
+// gets its path.
+std::vector<std::uint8_t> read_recording_directory_file(const std::string& directory,
+                                                        const std::string& requested,
+                                                        std::uint64_t max_bytes,
+                                                        std::string& full_path);
+
 // The operator's own --record FILE (any path, truncated when it exists), but a
 // regular file only, opened without waiting (O_NONBLOCK: a FIFO is refused).
 std::FILE* open_operator_recording(const std::string& path);

@@ -533,13 +533,13 @@ nlohmann::json ControlServer::hello(Client& client, const ControlJson& message) 
       integer_field(message, "version", 0, std::numeric_limits<std::int64_t>::max());
   if (version != kProtocolVersion) {
     ++counters_.unauthenticated;
-    // An older client would misread the frames (their blade blocks grew):
+    // An older client would misread the frames (they end with the cut tets):
     // tell it what to do rather than only that it failed.
     throw CommandError("protocol version " + std::to_string(version) +
                        " not supported (this servo speaks version " +
                        std::to_string(kProtocolVersion) +
                        (version < kProtocolVersion
-                            ? ", whose frames and recordings carry each blade's ideal pose; "
+                            ? ", whose frames and recordings carry the cut tets; "
                               "update the client: the hapticut toolkit and the add-on of this "
                               "servo's release"
                             : "; this servo is older than the client") +
@@ -583,7 +583,7 @@ nlohmann::json ControlServer::dispatch(Client& client, ControlMessage& request) 
   // Every message type of the control channel (docs/protocol.md) and what
   // answers it: the connection's own commands here, the servo's in Servo.
   // Each refuses the fields it does not take, by name; `set` names its own.
-  static const std::array<Command, 12> kCommands{{
+  static const std::array<Command, 16> kCommands{{
       {"hello",
        [](ControlServer& s, Client& c, ControlJson& m) {
          refuse_unknown_fields(m, {"version", "token"});
@@ -634,6 +634,26 @@ nlohmann::json ControlServer::dispatch(Client& client, ControlMessage& request) 
        [](ControlServer& s, Client&, ControlJson& m) {
          refuse_unknown_fields(m, {"blade", "pose", "buttons"});
          return s.servo_.pose_command(m);
+       }},
+      {"cuts",
+       [](ControlServer& s, Client&, ControlJson& m) {
+         refuse_unknown_fields(m, {"from"});
+         return s.servo_.cuts_command(m);
+       }},
+      {"reset_cuts",
+       [](ControlServer& s, Client&, ControlJson& m) {
+         refuse_unknown_fields(m, {});
+         return s.servo_.reset_cuts_command();
+       }},
+      {"save_cuts",
+       [](ControlServer& s, Client&, ControlJson& m) {
+         refuse_unknown_fields(m, {"path"});
+         return s.servo_.save_cuts_command(m);
+       }},
+      {"load_cuts",
+       [](ControlServer& s, Client&, ControlJson& m) {
+         refuse_unknown_fields(m, {"path"});
+         return s.servo_.load_cuts_command(m);
        }},
       {"shutdown",
        [](ControlServer& s, Client&, ControlJson& m) {

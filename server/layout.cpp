@@ -70,6 +70,13 @@ std::string layout_json() {
   }
   {
     nlohmann::json fields = nlohmann::json::array();
+#define STRUCT CutBlock
+    HAPTICUT_CUT_BLOCK_FIELDS(HAPTICUT_DESCRIBE_FIELD, HAPTICUT_DESCRIBE_ARRAY)
+#undef STRUCT
+    out["cut_block"] = describe<CutBlock>(fields);
+  }
+  {
+    nlohmann::json fields = nlohmann::json::array();
 #define STRUCT RecordingTrailer
     HAPTICUT_RECORDING_TRAILER_FIELDS(HAPTICUT_DESCRIBE_FIELD, HAPTICUT_DESCRIBE_ARRAY)
 #undef STRUCT

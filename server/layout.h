@@ -5,8 +5,8 @@
 // (core/hapticut/servo_layout.py) is tested against. Little-endian, every
 // field naturally aligned, every struct a multiple of 8 bytes.
 //
-// A frame:  FrameHeader, then per blade: BladeBlock, points block.
-// A record: RecordHeader, then per blade: BladeBlock, points block.
+// A frame:  FrameHeader, then per blade: BladeBlock, points block; a CutBlock.
+// A record: RecordHeader, then per blade: BladeBlock, points block; a CutBlock.
 // A recording ends with one RecordingTrailer (recording/recording_file.h).
 // Points block of a blade with N points: q (N x 3 f64), p (N x 3 f64),
 // state (N x u8), zero padding to a multiple of 8 bytes.
@@ -18,8 +18,8 @@
 
 namespace hapticut::servo {
 
-inline constexpr std::uint16_t kFrameVersion = 3;
-inline constexpr std::uint16_t kRecordVersion = 4;
+inline constexpr std::uint16_t kFrameVersion = 4;
+inline constexpr std::uint16_t kRecordVersion = 5;
 inline constexpr char kFrameMagic[4] = {'H', 'C', 'F', 'R'};
 inline constexpr char kRecordingEndMarker[8] = {'H', 'C', 'R', 'E', 'C', 'E', 'N', 'D'};
 // The largest UDP payload over IPv4; a scene whose frame is larger is refused.
@@ -85,6 +85,22 @@ inline constexpr std::size_t kMaxFrameBytes = 65507;
   F(std::uint8_t, engine_rejected) /* 1: the engine refused the sample. */                   \
   F(std::uint8_t, force_shading)   /* 1: this tick's settings shade. */
 
+// The cut tets (CutState::cut_order: in the order they were cut) a frame or a
+// record carries: the next entries of that order after those the last frame
+// (or record) carried, at most kCutBlockTets, so that a reader that gets every
+// one rebuilds the set by appending, and one that missed some sees `first`
+// beyond what it has (docs/protocol.md, "Cut tets").
+inline constexpr std::uint16_t kCutBlockTets = 64;
+#define HAPTICUT_CUT_BLOCK_FIELDS(F, A)                                                   \
+  F(std::uint32_t, generation)  /* Increments with every reset_cuts or load_cuts. */      \
+  F(std::uint32_t, total)       /* Tets cut after this tick: the order's length. */       \
+  F(std::uint32_t, before_tick) /* Tets cut when the tick began (after a reset in it). */ \
+  F(std::uint32_t, first)       /* The order's index of tets[0]. */                       \
+  F(std::uint16_t, carried)     /* Entries of tets in use. */                             \
+  F(std::uint16_t, capacity)    /* kCutBlockTets. */                                      \
+  F(std::uint32_t, reserved)                                                              \
+  A(std::int32_t, tets, kCutBlockTets)
+
 // Written once, after the last record, when a recording is closed cleanly:
 // a file without it was cut short. The marker is last, so that the file's
 // final 8 bytes tell a complete recording.
@@ -106,6 +122,10 @@ struct BladeBlock {
   HAPTICUT_BLADE_BLOCK_FIELDS(HAPTICUT_DECLARE_FIELD, HAPTICUT_DECLARE_ARRAY)
 };
 
+struct CutBlock {
+  HAPTICUT_CUT_BLOCK_FIELDS(HAPTICUT_DECLARE_FIELD, HAPTICUT_DECLARE_ARRAY)
+};
+
 struct RecordingTrailer {
   HAPTICUT_RECORDING_TRAILER_FIELDS(HAPTICUT_DECLARE_FIELD, HAPTICUT_DECLARE_ARRAY)
 };
@@ -113,6 +133,7 @@ struct RecordingTrailer {
 static_assert(sizeof(FrameHeader) % 8 == 0);
 static_assert(sizeof(RecordHeader) % 8 == 0);
 static_assert(sizeof(BladeBlock) % 8 == 0);
+static_assert(sizeof(CutBlock) % 8 == 0);
 static_assert(sizeof(RecordingTrailer) % 8 == 0);
 // Shorter than any record, so a trailer cut in half never reads as a record.
 static_assert(sizeof(RecordingTrailer) < sizeof(RecordHeader));

@@ -12,7 +12,7 @@ namespace hapticut::servo {
 
 // 2: every blade's ideal pose in the frames and the records (frame version 3,
 // record version 4), and a rigid blade's stiffness limit on its points' sum.
-inline constexpr int kProtocolVersion = 2;
+inline constexpr int kProtocolVersion = 3;
 inline constexpr std::uint32_t kMaxMessageBytes = 16U << 20;  // 16 MiB (an inline scene).
 
 class MessageReader {

@@ -1,9 +1,11 @@
 #include "servo.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <future>
 
 #include "client_files.h"
@@ -560,6 +562,125 @@ nlohmann::json Servo::engage_command(const ControlJson& message) {
   const bool engaged = boolean_field(message, "engaged");
   shared_->engaged.store(engaged);
   return {{"engaged", engaged}};
+}
+
+namespace {
+
+// The most cut tets one `cuts` reply carries (a client asks again from where
+// it ended: "more").
+constexpr std::uint32_t kMaxCutsPerReply = 8192;
+// A cuts file: its JSON, a tet index a few bytes each.
+constexpr std::uint64_t kMaxCutsFileBytes = 64ULL << 20;
+constexpr const char* kCutsFormat = "hapticut.cuts";
+constexpr int kCutsVersion = 1;
+
+}  // namespace
+
+nlohmann::json Servo::cuts_command(const ControlJson& message) {
+  const auto from = has_field(message, "from")
+                        ? static_cast<std::uint32_t>(integer_field(message, "from", 0, 0xFFFFFFFF))
+                        : 0U;
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!session_) throw CommandError("cuts: no scene loaded");
+  std::vector<std::int32_t> tets;
+  const CutFeed::Part part = session_->cut_feed().read(from, kMaxCutsPerReply, tets);
+  const std::uint32_t start = std::min(from, part.total);
+  return {{"generation", part.generation},
+          {"total", part.total},
+          {"from", start},
+          {"tets", tets},
+          {"more", start + tets.size() < part.total}};
+}
+
+nlohmann::json Servo::reset_cuts_command() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!session_) throw CommandError("reset_cuts: no scene loaded");
+  if (loop_thread_.joinable()) {
+    // The loop resets them at its next tick, before any blade steps.
+    shared_->cut_resets_requested.fetch_add(1);
+    return {{"at", "the next tick"}};
+  }
+  session_->cut_state().reset_cuts();
+  session_->cut_feed().follow(session_->cuts());
+  return {{"at", "now"}, {"generation", session_->cuts().generation()}};
+}
+
+nlohmann::json Servo::save_cuts_command(const ControlJson& message) {
+  const std::string requested = string_field(message, "path", kMaxPathBytes);
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!session_) throw CommandError("save_cuts: no scene loaded");
+  std::vector<std::int32_t> tets;
+  const CutFeed::Part part = session_->cut_feed().read(0, 0xFFFFFFFF, tets);
+  const nlohmann::json out = {{"format", kCutsFormat},
+                              {"version", kCutsVersion},
+                              {"scene", session_->scene_label()},
+                              {"tet_count", session_->recording_info().tet_count},
+                              {"tets", tets}};
+  std::string path;
+  try {
+    std::FILE* file = create_recording_file(options_.record_dir, requested, path);
+    const std::string text = out.dump();
+    const bool written = std::fwrite(text.data(), 1, text.size(), file) == text.size();
+    if (std::fclose(file) != 0 || !written) {
+      throw FileRefused("'" + path + "': " + std::strerror(errno));
+    }
+  } catch (const std::runtime_error& e) {
+    throw CommandError(std::string("save_cuts: ") + e.what());
+  }
+  return {{"path", path}, {"tets", tets.size()}, {"generation", part.generation}};
+}
+
+nlohmann::json Servo::load_cuts_command(const ControlJson& message) {
+  const std::string requested = string_field(message, "path", kMaxPathBytes);
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!session_) throw CommandError("load_cuts: no scene loaded");
+  if (loading_) throw CommandError("load_cuts: a load is in progress (status: loading)");
+  if (loop_thread_.joinable()) {
+    throw CommandError("load_cuts: a run is on (stop it first; reset_cuts works while running)");
+  }
+  std::string path;
+  std::vector<std::uint8_t> bytes;
+  try {
+    bytes = read_recording_directory_file(options_.record_dir, requested, kMaxCutsFileBytes, path);
+  } catch (const std::runtime_error& e) {
+    throw CommandError(std::string("load_cuts: ") + e.what());
+  }
+  const std::string where = "load_cuts: '" + path + "': ";
+  const nlohmann::json in = nlohmann::json::parse(bytes.begin(), bytes.end(), nullptr, false);
+  if (!in.is_object() || in.value("format", std::string()) != kCutsFormat) {
+    throw CommandError(where + "not a cuts file (format \"" + kCutsFormat + "\")");
+  }
+  if (!in.contains("version") || in.at("version") != kCutsVersion) {
+    throw CommandError(where + "version " +
+                       (in.contains("version") ? in.at("version").dump() : "none") +
+                       ", this servo reads version " + std::to_string(kCutsVersion));
+  }
+  const std::uint32_t tet_count = session_->recording_info().tet_count;
+  if (!in.contains("tet_count") || in.at("tet_count") != tet_count) {
+    throw CommandError(where + "saved from a scene of " +
+                       (in.contains("tet_count") ? in.at("tet_count").dump() : "unknown") +
+                       " tets ('" + in.value("scene", std::string()) + "'); the loaded scene has " +
+                       std::to_string(tet_count) + " ('" + session_->scene_label() + "')");
+  }
+  const auto& list = in.contains("tets") ? in.at("tets") : nlohmann::json();
+  if (!list.is_array()) throw CommandError(where + "tets: expected a list of tet indices");
+  std::vector<std::int32_t> tets;
+  tets.reserve(list.size());
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    if (!list[i].is_number_integer() || list[i].get<std::int64_t>() < 0 ||
+        list[i].get<std::int64_t>() >= tet_count) {
+      throw CommandError(where + "tets/" + std::to_string(i) + ": expected a tet index, 0 to " +
+                         std::to_string(tet_count - 1));
+    }
+    tets.push_back(list[i].get<std::int32_t>());
+  }
+  try {
+    session_->cut_state().set_cuts(tets);
+  } catch (const std::invalid_argument& e) {
+    throw CommandError(where + e.what() + "; the cuts are as they were");
+  }
+  session_->cut_feed().follow(session_->cuts());
+  return {{"path", path}, {"tets", tets.size()}, {"generation", session_->cuts().generation()}};
 }
 
 }  // namespace hapticut::servo

@@ -60,6 +60,11 @@ class Servo {
   nlohmann::json set_parameters(const ControlJson& message);
   nlohmann::json record_command(const ControlJson& message);
   nlohmann::json pose_command(const ControlJson& message);
+  // The scene's cut tets (docs/protocol.md, "Cut tets").
+  nlohmann::json cuts_command(const ControlJson& message);
+  nlohmann::json reset_cuts_command();
+  nlohmann::json save_cuts_command(const ControlJson& message);
+  nlohmann::json load_cuts_command(const ControlJson& message);
 
   LoopShared& shared() { return *shared_; }
   nlohmann::json status();

@@ -165,6 +165,13 @@ void run_loop(Session& session, LoopShared& shared) {
   std::uint64_t late = 0;
   std::uint64_t dropped = 0;
   std::uint64_t frame_sequence = 0;
+  CutState& cuts = session.cut_state();
+  CutFeed& cut_feed = session.cut_feed();
+  // Every run's stream starts at the cut order's first entry (a client that
+  // joined late asks for the rest); every recording does too.
+  CutCursor frame_cuts{cuts.generation(), 0};
+  CutCursor record_cuts;
+  bool recorded_last_tick = false;
   shared.running.store(true);
 
   for (;; ++tick) {
@@ -197,11 +204,24 @@ void run_loop(Session& session, LoopShared& shared) {
     const bool recording = shared.record_wanted.load(std::memory_order_acquire);
     shared.recording.store(recording, std::memory_order_release);
 
+    // Fresh tissue when asked (a control message, a replay's recorded reset),
+    // before any blade steps.
+    bool reset_cuts = false;
+    const std::uint64_t resets = shared.cut_resets_requested.load(std::memory_order_relaxed);
+    if (resets != shared.cut_resets_done.load(std::memory_order_relaxed)) {
+      shared.cut_resets_done.store(resets, std::memory_order_relaxed);
+      reset_cuts = true;
+    }
+    for (Binding& b : bindings) reset_cuts = b.device->cut_reset_due() || reset_cuts;
+    if (reset_cuts) cuts.reset_cuts();
+    const auto cut_before_tick = static_cast<std::uint32_t>(cuts.cut_count());
+
     // The tick: devices -> engine -> safety -> devices.
     for (Binding& b : bindings) {
       tick_blade(b, now_s, dt_s, fast, shared.engaged, stopping, settings);
     }
     const double compute_us = (monotonic_now_s() - woke_s) * 1e6;
+    cut_feed.follow(cuts);
 
     // Counters.
     shared.compute_us.add(compute_us);
@@ -212,6 +232,8 @@ void run_loop(Session& session, LoopShared& shared) {
 
     // Record.
     SpscRing* ring = recording ? shared.ring.load(std::memory_order_acquire) : nullptr;
+    if (ring != nullptr && !recorded_last_tick) record_cuts = {cuts.generation(), 0};
+    recorded_last_tick = ring != nullptr;
     if (ring != nullptr) {
       unsigned char* slot = ring->begin_push();
       if (slot == nullptr) {
@@ -232,6 +254,7 @@ void run_loop(Session& session, LoopShared& shared) {
         std::size_t offset = sizeof(header);
         for (Binding& b : bindings)
           offset += write_blade_block(b.result, current_snapshot(b), slot + offset);
+        write_cut_block(cuts, cut_before_tick, record_cuts, slot + offset);
         ring->end_push();
       }
     }
@@ -257,6 +280,8 @@ void run_loop(Session& session, LoopShared& shared) {
       std::size_t offset = sizeof(header);
       for (Binding& b : bindings)
         offset += write_blade_block(b.result, current_snapshot(b), frame.bytes + offset);
+      write_cut_block(cuts, cut_before_tick, frame_cuts, frame.bytes + offset);
+      offset += sizeof(CutBlock);
       header.frame_bytes = static_cast<std::uint32_t>(offset);
       std::memcpy(frame.bytes, &header, sizeof(header));
       frame.size = static_cast<std::uint32_t>(offset);

@@ -48,6 +48,10 @@ struct LoopShared {
   LatestValue<RuntimeSettings> settings;
   std::atomic<double> stream_interval_s{0.0};  // 0: nobody subscribed, no frames.
   std::atomic<bool> record_wanted{false};
+  // reset_cuts while a run is on: the loop resets the scene's cuts at the
+  // start of a tick while done lags requested (at the next run's start when
+  // this one ends first).
+  std::atomic<std::uint64_t> cut_resets_requested{0};
   LatestValue<LimitsRequest> limits;
   bool exit_when_done = false;  // Set before the run.
   double duration_s = 0.0;      // 0: no limit. Set before the run.
@@ -56,6 +60,7 @@ struct LoopShared {
   std::atomic<bool> running{false};
   std::atomic<bool> recording{false};  // The loop is pushing records.
   std::atomic<bool> ended_by_itself{false};
+  std::atomic<std::uint64_t> cut_resets_done{0};
   std::atomic<std::uint64_t> ticks{0};
   std::atomic<std::uint64_t> late_ticks{0};
   std::atomic<std::uint64_t> dropped_records{0};

@@ -68,6 +68,7 @@ Session::Session(const SessionConfig& config, const std::function<void()>& betwe
   between_stages();
   shading_ = std::make_shared<const ForceShading>(*space_);
   cuts_ = std::make_shared<CutState>(space_);
+  cut_feed_ = std::make_unique<CutFeed>(static_cast<std::size_t>(space_->mesh().tet_count()));
   between_stages();
 
   std::vector<DeviceSpec> specs;
@@ -154,6 +155,19 @@ Session::Session(const SessionConfig& config, const std::function<void()>& betwe
     bindings_.push_back(std::move(binding));
     between_stages();
   }
+  // A replay starts from the cuts its recording started with.
+  for (const Binding& b : bindings_) {
+    const std::span<const std::int32_t> initial = b.device->initial_cuts();
+    if (initial.empty()) continue;
+    try {
+      cuts_->set_cuts(initial);
+    } catch (const std::invalid_argument& e) {
+      throw DeviceError("blade '" + b.blade_name + "': device '" + b.device_text +
+                        "': the recording's cuts do not fit this scene (" + e.what() + ")");
+    }
+    break;
+  }
+  cut_feed_->follow(*cuts_);
   if (frame_bytes() > kMaxFrameBytes) {
     throw SceneError("/blades", "a stream frame of this scene's blades would be " +
                                     std::to_string(frame_bytes()) + " bytes, over the " +
@@ -163,6 +177,7 @@ Session::Session(const SessionConfig& config, const std::function<void()>& betwe
   recording_info_.rate_Hz = rate_Hz_;
   recording_info_.as_fast_as_possible = as_fast_as_possible_;
   recording_info_.scene = scene_label_;
+  recording_info_.tet_count = static_cast<std::uint32_t>(space_->mesh().tet_count());
   for (const Binding& b : bindings_) {
     recording_info_.blades.push_back({b.blade_name, b.device_text,
                                       static_cast<std::uint32_t>(b.snapshot.point_count()), 0,
@@ -191,7 +206,7 @@ std::size_t Session::frame_bytes() const {
   std::size_t bytes = sizeof(FrameHeader);
   for (const Binding& b : bindings_)
     bytes += sizeof(BladeBlock) + points_block_bytes(b.snapshot.point_count());
-  return bytes;
+  return bytes + sizeof(CutBlock);
 }
 
 }  // namespace hapticut::servo

@@ -10,6 +10,7 @@
 
 #include "blade_tick_snapshot.h"
 #include "client_files.h"
+#include "cut_feed.h"
 #include "devices/device.h"
 #include "devices/device_factory.h"
 #include "hapticut/blade.h"
@@ -94,6 +95,13 @@ class Session {
   // The tets the blades have cut since the load (cut_state.h); every blade
   // reads and marks this one, on the servo thread.
   const CutState& cuts() const { return *cuts_; }
+  // Changed only on the loop's thread while a run is on, by the control
+  // thread while none is (reset_cuts, load_cuts).
+  CutState& cut_state() { return *cuts_; }
+  // The cut order for the other threads (cut_feed.h): the writer follows
+  // cut_state() after every change.
+  CutFeed& cut_feed() { return *cut_feed_; }
+  const CutFeed& cut_feed() const { return *cut_feed_; }
 
  private:
   Scene scene_;
@@ -103,6 +111,7 @@ class Session {
   std::shared_ptr<const ForceShading> shading_;
   // The loaded scene's cut memory, shared by every blade (docs/decisions.md, "Cut memory").
   std::shared_ptr<CutState> cuts_;
+  std::unique_ptr<CutFeed> cut_feed_;
   double rate_Hz_ = 1000.0;
   bool as_fast_as_possible_ = false;
   std::vector<Binding> bindings_;

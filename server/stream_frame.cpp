@@ -1,5 +1,6 @@
 #include "stream_frame.h"
 
+#include <algorithm>
 #include <cstring>
 
 namespace hapticut::servo {
@@ -66,6 +67,23 @@ std::size_t write_blade_block(const BladeTickResult& result, const BladeTickSnap
     view.state[i] = static_cast<std::uint8_t>(point.place.state);
   }
   return sizeof(block) + bytes;
+}
+
+void write_cut_block(const CutState& cuts, std::uint32_t before_tick, CutCursor& cursor,
+                     unsigned char* out) {
+  CutBlock block;
+  block.generation = cuts.generation();
+  if (cursor.generation != block.generation) cursor = {block.generation, 0};
+  const std::span<const std::int32_t> order = cuts.cut_order();
+  block.total = static_cast<std::uint32_t>(order.size());
+  block.before_tick = before_tick;
+  block.first = std::min(cursor.next, block.total);
+  block.carried =
+      static_cast<std::uint16_t>(std::min<std::uint32_t>(block.total - block.first, kCutBlockTets));
+  block.capacity = kCutBlockTets;
+  std::copy_n(order.begin() + block.first, block.carried, block.tets);
+  cursor.next = block.first + block.carried;
+  std::memcpy(out, &block, sizeof(block));
 }
 
 }  // namespace hapticut::servo

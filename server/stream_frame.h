@@ -1,11 +1,13 @@
-// Writing one blade's BladeBlock and points block (layout.h) from the tick's
-// results: the same bytes go into stream frames and recording records.
+// Writing one blade's BladeBlock and points block, and the CutBlock (layout.h),
+// from the tick's results: the same bytes go into stream frames and recording
+// records.
 #pragma once
 
 #include <cstdint>
 
 #include "blade_tick_snapshot.h"
 #include "devices/device.h"
+#include "hapticut/cut_state.h"
 #include "layout.h"
 #include "safety.h"
 
@@ -35,5 +37,18 @@ struct BladeTickResult {
 // bytes); returns the bytes written.
 std::size_t write_blade_block(const BladeTickResult& result, const BladeTickSnapshot& snapshot,
                               unsigned char* out);
+
+// Where the next CutBlock of one output (the stream, a recording) goes on in
+// the cut order: a new generation starts it again from the first entry.
+struct CutCursor {
+  std::uint32_t generation = 0;
+  std::uint32_t next = 0;
+};
+
+// Writes the CutBlock at `out` (sizeof(CutBlock) bytes): the cut order's next
+// entries after `cursor`, which it advances; `before_tick` is the count of
+// tets cut when the tick began.
+void write_cut_block(const CutState& cuts, std::uint32_t before_tick, CutCursor& cursor,
+                     unsigned char* out);
 
 }  // namespace hapticut::servo

@@ -96,6 +96,47 @@ class Recording:
         self.blade(name)  # KeyError naming the blades for an unknown one.
         return next(b["coupling"] for b in self.header["blades"] if b["name"] == name)
 
+    @property
+    def cut_blocks(self) -> np.ndarray:
+        """(T,) servo_layout.CUT_BLOCK: each record's cut block."""
+        return layout.cut_blocks(self.records)
+
+    def cut_order(self, upto: int | None = None) -> np.ndarray:
+        """(k,) int32: the tets the scene had cut at the end of record ``upto`` (default the
+        last), in the order they were cut: the engine's own cut set (the servo records its
+        cut order, docs/servo.md), since the last reset_cuts before that record. The records
+        carry the order a block at a time, so entries of a record's tick may come in the
+        next records: they are read from there. RecordingError when records were dropped
+        and the order has a hole."""
+        blocks = self.cut_blocks
+        if not len(blocks):
+            return np.zeros(0, np.int32)
+        upto = len(blocks) - 1 if upto is None else int(upto)
+        generation = int(blocks[upto]["generation"])
+        wanted = int(blocks[upto]["total"])
+        order: list[int] = []
+        for i in range(len(blocks)):
+            block = blocks[i]
+            if int(block["generation"]) != generation:
+                if i > upto:
+                    break
+                continue
+            first, carried = int(block["first"]), int(block["carried"])
+            if first > len(order):
+                raise RecordingError(
+                    f"recording {self.path!r}: record {i} carries cut tets from {first} on, "
+                    f"and the records before it carry {len(order)} (records were dropped)"
+                )
+            order[first:] = block["tets"][:carried].tolist()
+            if i >= upto and len(order) >= wanted:
+                break
+        if len(order) < wanted:
+            raise RecordingError(
+                f"recording {self.path!r}: {wanted} tets were cut by record {upto}, its "
+                f"records carry {len(order)} (it ended before the rest were written)"
+            )
+        return np.asarray(order[:wanted], np.int32)
+
     def __len__(self) -> int:
         return len(self.records)
 

@@ -30,7 +30,7 @@ import numpy as np
 
 from hapticut import servo_layout as layout
 
-PROTOCOL_VERSION = 2
+PROTOCOL_VERSION = 3
 MAX_MESSAGE_BYTES = 16 << 20
 
 
@@ -43,6 +43,7 @@ class StreamFrame:
     header: np.void  # layout.FRAME_HEADER
     blades: dict[str, np.void]  # name -> layout.blade_dtype(points) ("block", "q", "p", "state")
     received_s: float  # time.monotonic() on arrival (the servo's clock: CLOCK_MONOTONIC)
+    cuts: np.void | None = None  # layout.CUT_BLOCK: the cut tets it carries (CutSet.take)
 
     @property
     def sequence(self) -> int:
@@ -96,7 +97,62 @@ def parse_stream_frame(
         name = names[i] if names is not None and i < len(names) else f"blade{i}"
         blades[name] = np.frombuffer(data, dtype, 1, offset)[0]
         offset += dtype.itemsize
-    return StreamFrame(header, blades, received_s)
+    if offset + layout.CUT_BLOCK.itemsize != len(data):
+        raise ValueError(
+            f"frame of {len(data)} bytes: its blades end at {offset}, and its cut block is "
+            f"{layout.CUT_BLOCK.itemsize} bytes"
+        )
+    cuts = np.frombuffer(data, layout.CUT_BLOCK, 1, offset)[0]
+    if int(cuts["carried"]) > layout.CUT_BLOCK_TETS:
+        raise ValueError(f"cut block carries {int(cuts['carried'])} tets, over its room")
+    return StreamFrame(header, blades, received_s, cuts)
+
+
+class CutSet:
+    """The scene's cut tets as a client keeps them from the stream: each frame carries the
+    next entries of the servo's cut order (servo_layout.CUT_BLOCK); a frame that is not the
+    next (a lost datagram, a slower subscription, a client that joined late) asks for the
+    rest over the control channel (``ServoClient.cuts``). ``order`` is the servo's cut
+    order, ``tets`` the same as a set."""
+
+    def __init__(self) -> None:
+        self.generation: int | None = None
+        self.order: list[int] = []
+        self.tets: set[int] = set()
+        self.total = 0  # What the newest frame says the servo has cut.
+        self.fills = 0  # Times a hole was filled over the control channel.
+
+    def take(self, frame: StreamFrame, client: ServoClient | None = None) -> bool:
+        """Adds what ``frame`` carries; True when the set is whole up to the frame's tick.
+        A frame of another generation (the cuts were reset or loaded) starts the set again;
+        one that leaves a hole is filled from ``client`` when given (else False)."""
+        block = frame.cuts
+        if block is None:
+            return False
+        generation, first = int(block["generation"]), int(block["first"])
+        carried = int(block["carried"])
+        self.total = int(block["total"])
+        if generation != self.generation:
+            self.generation, self.order, self.tets = generation, [], set()
+        if first > len(self.order):
+            if client is None:
+                return False
+            self._fill(client)
+        else:
+            self._append(block["tets"][:carried].tolist()[len(self.order) - first :])
+        return len(self.order) >= self.total
+
+    def _fill(self, client: ServoClient) -> None:
+        self.fills += 1
+        generation, tets = client.cuts(len(self.order))
+        if generation != self.generation:
+            self.generation, self.order, self.tets = generation, [], set()
+            generation, tets = client.cuts(0)
+        self._append(tets.tolist())
+
+    def _append(self, tets: list[int]) -> None:
+        self.order += tets
+        self.tets.update(tets)
 
 
 _SESSION_OFFSET = layout.FRAME_HEADER.fields["session"][1]
@@ -343,6 +399,30 @@ class ServoClient:
 
     def send_pose(self, blade: str, pose: Sequence[float], buttons: int = 0) -> dict:
         return self.request("pose", blade=blade, pose=[float(x) for x in pose], buttons=buttons)
+
+    def cuts(self, from_index: int = 0) -> tuple[int, np.ndarray]:
+        """The scene's cut tets in the order they were cut, from ``from_index`` on: (their
+        generation, int32 array), asked a reply at a time (``cuts``, docs/protocol.md)."""
+        tets: list[int] = []
+        generation = None
+        while True:
+            reply = self.request("cuts", **{"from": from_index + len(tets)})
+            if generation is not None and reply["generation"] != generation:
+                tets, generation = [], None  # Reset between two replies: start again.
+                continue
+            generation = reply["generation"]
+            tets += reply["tets"]
+            if not reply["more"]:
+                return int(generation), np.asarray(tets, np.int32)
+
+    def reset_cuts(self) -> dict:
+        return self.request("reset_cuts")
+
+    def save_cuts(self, path: str | os.PathLike) -> dict:
+        return self.request("save_cuts", path=os.fspath(path))
+
+    def load_cuts(self, path: str | os.PathLike) -> dict:
+        return self.request("load_cuts", path=os.fspath(path))
 
     def shutdown(self) -> dict:
         return self.request("shutdown")

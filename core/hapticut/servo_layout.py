@@ -5,8 +5,8 @@ them once here, as numpy dtypes, and ``tests/python/test_servo_layout.py``
 checks the two against ``hapticut-servo --print-layout``. Pure numpy: the
 Blender add-on imports it without the compiled module.
 
-A frame:  FRAME_HEADER, then per blade: BLADE_BLOCK, its points block.
-A record: RECORD_HEADER, then per blade: BLADE_BLOCK, its points block.
+A frame:  FRAME_HEADER, then per blade: BLADE_BLOCK, its points block; a CUT_BLOCK.
+A record: RECORD_HEADER, then per blade: BLADE_BLOCK, its points block; a CUT_BLOCK.
 A recording ends with RECORDING_TRAILER, written when it is closed cleanly.
 Points block of N points: q (N, 3) f8, p (N, 3) f8, state (N,) u1, zero
 padding to a multiple of 8 bytes.
@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
-FRAME_VERSION = 3
-RECORD_VERSION = 4
+FRAME_VERSION = 4
+RECORD_VERSION = 5
 FRAME_MAGIC = b"HCFR"
 RECORDING_MAGIC = b"HCREC001"
 RECORDING_END_MARKER = b"HCRECEND"
@@ -88,6 +88,23 @@ BLADE_BLOCK = np.dtype(
         ("deferred_points", "<u2"),
         ("engine_rejected", "u1"),
         ("force_shading", "u1"),
+    ]
+)
+
+# The next entries of the scene's cut order (the cut tets, in the order they were cut) after
+# those the last frame, or record, carried: a reader that gets every one rebuilds the set by
+# appending (docs/protocol.md, "Cut tets"). Last in a frame and in a record.
+CUT_BLOCK_TETS = 64
+CUT_BLOCK = np.dtype(
+    [
+        ("generation", "<u4"),  # Changes with every reset_cuts or load_cuts.
+        ("total", "<u4"),  # Tets cut after this tick: the order's length.
+        ("before_tick", "<u4"),  # Tets cut when the tick began.
+        ("first", "<u4"),  # The order's index of tets[0].
+        ("carried", "<u2"),  # Entries of tets in use.
+        ("capacity", "<u2"),
+        ("reserved", "<u4"),
+        ("tets", "<i4", (CUT_BLOCK_TETS,)),
     ]
 )
 
@@ -168,9 +185,33 @@ def blade_dtype(points: int) -> np.dtype:
 
 
 def _with_blades(header: np.dtype, names: list[str], points: list[int]) -> np.dtype:
+    """The header and the blades as fields; the CUT_BLOCK after them is in the itemsize, not a
+    field (a blade may have any name): ``cut_blocks`` reads it."""
     fields: list = [("header", header)]
     fields += [(name, blade_dtype(n)) for name, n in zip(names, points, strict=True)]
-    return np.dtype(fields)
+    packed = np.dtype(fields)
+    return np.dtype(
+        {
+            "names": list(packed.names),
+            "formats": [packed.fields[name][0] for name in packed.names],
+            "offsets": [packed.fields[name][1] for name in packed.names],
+            "itemsize": packed.itemsize + CUT_BLOCK.itemsize,
+        }
+    )
+
+
+def cut_blocks(records: np.ndarray) -> np.ndarray:
+    """(T,) CUT_BLOCK: the cut block of each of these records (or frames), the last
+    CUT_BLOCK.itemsize bytes of each (a view, not a copy)."""
+    records = np.ascontiguousarray(records)
+    size = records.dtype.itemsize
+    return np.ndarray(
+        (len(records),),
+        CUT_BLOCK,
+        buffer=records.view(np.uint8).reshape(-1),
+        offset=size - CUT_BLOCK.itemsize,
+        strides=(size,),
+    )
 
 
 def stream_frame_dtype(points: list[int], names: list[str] | None = None) -> np.dtype:

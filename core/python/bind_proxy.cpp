@@ -530,6 +530,29 @@ void bind_proxy(nb::module_& m) {
             b.blade.reset_cuts();
           },
           "Uncuts every tet (reset does not: the cuts stay with the scene).")
+      .def_prop_ro(
+          "cut_order",
+          [](const PyBlade& b) {
+            const auto busy = claim(b);
+            const std::span<const std::int32_t> order = b.blade.cuts().cut_order();
+            auto out = new_array<std::int32_t>({order.size()});
+            std::copy(order.begin(), order.end(), out.data());
+            return out;
+          },
+          "(k,) int32: the cut tets in the order they were cut (what the servo streams, "
+          "records and saves).",
+          nb::rv_policy::move)
+      .def(
+          "set_cuts",
+          [](PyBlade& b,
+             const nb::ndarray<const std::int32_t, nb::ndim<1>, nb::device::cpu>& tets) {
+            const auto busy = claim(b);
+            b.blade.set_cuts({tets.data(), tets.shape(0)});
+          },
+          nb::arg("tets"),
+          "Uncuts every tet, then cuts these in order. Raises ValueError naming the entry for "
+          "a tet out of range, given twice or of a material that is never cut (then nothing "
+          "is cut).")
       .def(
           "step",
           [](PyBlade& b, const nb::ndarray<const double, nb::shape<7>, nb::device::cpu>& pose,

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <string>
 
 #include "hapticut/proxy_place.h"
+#include "hapticut/scene.h"
 #include "hapticut/space.h"
 #include "hapticut/tet_mesh.h"
 
@@ -12,6 +14,13 @@ namespace hapticut {
 CutState::CutState(std::shared_ptr<const Space> space) : space_(std::move(space)) {
   if (!space_) throw std::invalid_argument("a CutState needs a Space");
   cut_.assign(static_cast<std::size_t>(space_->mesh().tet_count()), 0);
+  order_.assign(cut_.size(), 0);
+}
+
+void CutState::mark(std::int32_t t) {
+  cut_[t] = 1;
+  order_[static_cast<std::size_t>(cut_count_)] = t;
+  ++cut_count_;
 }
 
 bool CutState::cut_if_inside(std::int32_t t, const Vec3& x) {
@@ -23,8 +32,7 @@ bool CutState::cut_if_inside(std::int32_t t, const Vec3& x) {
   // face (a rigid blade's ideal point, seated in the membrane's tet) touches
   // the skin without opening it.
   if (!(space_->mesh().outside_distance(t, x) < -space_->tolerance())) return false;
-  cut_[t] = 1;
-  ++cut_count_;
+  mark(t);
   return true;
 }
 
@@ -65,7 +73,7 @@ int CutState::cut_left_behind(const ProxyPlace& place, const Vec3& now) {
   const bool owner_cut = owner_model != MaterialModel::Membrane || place.state != ProxyState::Tet ||
                          mesh.outside_distance(owner, place.q) < -eps;
   if (cut_[owner] == 0 && owner_cut && mesh.outside_distance(owner, now) > eps) {
-    cut_[owner] = 1;
+    mark(owner);
     ++newly_cut;
   }
   const auto touched = [&](std::int32_t t) {
@@ -73,7 +81,7 @@ int CutState::cut_left_behind(const ProxyPlace& place, const Vec3& now) {
     const MaterialModel model = space_->own_model(t);
     if ((model == MaterialModel::Drag || model == MaterialModel::Viscous) &&
         mesh.outside_distance(t, now) > eps) {
-      cut_[t] = 1;
+      mark(t);
       ++newly_cut;
     }
   };
@@ -93,13 +101,36 @@ int CutState::cut_left_behind(const ProxyPlace& place, const Vec3& now) {
     case ProxyState::Outside:
       break;
   }
-  cut_count_ += newly_cut;
   return newly_cut;
 }
 
 void CutState::reset_cuts() {
   std::fill(cut_.begin(), cut_.end(), std::uint8_t{0});
   cut_count_ = 0;
+  ++generation_;
+}
+
+void CutState::set_cuts(std::span<const std::int32_t> tets) {
+  std::vector<std::uint8_t> given(cut_.size(), 0);
+  for (std::size_t i = 0; i < tets.size(); ++i) {
+    const std::int32_t t = tets[i];
+    std::string problem;
+    if (t < 0 || t >= static_cast<std::int32_t>(cut_.size())) {
+      problem = "tet " + std::to_string(t) + " is not one of the scene's " +
+                std::to_string(cut_.size()) + " tets";
+    } else if (given[t] != 0) {
+      problem = "tet " + std::to_string(t) + " is given twice";
+    } else if (!is_cuttable(space_->own_model(t))) {
+      problem = "tet " + std::to_string(t) + " is of a material that is never cut (" +
+                std::string(material_model_name(space_->own_model(t))) + ")";
+    }
+    if (!problem.empty()) {
+      throw std::invalid_argument("cut tets/" + std::to_string(i) + ": " + problem);
+    }
+    given[t] = 1;
+  }
+  reset_cuts();
+  for (const std::int32_t t : tets) mark(t);
 }
 
 std::vector<std::int32_t> CutState::cut_tets() const {

@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -109,6 +110,13 @@ class Device {
   // A scripted device (sim, replay) that has played its whole path. The
   // servo may then end the run (--exit-when-done). Any thread.
   virtual bool finished() const { return false; }
+  // The tets cut before the device's first sample, in their order (a replay:
+  // the recording's); the session starts from them. Empty for live devices.
+  virtual std::span<const std::int32_t> initial_cuts() const { return {}; }
+  // Asked at the start of every tick, before any blade reads: whether the
+  // scene's cuts are reset before this tick's steps (a replay, at the tick
+  // where the recorded run's were reset).
+  virtual bool cut_reset_due() { return false; }
 
   // The backend's own counters (garbage refused, reconnections...) by name,
   // for the servo's status and statistics. Not real-time; any thread.

@@ -9,15 +9,66 @@
 
 namespace hapticut::servo {
 
-ReplayDevice::ReplayDevice(std::unique_ptr<RecordingReader> reader, std::size_t blade_offset)
+ReplayDevice::ReplayDevice(std::unique_ptr<RecordingReader> reader, std::size_t blade_offset,
+                           const std::string& describe)
     : reader_(std::move(reader)), blade_offset_(blade_offset) {
   const std::size_t record_bytes = reader_->info().record_bytes;
   chunk_records_ = std::max<std::uint64_t>(1, kReplayChunkBytes / record_bytes);
   chunk_.resize(chunk_records_ * record_bytes);
+  read_initial_cuts(describe);
+}
+
+CutBlock ReplayDevice::cut_block(std::uint64_t index) const {
+  CutBlock block;
+  std::memcpy(&block,
+              chunk_.data() + (index - chunk_first_) * reader_->info().record_bytes +
+                  reader_->info().cut_block_offset,
+              sizeof(block));
+  return block;
+}
+
+void ReplayDevice::read_initial_cuts(const std::string& describe) {
+  const std::uint64_t count = reader_->record_count();
+  if (count == 0) return;
+  if (!load_chunk(0)) throw DeviceError(describe + ": its first records cannot be read");
+  const CutBlock first = cut_block(0);
+  cut_generation_ = first.generation;
+  const std::uint32_t wanted = first.before_tick;
+  initial_cuts_.reserve(wanted);
+  for (std::uint64_t i = 0; i < count && initial_cuts_.size() < wanted; ++i) {
+    if (i >= chunk_first_ + chunk_count_ && !load_chunk(i)) break;
+    const CutBlock block = cut_block(i);
+    if (block.generation != first.generation || block.first != initial_cuts_.size() ||
+        block.carried > kCutBlockTets) {
+      break;
+    }
+    for (std::uint16_t k = 0; k < block.carried && initial_cuts_.size() < wanted; ++k) {
+      initial_cuts_.push_back(block.tets[k]);
+    }
+  }
+  if (initial_cuts_.size() != wanted) {
+    throw DeviceError(describe + ": the recording started with " + std::to_string(wanted) +
+                      " tets cut and its records carry " + std::to_string(initial_cuts_.size()) +
+                      " of them (damaged or cut short)");
+  }
+  chunk_count_ = 0;  // start() reads from the first record again.
+}
+
+bool ReplayDevice::cut_reset_due() {
+  const std::uint64_t count = reader_->record_count();
+  if (next_ >= count) return false;
+  if (next_ < chunk_first_ || next_ >= chunk_first_ + chunk_count_) {
+    if (!load_chunk(next_)) return false;  // read() finds the file changed and ends.
+  }
+  const std::uint32_t generation = cut_block(next_).generation;
+  const bool due = next_ > 0 && generation != cut_generation_;
+  cut_generation_ = generation;
+  return due;
 }
 
 void ReplayDevice::start() {
   next_ = 0;
+  cut_generation_ = 0;
   sequence_ = 0;
   chunk_count_ = 0;
   last_sample_ = DeviceSample{};
@@ -103,7 +154,7 @@ std::unique_ptr<Device> make_replay_device(const DeviceSpec& spec, const DeviceC
                       "' (it has: " + names + ")");
   }
   const std::size_t offset = found->offset;
-  return std::make_unique<ReplayDevice>(std::move(reader), offset);
+  return std::make_unique<ReplayDevice>(std::move(reader), offset, spec.describe());
 }
 
 }  // namespace hapticut::servo

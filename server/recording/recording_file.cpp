@@ -14,7 +14,8 @@ void lay_out_record(RecordingInfo& info) {
     blade.offset = offset;
     offset += sizeof(BladeBlock) + points_block_bytes(blade.points);
   }
-  info.record_bytes = offset;
+  info.cut_block_offset = offset;
+  info.record_bytes = offset + sizeof(CutBlock);
 }
 
 std::vector<unsigned char> recording_preamble(const RecordingInfo& info) {
@@ -25,6 +26,8 @@ std::vector<unsigned char> recording_preamble(const RecordingInfo& info) {
   header["as_fast_as_possible"] = info.as_fast_as_possible;
   header["scene"] = info.scene;
   header["record_bytes"] = info.record_bytes;
+  header["tet_count"] = info.tet_count;
+  header["cut_block"] = info.cut_block_offset;
   header["blades"] = nlohmann::json::array();
   for (const RecordingBlade& b : info.blades) {
     header["blades"].push_back({{"name", b.name},

@@ -4,7 +4,8 @@
 //   16..16+H    the header, JSON (UTF-8), padded with spaces so that the
 //               records start at a multiple of 8
 //   then        fixed-size records (layout.h: RecordHeader, then per blade a
-//               BladeBlock and its points block), record_bytes each
+//               BladeBlock and its points block, then a CutBlock),
+//               record_bytes each
 //   last        the trailer (layout.h: RecordingTrailer, ending "HCRECEND"),
 //               written when the recording is closed cleanly
 // A file without the trailer was cut short (killed, disk full): readers
@@ -34,6 +35,8 @@ struct RecordingInfo {
   bool as_fast_as_possible = false;
   std::string scene;
   std::vector<RecordingBlade> blades;
+  std::uint32_t tet_count = 0;       // The scene's: what the cut tets index.
+  std::size_t cut_block_offset = 0;  // Of the CutBlock within a record.
   std::size_t record_bytes = 0;
 };
 

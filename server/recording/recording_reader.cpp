@@ -126,6 +126,7 @@ RecordingReader::RecordingReader(const std::string& path) : path_(path) {
           {fields.text(b, "name", pointer, true), fields.text(b, "device", pointer, false),
            static_cast<std::uint32_t>(points), 0, fields.text(b, "coupling", pointer, false)});
     }
+    info_.tet_count = static_cast<std::uint32_t>(fields.count(header, "tet_count", ""));
     lay_out_record(info_);
     const std::uint64_t stated = fields.count(header, "record_bytes", "");
     if (info_.record_bytes != stated) {

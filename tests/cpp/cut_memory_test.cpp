@@ -11,6 +11,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hapticut/blade.h"
@@ -185,6 +186,58 @@ TEST_P(CutMemory, TheSameStrokeFromResetGivesTheSameCutSet) {
             once);
   // Only flesh is cut, never air.
   for (std::int32_t t : blade.cuts().cut_tets()) EXPECT_EQ(space->mesh().material(t), 1);
+}
+
+TEST_P(CutMemory, TheCutOrderIsTheSetInTheOrderOfCuttingAndSetCutsRestoresIt) {
+  const auto space = flesh_block();
+  Blade blade(space, knife(GetParam()));
+  const std::uint32_t fresh_generation = blade.cuts().generation();
+  slit(blade, 0.6);
+  const std::vector<std::int32_t> order(blade.cuts().cut_order().begin(),
+                                        blade.cuts().cut_order().end());
+  ASSERT_GT(order.size(), 10U);
+  std::vector<std::int32_t> sorted = order;
+  std::sort(sorted.begin(), sorted.end());
+  EXPECT_EQ(sorted, blade.cuts().cut_tets());              // Each cut tet once.
+  EXPECT_EQ(blade.cuts().generation(), fresh_generation);  // Cutting appends.
+
+  // Another blade's state set from the order: the same bytes, the same order.
+  Blade other(space, knife(GetParam()));
+  other.set_cuts(order);
+  EXPECT_NE(other.cuts().generation(), fresh_generation);
+  EXPECT_TRUE(std::equal(other.cuts().bytes().begin(), other.cuts().bytes().end(),
+                         blade.cuts().bytes().begin(), blade.cuts().bytes().end()));
+  EXPECT_TRUE(std::equal(other.cuts().cut_order().begin(), other.cuts().cut_order().end(),
+                         order.begin(), order.end()));
+
+  // Refused, naming the entry, and the cuts stay as they were.
+  const std::uint32_t before = other.cuts().generation();
+  const std::int32_t air_tet = [&] {
+    for (std::int32_t t = 0; t < space->mesh().tet_count(); ++t) {
+      if (space->mesh().material(t) == 0) return t;
+    }
+    return -1;
+  }();
+  const std::vector<std::pair<std::vector<std::int32_t>, std::string>> refused{
+      {{order[0], -3}, "cut tets/1: tet -3 is not one of the scene's"},
+      {{order[0], order[1], order[0]},
+       "cut tets/2: tet " + std::to_string(order[0]) + " is given twice"},
+      {{air_tet},
+       "cut tets/0: tet " + std::to_string(air_tet) + " is of a material that is never cut (free)"},
+  };
+  for (const auto& [tets, message] : refused) {
+    try {
+      other.set_cuts(tets);
+      ADD_FAILURE() << "taken: " << message;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(other.cuts().generation(), before);
+    EXPECT_EQ(other.cuts().cut_count(), static_cast<std::int64_t>(order.size()));
+  }
+  other.reset_cuts();
+  EXPECT_NE(other.cuts().generation(), before);
+  EXPECT_TRUE(other.cuts().cut_order().empty());
 }
 
 INSTANTIATE_TEST_SUITE_P(BothCouplings, CutMemory,

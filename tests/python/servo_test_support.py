@@ -87,6 +87,19 @@ def wait_stopped(client: ServoClient, timeout_s: float = 60.0) -> list:
     return frames
 
 
+def tissue_scene(path: Path, source: Path = EXAMPLES / "finger.hapticut.msgpack") -> Path:
+    """The scene with its skin and bone made flesh (drag 1 mm): the sim stroke cuts it."""
+    scene = load_scene(source)
+    materials = [
+        dataclasses.replace(m, model="drag", drag_distance_mm=1.0, break_force_N=0.0)
+        if m.model in ("membrane", "rigid")
+        else m
+        for m in scene.materials
+    ]
+    save_scene(dataclasses.replace(scene, materials=materials), path)
+    return path
+
+
 def two_blade_scene(path: Path) -> Path:
     """The sphere example with a second blade, "retractor" (20 points along y)."""
     scene = load_scene(SPHERE)
@@ -158,6 +171,10 @@ def offline_check(
     blade.settings = base
     records = recording.blade(blade_name)
     block = records["block"]
+    cuts = recording.cut_blocks
+    # The engine starts from the tets the recording started with cut.
+    if len(cuts) and int(cuts["before_tick"][0]) > 0:
+        blade.set_cuts(recording.cut_order(0)[: int(cuts["before_tick"][0])])
     stepped = 0
     for k in range(len(records)):
         kind = int(block["step_kind"][k])
@@ -189,6 +206,12 @@ def offline_check(
         assert bool(tick["rejected"]) == bool(block["engine_rejected"][k]), (
             f"{blade_name}: engine rejection differs at tick {k}"
         )
+        if len(recording.blade_names) == 1 and cuts["generation"][k] == cuts["generation"][0]:
+            assert len(blade.cut_order) == int(cuts["total"][k]), (
+                f"{blade_name}: the tets cut differ at tick {k}"
+            )
+    if len(recording.blade_names) == 1 and len(cuts) and len(set(cuts["generation"])) == 1:
+        assert np.array_equal(blade.cut_order, recording.cut_order()), "the cut order differs"
     return stepped
 
 
@@ -206,5 +229,6 @@ __all__ = [
     "run_servo",
     "scene_with_coupling",
     "stats_of",
+    "tissue_scene",
     "two_blade_scene",
 ]

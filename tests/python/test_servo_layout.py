@@ -28,6 +28,7 @@ def printed() -> dict:
         ("record_header", layout.RECORD_HEADER),
         ("blade_block", layout.BLADE_BLOCK),
         ("recording_trailer", layout.RECORDING_TRAILER),
+        ("cut_block", layout.CUT_BLOCK),
     ],
 )
 def test_fixed_structs_agree(printed, key, dtype):
@@ -52,7 +53,15 @@ def test_points_block_and_versions_agree(printed):
 
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
-DOC_TYPES = {"char": "S1", "u8": "u1", "u16": "u2", "u32": "u4", "u64": "u8", "f64": "f8"}
+DOC_TYPES = {
+    "char": "S1",
+    "u8": "u1",
+    "u16": "u2",
+    "u32": "u4",
+    "u64": "u8",
+    "i32": "i4",
+    "f64": "f8",
+}
 
 
 def documented_struct(doc: str, name: str) -> tuple[int, list[dict]]:
@@ -83,6 +92,7 @@ def documented_struct(doc: str, name: str) -> tuple[int, list[dict]]:
         ("protocol.md", "BladeBlock", "blade_block"),
         ("servo.md", "RecordHeader", "record_header"),
         ("servo.md", "RecordingTrailer", "recording_trailer"),
+        ("protocol.md", "CutBlock", "cut_block"),
     ],
 )
 def test_the_docs_tables_are_the_printed_layout(printed, doc, name, key):

@@ -136,9 +136,10 @@ def test_a_recording_that_cannot_be_written_is_reported_while_running(tmp_path):
 
 
 def test_a_client_of_the_old_protocol_is_refused_and_told_to_update():
-    """Version 1 clients read blade blocks without the ideal pose: they would misread every
-    frame, so hello refuses them, and the connection then works with the current version."""
-    assert PROTOCOL_VERSION == 2 and layout.FRAME_VERSION == 3 and layout.RECORD_VERSION == 4
+    """Older clients read frames without the cut tets (and version 1 blade blocks without the
+    ideal pose): they would misread every frame, so hello refuses them, and the connection
+    then works with the current version."""
+    assert PROTOCOL_VERSION == 3 and layout.FRAME_VERSION == 4 and layout.RECORD_VERSION == 5
     with ServoProcess([str(SPHERE), "--device", "scalpel=sim", "--wait"]) as servo:
         old = ServoClient(port=servo.port).connect()
         with pytest.raises(ServoError) as refused:
@@ -149,11 +150,11 @@ def test_a_client_of_the_old_protocol_is_refused_and_told_to_update():
         old.close()
         assert servo.stop() == 0
     assert str(refused.value).endswith(
-        "protocol version 1 not supported (this servo speaks version 2, whose frames and "
-        "recordings carry each blade's ideal pose; update the client: the hapticut toolkit and "
-        "the add-on of this servo's release)"
+        "protocol version 1 not supported (this servo speaks version 3, whose frames and "
+        "recordings carry the cut tets; update the client: the hapticut toolkit and the add-on "
+        "of this servo's release)"
     )
-    assert (reply["version"], reply["frame_version"], reply["record_version"]) == (2, 3, 4)
+    assert (reply["version"], reply["frame_version"], reply["record_version"]) == (3, 4, 5)
 
 
 def test_a_client_of_other_layouts_refuses_the_servo(monkeypatch):

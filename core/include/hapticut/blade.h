@@ -141,6 +141,8 @@ class Blade {
   const CutState& cuts() const { return *cuts_; }
   // Uncuts every tet of the shared cut state (cut_state.h). Never allocates.
   void reset_cuts() { cuts_->reset_cuts(); }
+  // CutState::set_cuts on the blade's cut state (shared with the scene's other blades).
+  void set_cuts(std::span<const std::int32_t> tets) { cuts_->set_cuts(tets); }
   const std::vector<Vec3>& tool_points() const { return tool_points_; }
   const std::vector<Vec3>& world_points() const { return world_points_; }
   const std::vector<Proxy>& proxies() const { return proxies_; }

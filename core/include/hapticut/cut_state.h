@@ -60,11 +60,25 @@ class CutState {
   int cut_left_behind(const ProxyPlace& start, const Vec3& now);
   // Uncuts every tet (a new stroke on fresh tissue). Never allocates.
   void reset_cuts();
+  // Uncuts every tet, then cuts `tets` in their order (a saved cut set, or a
+  // recording's cuts before its first tick). Throws std::invalid_argument,
+  // naming the entry, for a tet out of range, one given twice, or one whose
+  // own material is never cut; then the cuts are as they were. Allocates
+  // (a load's, not the tick's).
+  void set_cuts(std::span<const std::int32_t> tets);
 
   // One byte per tet, 1 where cut: what a recording or a save would copy.
   std::span<const std::uint8_t> bytes() const { return cut_; }
   // Tets cut since the last reset_cuts.
   std::int64_t cut_count() const { return cut_count_; }
+  // Changes with every reset_cuts or set_cuts: a reader of cut_order that
+  // has the same generation may append to what it read before.
+  std::uint32_t generation() const { return generation_; }
+  // The cut tets in the order they were cut: what the servo streams, records
+  // and saves, so that a reader rebuilds the set by appending.
+  std::span<const std::int32_t> cut_order() const {
+    return {order_.data(), static_cast<std::size_t>(cut_count_)};
+  }
   // The cut tets in increasing order (allocates; not for the tick).
   std::vector<std::int32_t> cut_tets() const;
   const Space& space() const { return *space_; }
@@ -73,10 +87,14 @@ class CutState {
   // Cuts tet t if not cut yet, its own material is cuttable and x lies inside
   // it by more than the tolerance.
   bool cut_if_inside(std::int32_t t, const Vec3& x);
+  // Marks tet t cut (not cut yet) and appends it to the order.
+  void mark(std::int32_t t);
 
   std::shared_ptr<const Space> space_;
   std::vector<std::uint8_t> cut_;
+  std::vector<std::int32_t> order_;  // One entry a tet: the first cut_count_ are cut, in order.
   std::int64_t cut_count_ = 0;
+  std::uint32_t generation_ = 0;
 };
 
 }  // namespace hapticut
