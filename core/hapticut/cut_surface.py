@@ -4,9 +4,11 @@ Pure numpy (the Blender add-on loads this file from the toolkit, like ``servo_cl
 From a servo recording's proxies ``q`` (ticks, N, 3) and states, and the scene's tets:
 
 - a point *cuts* at a tick when its proxy is inside a tet (state TET, not held on a face,
-  edge or vertex) whose material is cuttable (drag, viscous, or a membrane it pierced);
-- the tets those points were in at the rows below are the cut tets (``CutSurface.cut_tets``):
-  which tets a stroke cut, decided once, per tet;
+  edge or vertex) whose material is cuttable (drag, viscous, or a membrane it pierced) and,
+  for a servo recording, that the engine cut (its cut order, which the recording carries:
+  ``Recording.cut_order``); the cut tets (``CutSurface.cut_tets``) are then the engine's,
+  so the surface a bake renders and the cut the hand felt are the same tets. Without the
+  engine's set (proxies alone), they are the tets the cutting points were in at the rows;
 - the surface is the edge's swept path (hapticut.cut_clip): rows of points are ticks picked
   at the scene's frames (``substeps`` per frame), and between them where the edge jumped
   further than the rows' usual step (``rows_along_path``); the quads between points i, i+1
@@ -344,8 +346,10 @@ def cut_surface(
     material_models,
     substeps: int = 2,
     locator: TetLocator | None = None,
+    engine_cut: np.ndarray | None = None,
 ) -> CutSurface:
-    """The whole computation (module doc) for one blade of a recording."""
+    """The whole computation (module doc) for one blade of a recording; ``engine_cut``, the
+    tets the engine cut (the recording's cut order), decides which tets cut."""
     locator = locator or TetLocator(tet_vertices, tets)
     rows, _ = row_ticks_at_frames(times_s, fps, frame_start, substeps)
     q = np.asarray(q, np.float64)
@@ -370,9 +374,12 @@ def cut_surface(
         return inside
 
     def cut_at(rows: np.ndarray) -> np.ndarray:
-        return cutting_tets(
+        found = cutting_tets(
             q[rows], np.asarray(states)[rows], locator, tet_materials, material_models
         )
+        if engine_cut is None:
+            return found
+        return np.where(np.isin(found, engine_cut), found, -1)
 
     cut_in = cut_at(rows)
     finer = cut_clip.rows_over_material(q, rows, cut_in >= 0, firmly)
@@ -380,7 +387,7 @@ def cut_surface(
         rows, cut_in = finer, cut_at(finer)
     row_frames = frame_start + np.asarray(times_s, np.float64)[rows] * fps
     cutting = cut_in >= 0
-    cut_tets = np.unique(cut_in[cutting])
+    cut_tets = np.unique(cut_in[cutting] if engine_cut is None else engine_cut).astype(np.int64)
     if len(rows) < 2 or q.shape[1] < 2:
         return replace(sweep(q, states, rows, row_frames, cutting), cut_tets=cut_tets)
     vertices, faces, face_frames = cut_clip.clipped_sweep(
@@ -406,9 +413,16 @@ def recording_cut_surfaces(
     recording, tets: dict, fps: float, frame_start: int, substeps: int, ticks: int
 ) -> dict[str, CutSurface]:
     """Each blade's cut surface over the recording's first ``ticks`` records (a
-    hapticut.recording.Recording; ``tets`` as preview_tets gives them)."""
+    hapticut.recording.Recording; ``tets`` as preview_tets gives them), cut where the engine
+    cut by the last of them (``Recording.cut_order``; the scene has one cut set, so every
+    blade's ``cut_tets`` is the same). A recording whose records were dropped leaves a hole
+    in that order: then the proxies decide alone (module doc)."""
     times = recording.elapsed_s()[:ticks]
     locator = TetLocator(tets["vertices"], tets["tets"])
+    try:
+        engine_cut = recording.cut_order(min(ticks, len(recording)) - 1) if ticks else None
+    except ValueError:
+        engine_cut = None
     surfaces = {}
     for name in recording.blade_names:
         blade = recording.blade(name)
@@ -424,6 +438,7 @@ def recording_cut_surfaces(
             tets["models"],
             substeps=substeps,
             locator=locator,
+            engine_cut=engine_cut,
         )
     return surfaces
 

@@ -188,6 +188,33 @@ def test_the_cut_surface_command_writes_what_the_function_computes(finger, tmp_p
     assert got.row_ticks.max() < 900 < len(rec)
 
 
+def test_the_bakes_cut_tets_are_the_engines(finger, stroke_recording, tmp_path):
+    """One source: the surface a bake renders is cut where the engine cut (the recording's
+    cut order), and its cut tets are the engine's set at the last tick it keys."""
+    from hapticut.preview import write_preview
+
+    scene, _ = finger
+    rec = stroke_recording
+    preview = tmp_path / "finger.npz"
+    write_preview(scene, preview)
+    tets = cut_surface.preview_tets(preview)
+    ticks = len(rec)
+    surface = cut_surface.recording_cut_surfaces(rec, tets, 24.0, 1, 2, ticks)["scalpel"]
+    engine = rec.cut_order()
+    assert len(engine) > 20 and len(surface.faces) > 20
+    assert np.array_equal(surface.cut_tets, np.unique(engine))
+    # Every point that cuts at a row is in a tet the engine cut.
+    q = rec.blade("scalpel")["q"][surface.row_ticks]
+    locator = cut_surface.TetLocator(tets["vertices"], tets["tets"])
+    found = locator.locate(q[surface.cutting])
+    assert np.isin(found, engine).all()
+    # Halfway through the keys, the engine's set then.
+    half = int(np.argmax(rec.cut_blocks["total"] >= len(engine) // 2)) + 1
+    early = cut_surface.recording_cut_surfaces(rec, tets, 24.0, 1, 2, half)["scalpel"]
+    assert np.array_equal(early.cut_tets, np.unique(rec.cut_order(half - 1)))
+    assert 0 < len(early.cut_tets) < len(surface.cut_tets)
+
+
 @pytest.mark.parametrize(
     ("extra", "problem"),
     [
