@@ -168,6 +168,11 @@ def stroke_poses(space: _core.Space) -> np.ndarray:
 COUPLINGS = ("rigid", "independent")
 
 
+def _faster(best: dict | None, r: dict) -> dict:
+    """The round of lower median tick."""
+    return r if best is None or np.median(r["tick_ns"]) < np.median(best["tick_ns"]) else best
+
+
 def time_ticks(
     space: _core.Space,
     points: int,
@@ -189,8 +194,7 @@ def time_ticks(
             coupling=coupling,
             cut_memory=cut_memory,
         )
-        if best is None or np.median(r["tick_ns"]) < np.median(best["tick_ns"]):
-            best = r
+        best = _faster(best, r)
     return best
 
 
@@ -219,11 +223,6 @@ def max_points_within(
         else:
             hi = mid
     return lo
-
-
-def _faster(best: dict | None, r: dict) -> dict:
-    """The round of lower median tick."""
-    return r if best is None or np.median(r["tick_ns"]) < np.median(best["tick_ns"]) else best
 
 
 CUT_MEMORY_HEADERS = [
