@@ -120,7 +120,8 @@ void bind_benchmarks(nb::module_& m) {
       [](std::shared_ptr<const Space> space, const std::vector<double>& start_mm,
          const std::vector<double>& end_mm, int points,
          const nb::ndarray<const double, nb::shape<-1, 7>, nb::c_contig, nb::device::cpu>& poses,
-         double dt_s, std::optional<RuntimeSettings> settings_in, const std::string& coupling) {
+         double dt_s, std::optional<RuntimeSettings> settings_in, const std::string& coupling,
+         bool cut_memory) {
         if (poses.shape(0) < 1) throw std::invalid_argument("time_blade needs at least one pose");
         const auto parsed_coupling = blade_coupling_from_name(coupling);
         if (!parsed_coupling) {
@@ -134,6 +135,7 @@ void bind_benchmarks(nb::module_& m) {
                             {end_mm.at(0), end_mm.at(1), end_mm.at(2)},
                             points,
                             *parsed_coupling});
+        blade.set_cut_memory(cut_memory);
         const std::size_t n = poses.shape(0);
         auto pose_at = [&](std::size_t k) {
           return Pose{{poses(k, 0), poses(k, 1), poses(k, 2)},
@@ -176,13 +178,16 @@ void bind_benchmarks(nb::module_& m) {
         d["total_transitions"] = blade.counters().total_transitions;
         d["unfinished_ticks"] = blade.counters().unfinished_ticks;
         d["budget"] = settings.blade_budget(blade.point_count());
+        d["cut_tets"] = blade.cuts().cut_count();
         return d;
       },
       nb::arg("space"), nb::arg("start_mm"), nb::arg("end_mm"), nb::arg("points"), nb::arg("poses"),
       nb::arg("dt_s") = 0.001, nb::arg("settings") = nb::none(), nb::arg("coupling") = "rigid",
+      nb::arg("cut_memory") = true,
       "Run a blade along (M, 7) poses; wall-clock ns of every tick (GIL released). "
       "settings: a RuntimeSettings, default the Space's own; coupling: \"rigid\" (the "
-      "default) or \"independent\".");
+      "default) or \"independent\"; cut_memory: False for a blade that reads and cuts no "
+      "tet (Blade::set_cut_memory). cut_tets: the tets the stroke cut, from none.");
 }
 
 }  // namespace hapticut::python

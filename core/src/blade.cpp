@@ -61,8 +61,8 @@ Blade::Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
   if (&cuts_->space() != space_.get()) {
     throw std::invalid_argument("blade '" + spec.name + "': its CutState is another scene's");
   }
-  cuttable_materials_ = std::any_of(space_->materials().begin(), space_->materials().end(),
-                                    [](const Material& m) { return is_cuttable(m.model); });
+  has_cuttable_materials_ = std::any_of(space_->materials().begin(), space_->materials().end(),
+                                        [](const Material& m) { return is_cuttable(m.model); });
   tool_start_ = spec.start_mm;
   tool_span_ = spec.end_mm - spec.start_mm;
   if (!is_finite(tool_span_)) {
@@ -85,13 +85,19 @@ Blade::Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
   tool_direction_ = length_mm_ > 0.0 ? tool_span_ / length_mm_ : Vec3{1.0, 0.0, 0.0};
   if (coupling_ == BladeCoupling::Rigid) {
     rigid_ = std::make_unique<RigidEdge>(space_, fractions_, length_mm_);
-    rigid_->set_cuts(cuts_.get());
     point_forces_.assign(tool_points_.size(), Vec3{});
     resisting_materials_ =
         std::any_of(space_->materials().begin(), space_->materials().end(), [](const Material& m) {
           return m.model != MaterialModel::Free && m.model != MaterialModel::Rigid;
         });
   }
+  set_cut_memory(true);
+}
+
+void Blade::set_cut_memory(bool on) {
+  read_cuts_ = on ? cuts_.get() : nullptr;
+  cuttable_materials_ = on && has_cuttable_materials_;
+  if (rigid_) rigid_->set_cuts(read_cuts_);
 }
 
 // Checks the pose and places the points; on a refused pose the proxies are
@@ -232,7 +238,7 @@ BladeTick Blade::step_points(double dt_s, const RuntimeSettings& settings) {
   int remaining = settings.blade_budget(static_cast<int>(n));
   const int cap = settings.max_transitions_per_tick;
   const ForceShading* shading = settings.force_shading ? shading_.get() : nullptr;
-  const CutState* cuts = cuts_.get();
+  const CutState* cuts = read_cuts_;
   BladeTick tick;
   Vec3 weighted_force;  // Sum of s_i f_i, for the torque.
   auto index = [&](std::size_t k) { return first_ + k < n ? first_ + k : first_ + k - n; };

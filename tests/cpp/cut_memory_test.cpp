@@ -240,6 +240,24 @@ TEST_P(CutMemory, TheCutOrderIsTheSetInTheOrderOfCuttingAndSetCutsRestoresIt) {
   EXPECT_TRUE(other.cuts().cut_order().empty());
 }
 
+// The blade `hapticut bench blade` weighs the memory's cost against: with the
+// memory off it cuts nothing and feels the uncut flesh again and again; on
+// again, it remembers from there.
+TEST_P(CutMemory, ABladeWithoutMemoryCutsNothingAndFeelsTheUncutMaterial) {
+  const auto space = flesh_block();
+  Blade blade(space, knife(GetParam()));
+  blade.set_cut_memory(false);
+  EXPECT_FALSE(blade.cut_memory());
+  const double first = slit(blade, 0.6);
+  EXPECT_EQ(blade.cuts().cut_count(), 0);
+  EXPECT_EQ(slit(blade, 0.6), first);
+  blade.set_cut_memory(true);
+  EXPECT_TRUE(blade.cut_memory());
+  EXPECT_EQ(slit(blade, 0.6), first);
+  EXPECT_GT(blade.cuts().cut_count(), 0);
+  EXPECT_LE(slit(blade, 0.6), kStiffness * 0.4 * blade.point_count() + 1e-9);
+}
+
 INSTANTIATE_TEST_SUITE_P(BothCouplings, CutMemory,
                          ::testing::Values(BladeCoupling::Independent, BladeCoupling::Rigid),
                          [](const ::testing::TestParamInfo<BladeCoupling>& info) {

@@ -81,6 +81,42 @@ def test_the_blade_table_has_a_row_per_scene_and_coupling(tmp_path):
     assert contact[2] == contact[3] and int(contact[2].replace(",", "")) > 0
     assert contact[6] == contact[7] and int(contact[6].replace(",", "")) > 0
     assert rows[6][column["rigid / independent in contact"]].endswith("x")
+    # Cut memory: the strokes through tissue cut it (the cut scene and the grid), the rigid
+    # ones cut nothing; the extra cost is the row's figure less the blade's without memory.
+    first = column["tets cut"]
+    assert headers[first : first + len(blade.CUT_MEMORY_HEADERS)] == blade.CUT_MEMORY_HEADERS
+    cut = [int(row[column["tets cut"]]) for row in rows]
+    assert all(n > 10 for n in cut[0:2] + cut[4:6]), cut
+    assert cut[2:4] == cut[6:8] == [0, 0]
+    for row in rows:
+        with_memory, without = (
+            _number(row[column[name]])
+            for name in ("median ns/tick", "median ns/tick without cut memory")
+        )
+        assert without > 0
+        extra = _number(row[column["cut memory +median ns"]])
+        assert extra == pytest.approx(with_memory - without, abs=1.0 + 0.01 * abs(extra))
+        percent = _number(row[column["cut memory +median %"]])
+        assert percent == pytest.approx(100 * extra / without, abs=0.01 + 0.01 * abs(percent))
+        _number(row[column["cut memory +p99 ns"]])
+
+
+def _number(cell: str) -> float:
+    """A figure of the table as format_table printed it."""
+    return float(cell.replace(",", ""))
+
+
+def test_a_blade_without_cut_memory_cuts_nothing_on_the_stroke_one_with_it_cuts():
+    space = blade._grid_space()
+    poses = blade.stroke_poses(space)
+    for coupling in blade.COUPLINGS:
+        remembering = blade.time_ticks(space, 50, poses, repeats=1, coupling=coupling)
+        forgetting = blade.time_ticks(
+            space, 50, poses, repeats=1, coupling=coupling, cut_memory=False
+        )
+        assert remembering["cut_tets"] > 50, coupling
+        assert forgetting["cut_tets"] == 0, coupling
+        assert len(forgetting["tick_ns"]) == len(poses)
 
 
 def test_the_crease_stroke_rests_the_blade_in_the_groove():

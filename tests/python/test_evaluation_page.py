@@ -56,6 +56,7 @@ def render(tmp_path: Path, share: dict, *, quick: bool) -> str:
         blade_shading_rows=committed("rigid_blade_shading"),
         rigid_rows=committed("rigid_blade"),
         penetration_rows=committed("edge_penetration"),
+        cut_memory_rows=committed("cut_memory"),
         quick=quick,
         elapsed_s=12.3,
     )
@@ -79,6 +80,9 @@ def test_the_page_has_a_figure_for_every_placeholder(tmp_path, share):
         assert f"| {row['example']} | {row['points']} |" in page
     for row in committed("edge_penetration"):
         assert f"| {row['scene']} | {row['method']} |" in page
+    assert "## Cut memory: a second pass in the slit" in page
+    for row in committed("cut_memory"):
+        assert f"| {row['scene']} | {row['pass']} |" in page
 
 
 def test_every_block_of_the_template_is_used():

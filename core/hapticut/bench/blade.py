@@ -11,8 +11,11 @@ walks and fits) and once with the paper's independent points. The table shows
 each scene's worst tick (time, transitions of all points, a rigid blade's most
 rounds) and its capped points, and the ticks in contact (the rigid blade resting on
 rigid material): their median and p99 for both couplings, and the rigid blade's cost
-there against the independent points'. Then the largest number of blade points whose
-median tick fits in 100 µs (10% of a 1 kHz period on one core) is searched.
+there against the independent points'. The cost of cut memory (docs/decisions.md, "Cut
+memory"): every stroke is timed again by a blade without it, which reads and cuts no tet
+(``cut_memory=False``), and the table gives the tets the stroke cut and the extra median and
+p99 per tick. Then the largest number of blade points whose median tick fits in 100 µs (10%
+of a 1 kHz period on one core) is searched.
 
 The example scenes ship in the package (``hapticut/examples``); the working directory's
 ``examples/`` (a source checkout's) is used when the package has none, and ``--scenes DIR``
@@ -30,6 +33,7 @@ import numpy as np
 import hapticut
 from hapticut import _core, engine
 from hapticut.bench.table import format_table
+from hapticut.scenefile import Material
 
 # Where the example scenes are looked for, in this order (see the module docstring).
 PACKAGED_EXAMPLES = Path(hapticut.__file__).resolve().parent / "examples"
@@ -38,6 +42,10 @@ BLADE_HALF_LENGTH_MM = 50.0  # The paper's 0.1 m edge.
 STROKE_SPEED_MM_PER_S = 100.0
 BUDGET_NS = 100_000.0
 TARGET_P99_NS = 5_000.0  # No tick over 5 µs p99 for a 50-point blade.
+# The tissue a stroke cuts acts as this drag from then on (its cut variant, cut_to): a tenth,
+# so the memory's reads and cuts run as a scene with cut memory runs them.
+CUT_DRAG_MM = 0.1
+CUT_TISSUE = {"name": "tissue, cut", "model": "drag", "drag_distance_mm": CUT_DRAG_MM}
 # The paper's names for the examples; any other scene is labelled by its file name.
 LABELS = {
     "sphere80": "sphere 80 faces",
@@ -80,7 +88,8 @@ def _grid_space() -> _core.Space:
     labels = (np.linalg.norm(centres, axis=1) < 35).astype(np.int32)
     materials = [
         {"name": "air", "model": "free"},
-        {"name": "tissue", "model": "drag", "drag_distance_mm": 1.0},
+        {"name": "tissue", "model": "drag", "drag_distance_mm": 1.0, "cut_to": CUT_TISSUE["name"]},
+        CUT_TISSUE,
     ]
     return _core.Space(vertices, tets, labels, materials)
 
@@ -111,13 +120,17 @@ def crease_poses() -> np.ndarray:
 
 
 def _as_cut(scene) -> _core.Space:
-    """The scene with every non-free material made tissue (drag, D = 1 mm): the paper's cut."""
+    """The scene with every non-free material made tissue (drag, D = 1 mm): the paper's cut;
+    once cut, the tissue acts as CUT_TISSUE."""
     materials = [
         m
         if m.model == "free"
-        else replace(m, model="drag", drag_distance_mm=1.0, break_force_N=0.0)
+        else replace(
+            m, model="drag", drag_distance_mm=1.0, break_force_N=0.0, cut_to=CUT_TISSUE["name"]
+        )
         for m in scene.materials
     ]
+    materials.append(Material(**CUT_TISSUE))
     return engine.space_from_scene(replace(scene, materials=materials))
 
 
@@ -155,10 +168,21 @@ def stroke_poses(space: _core.Space) -> np.ndarray:
 COUPLINGS = ("rigid", "independent")
 
 
+def _faster(best: dict | None, r: dict) -> dict:
+    """The round of lower median tick."""
+    return r if best is None or np.median(r["tick_ns"]) < np.median(best["tick_ns"]) else best
+
+
 def time_ticks(
-    space: _core.Space, points: int, poses: np.ndarray, repeats: int = 3, coupling: str = "rigid"
+    space: _core.Space,
+    points: int,
+    poses: np.ndarray,
+    repeats: int = 3,
+    coupling: str = "rigid",
+    cut_memory: bool = True,
 ) -> dict:
-    """Per-tick ns of a blade of `points` points along the stroke (best of repeats by median)."""
+    """Per-tick ns of a blade of `points` points along the stroke (best of repeats by median),
+    each repeat from uncut tissue; cut_memory=False: a blade that reads and cuts no tet."""
     best = None
     for _ in range(repeats):
         r = _core.time_blade(
@@ -168,9 +192,9 @@ def time_ticks(
             points,
             poses,
             coupling=coupling,
+            cut_memory=cut_memory,
         )
-        if best is None or np.median(r["tick_ns"]) < np.median(best["tick_ns"]):
-            best = r
+        best = _faster(best, r)
     return best
 
 
@@ -201,11 +225,39 @@ def max_points_within(
     return lo
 
 
+CUT_MEMORY_HEADERS = [
+    "tets cut",
+    "median ns/tick without cut memory",
+    "p99 ns without cut memory",
+    "cut memory +median ns",
+    "cut memory +median %",
+    "cut memory +p99 ns",
+]
+
+
+def cut_memory_figures(with_memory: dict, without: dict) -> list:
+    """The CUT_MEMORY_HEADERS columns of one row: the tets the stroke cut, the blade
+    without cut memory's median and p99 per tick, and what the memory adds to them."""
+    ticks = np.asarray(with_memory["tick_ns"])
+    plain = np.asarray(without["tick_ns"])
+    median, plain_median = float(np.median(ticks)), float(np.median(plain))
+    p99, plain_p99 = float(np.percentile(ticks, 99)), float(np.percentile(plain, 99))
+    return [
+        int(with_memory["cut_tets"]),
+        plain_median,
+        plain_p99,
+        median - plain_median,
+        100.0 * (median - plain_median) / plain_median,
+        p99 - plain_p99,
+    ]
+
+
 def run(find_max: bool = True, rounds: int = 3, scenes_dir: Path | None = None) -> str:
-    """The table. Every scene is timed once per round, in turn, and keeps its best
-    round (lowest median tick; most points within the budget): this machine's slow
-    spells last seconds, and a scene timed inside one reads up to twice its cost.
-    The capped points and the worst tick's transitions are those of the best round."""
+    """The table. Every scene is timed once per round, in turn, with and without cut
+    memory, and keeps its best round of each (lowest median tick; most points within the
+    budget): this machine's slow spells last seconds, and a scene timed inside one reads up
+    to twice its cost. The capped points and the worst tick's transitions are those of the
+    best round."""
     paths, found = example_scenes(scenes_dir)
     strokes = [(label, space, stroke_poses(space)) for label, space in scenes(paths)]
     strokes.append((CREASE_LABEL, crease_space(), crease_poses()))
@@ -213,13 +265,15 @@ def run(find_max: bool = True, rounds: int = 3, scenes_dir: Path | None = None) 
         (label, space, poses, coupling) for label, space, poses in strokes for coupling in COUPLINGS
     ]
     best: list[dict | None] = [None] * len(cases)
+    best_without: list[dict | None] = [None] * len(cases)  # The blade without cut memory.
     most = [0] * len(cases)
     search_s = [0.0] * len(cases)
     for _ in range(max(1, rounds)):
         for k, (_, space, poses, coupling) in enumerate(cases):
             r = time_ticks(space, 50, poses, coupling=coupling)
-            if best[k] is None or np.median(r["tick_ns"]) < np.median(best[k]["tick_ns"]):
-                best[k] = r
+            best[k] = _faster(best[k], r)
+            r = time_ticks(space, 50, poses, coupling=coupling, cut_memory=False)
+            best_without[k] = _faster(best_without[k], r)
             if find_max:
                 started = time.perf_counter()
                 most[k] = max(most[k], max_points_within(space, poses, coupling=coupling))
@@ -268,6 +322,7 @@ def run(find_max: bool = True, rounds: int = 3, scenes_dir: Path | None = None) 
             "yes"
             if np.percentile(ticks, 99) <= TARGET_P99_NS and not np.any(r["capped_points"])
             else "NO",
+            *cut_memory_figures(r, best_without[k]),
         ]
         if find_max:
             row.append(most[k])
@@ -293,6 +348,7 @@ def run(find_max: bool = True, rounds: int = 3, scenes_dir: Path | None = None) 
         "budget",
         "capped points",
         "target met",
+        *CUT_MEMORY_HEADERS,
     ]
     if find_max:
         headers += ["points in 100 µs", "search time"]
@@ -307,5 +363,8 @@ def run(find_max: bool = True, rounds: int = 3, scenes_dir: Path | None = None) 
         "the device goes on through a rigid body, its held blade's points walk round it.\n"
         "In contact: the ticks where the rigid blade rests on rigid material (the same poses\n"
         "for both couplings); goal: a rigid tick in contact within 3x the independent one.\n"
+        "Cut memory: the same stroke by a blade without it (reads and cuts no tet); the extra\n"
+        "median and p99 per tick are the best rounds' with it less without it (noise either\n"
+        f"way); cut tissue acts as drag {CUT_DRAG_MM:g} mm. Goal: no allocation per tick.\n"
     )
     return paper + found + "\n" + format_table(headers, rows)

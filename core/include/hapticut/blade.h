@@ -143,6 +143,12 @@ class Blade {
   void reset_cuts() { cuts_->reset_cuts(); }
   // CutState::set_cuts on the blade's cut state (shared with the scene's other blades).
   void set_cuts(std::span<const std::int32_t> tets) { cuts_->set_cuts(tets); }
+  // Off: this blade reads every tet as its own material and cuts nothing, the
+  // paper's blade without memory (what `hapticut bench blade` weighs the
+  // memory's cost against); the shared cut state is kept as it is. On by
+  // default; takes effect from the next tick. Never allocates.
+  void set_cut_memory(bool on);
+  bool cut_memory() const { return read_cuts_ != nullptr; }
   const std::vector<Vec3>& tool_points() const { return tool_points_; }
   const std::vector<Vec3>& world_points() const { return world_points_; }
   const std::vector<Proxy>& proxies() const { return proxies_; }
@@ -189,8 +195,12 @@ class Blade {
   std::shared_ptr<const Space> space_;
   std::shared_ptr<const ForceShading> shading_;
   std::shared_ptr<CutState> cuts_;
+  // What the walks read: cuts_, or null with the cut memory off.
+  const CutState* read_cuts_ = nullptr;
   // Whether the Space has a cuttable material (drag, viscous, membrane): only
   // then do the points look for tets to cut.
+  bool has_cuttable_materials_ = true;
+  // Whether the points look for tets to cut: the above, with the memory on.
   bool cuttable_materials_ = true;
   Vec3 tool_start_;  // The segment's start and its span (end - start), in the tool frame.
   Vec3 tool_span_;

@@ -1,5 +1,6 @@
 """The evaluation's charts (PNG): speed against accuracy, transition cost against valence, the
-rigid blade's stiffness against the length of edge over bone."""
+rigid blade's stiffness against the length of edge over bone, the force along strokes through
+cut and uncut tissue."""
 
 from __future__ import annotations
 
@@ -147,6 +148,54 @@ def rigid_stiffness(rows: list[dict], out: Path) -> None:
     ax.set_title("A bone under part of a blade")
     ax.grid(True, alpha=0.3)
     ax.legend()
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+
+
+def cut_memory(slits: list[dict], presses: list[dict], out: Path) -> None:
+    """|force| along the three passes through the flesh (against x) and the three presses
+    through the skin (against the device's height), with the materials' bounds."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from hapticut_evaluation import cut_memory as cm
+
+    fig, (slit, skin) = plt.subplots(1, 2, figsize=(11, 4.4))
+    styles = ("-", "--", ":")
+    for p, style in zip(slits, styles, strict=True):
+        slit.plot(p["x_mm"], p["force_N"], style, lw=1.6, label=p["pass"])
+    for p, style in zip(presses, styles, strict=True):
+        skin.plot(p["z_mm"], p["force_N"], style, lw=1.6, label=p["pass"])
+    skin.invert_xaxis()  # Down, as the tool goes: before the bounds' labels, set at the left.
+    bounds = (
+        (slit, cm.K * cm.FLESH_DRAG_MM, "k D, uncut"),
+        (slit, cm.K * cm.FLESH_CUT_DRAG_MM, "k D, cut"),
+        (skin, cm.SKIN_BREAK_N, "break force"),
+        (skin, cm.K * cm.UNDER_SKIN_DRAG_MM, "k D, flesh under it"),
+    )
+    for ax, level, label in bounds:
+        ax.axhline(level, color="grey", lw=0.7, ls=":")
+        ax.annotate(
+            label,
+            (ax.get_xlim()[0], level),
+            textcoords="offset points",
+            xytext=(2, 3),
+            fontsize=7,
+            color="grey",
+        )
+    slit.axvspan(*cm.INSIDE_X_MM, color="tab:blue", alpha=0.06, lw=0)
+    slit.set_xlabel("tool position along the stroke, x (mm); the flesh: |x| < 10")
+    slit.set_title(f"Flesh (drag {cm.FLESH_DRAG_MM:g} mm), cut to drag {cm.FLESH_CUT_DRAG_MM:g} mm")
+    skin.axvspan(-cm.SKIN_MM, 0.0, color="tab:orange", alpha=0.08, lw=0)
+    skin.set_xlabel("tool height z (mm), pressing down; the skin: shaded")
+    skin.set_title(f"Skin (breaks at {cm.SKIN_BREAK_N:g} N), cut to air, over flesh")
+    for ax in (slit, skin):
+        ax.set_ylabel("|force| (N)")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8, loc="center left")
     fig.tight_layout()
     fig.savefig(out, dpi=110)
     plt.close(fig)

@@ -687,6 +687,59 @@ def rigid_blade_section(b, stiffness_rows: list[dict], penetration_rows: list[di
     )
 
 
+def cut_memory_section(b, rows: list[dict]) -> str:
+    """The force along a first pass, a second in its slit and a parallel one through flesh cut
+    to a tenth, and the skin's breaking peak on first entry against re-entry."""
+    if not rows:
+        return ""
+    from hapticut_evaluation import cut_memory as cm
+
+    def peak(scene: str, name: str) -> str:
+        (row,) = (r for r in rows if r["scene"] == scene and r["pass"] == name)
+        return f"{row['peak_N']:.3g}"
+
+    slit = [name for name, _ in cm.SLIT_PASSES]
+    skin = [name for name, _ in cm.SKIN_PASSES]
+    return fill(
+        b,
+        "cut_memory",
+        k=f"{cm.K:g}",
+        speed_mm_s=f"{cm.SPEED_MM_S:g}",
+        grid_mm=f"{cm.GRID_MM:g}",
+        jitter_pct=f"{cm.GRID_JITTER * 100:g}",
+        drag_mm=f"{cm.FLESH_DRAG_MM:g}",
+        cut_drag_mm=f"{cm.FLESH_CUT_DRAG_MM:g}",
+        depth_mm=f"{-cm.SLIT_Z_MM:g}",
+        slab_mm=f"{2 * cm.FLESH_HALF_MM:g}",
+        beside_mm=f"{cm.BESIDE_MM:g}",
+        break_N=f"{cm.SKIN_BREAK_N:g}",
+        skin_mm=f"{cm.SKIN_MM:g}",
+        under_mm=f"{cm.UNDER_SKIN_DRAG_MM:g}",
+        inside=f"{cm.INSIDE_X_MM[0]:g} to {cm.INSIDE_X_MM[1]:g} mm",
+        table=markdown_table(
+            rows,
+            [
+                ("scene", "scene"),
+                ("pass", "pass"),
+                ("beside_mm", "beside mm"),
+                ("read", "read"),
+                ("peak_N", "peak N"),
+                ("mean_N", "mean N"),
+                ("stroke_peak_N", "stroke peak N"),
+                ("tets_cut", "tets cut"),
+                ("uncut_bound_N", "uncut N"),
+                ("cut_bound_N", "cut N"),
+            ],
+        ),
+        first_N=peak(cm.FLESH, slit[0]),
+        second_N=peak(cm.FLESH, slit[1]),
+        parallel_N=peak(cm.FLESH, slit[2]),
+        break_first_N=peak(cm.SKIN, skin[0]),
+        reentry_N=peak(cm.SKIN, skin[1]),
+        break_beside_N=peak(cm.SKIN, skin[2]),
+    )
+
+
 FILES = (
     "accuracy.csv",
     "drag_lag.csv",
@@ -702,6 +755,8 @@ FILES = (
     "rigid_blade.csv",
     "edge_penetration.csv",
     "rigid_stiffness.png",
+    "cut_memory.csv",
+    "cut_memory.png",
 )
 
 
@@ -721,6 +776,7 @@ def write_page(
     blade_shading_rows=(),
     rigid_rows=(),
     penetration_rows=(),
+    cut_memory_rows=(),
     quick: bool,
     elapsed_s: float,
 ) -> None:
@@ -823,6 +879,7 @@ def write_page(
         examples=examples_section(b, example_rows),
         valence=valence_section(b, valence_rows, valence_fit, valence_share),
         rigid_blade=rigid_blade_section(b, list(rigid_rows), list(penetration_rows)),
+        cut_memory=cut_memory_section(b, list(cut_memory_rows)),
         files=", ".join(f"`{name}`" for name in FILES if (out / name).exists()) + ".",
     )
     (out / "README.md").write_text(page + "\n")

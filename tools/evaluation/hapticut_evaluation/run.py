@@ -8,6 +8,7 @@ from pathlib import Path
 from hapticut_evaluation import (
     accuracy,
     charts,
+    cut_memory,
     economy,
     example_shading,
     report,
@@ -63,6 +64,10 @@ def run_all(out: Path, *, quick: bool = False, log=print) -> dict:
         economy.EXAMPLES_DIR / "finger.hapticut.msgpack", quick=quick
     )
     charts.rigid_stiffness(rigid_rows, out / "rigid_stiffness.png")
+    log("cut memory")
+    slits, presses = cut_memory.slit_passes(), cut_memory.skin_passes()
+    cut_memory_rows = cut_memory.run_cut_memory(slits, presses)
+    charts.cut_memory(slits, presses, out / "cut_memory.png")
     for name, rows in [
         ("rigid_blade", rigid_rows),
         ("edge_penetration", penetration_rows),
@@ -75,6 +80,7 @@ def run_all(out: Path, *, quick: bool = False, log=print) -> dict:
         ("example_economy", example_rows),
         ("example_shading", shading_rows),
         ("rigid_blade_shading", blade_shading_rows),
+        ("cut_memory", cut_memory_rows),
     ]:
         report.write_csv(out / f"{name}.csv", rows)
     charts.speed_vs_error(accuracy_rows, out / "speed_vs_error.png")
@@ -93,6 +99,7 @@ def run_all(out: Path, *, quick: bool = False, log=print) -> dict:
         blade_shading_rows=blade_shading_rows,
         rigid_rows=rigid_rows,
         penetration_rows=penetration_rows,
+        cut_memory_rows=cut_memory_rows,
         quick=quick,
         elapsed_s=time.perf_counter() - start,
     )
