@@ -149,6 +149,7 @@ class Region:
         material: Material,
         name: str | None = None,
         scale: float = 1.0,
+        cut_material: Material | None = None,
     ) -> Region:
         """A region read from a mesh file (OBJ, PLY, STL, OFF...), named after the file."""
         if name is None:
@@ -157,7 +158,8 @@ class Region:
             vertices, faces = read_surface(path)
         except BuildError as error:
             raise BuildError(name, error.problem) from None
-        return cls(name, np.asarray(vertices, np.float64) * scale, np.asarray(faces), material)
+        vertices = np.asarray(vertices, np.float64) * scale
+        return cls(name, vertices, np.asarray(faces), material, cut_material)
 
 
 @dataclass(frozen=True)
