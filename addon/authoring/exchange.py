@@ -75,7 +75,8 @@ def evaluated_triangles(obj, depsgraph, mm: float) -> tuple[np.ndarray, np.ndarr
 
 
 def region_material(obj, table: dict) -> dict:
-    """The region's material as the request writes it ({name, model, parameters...})."""
+    """The region's material as the request writes it ({name, model, parameters...}, and
+    ``cut`` when its cut tets become something else)."""
     settings = obj.hapticut
     if settings.material_preset != "custom":
         preset = materials.preset(table, settings.material_preset)
@@ -85,7 +86,8 @@ def region_material(obj, table: dict) -> dict:
                 obj.name,
                 f"material preset {settings.material_preset!r} is not one of {names} (or custom)",
             )
-        return {"name": preset["name"], "model": preset["model"], **preset["parameters"]}
+        material = {"name": preset["name"], "model": preset["model"], **preset["parameters"]}
+        return _with_cut(obj, material, materials.model(table, preset["model"]))
     model = materials.model(table, settings.custom_model)
     if model is None:
         names = ", ".join(m["name"] for m in table["models"])
@@ -102,7 +104,26 @@ def region_material(obj, table: dict) -> dict:
                 obj.name, f"{name} = {value:g} is outside {materials.range_text(parameter)}"
             )
         material[name] = float(value)
-    return material
+    return _with_cut(obj, material, model)
+
+
+def _with_cut(obj, material: dict, model: dict | None) -> dict:
+    """The material with the request's ``cut`` from the region's *Once cut*: none when it
+    stays as it is, or when a blade never cuts its model (the panel says the setting has no
+    effect there)."""
+    settings = obj.hapticut
+    if settings.cut_becomes == "UNCHANGED" or not materials.cuttable(model):
+        return material
+    if settings.cut_becomes == "FREE":
+        return {**material, "cut": {"becomes": "free"}}
+    factor = settings.cut_factor
+    if not 0.0 < factor <= 1.0:
+        raise SceneProblemError(
+            obj.name,
+            f"Once cut: Factor {factor:g} is outside (0, 1]",
+            remedy="a factor of 0 leaves no resistance: choose Free",
+        )
+    return {**material, "cut": {"becomes": "weaker", "factor": float(factor)}}
 
 
 def fill_custom_parameters(obj, table: dict) -> None:

@@ -41,6 +41,18 @@ ORIENTATIONS = (
     ("LOCKED", "Locked", "A rigid blade keeps the device's orientation (no torque rendered)"),
 )
 CUSTOM = "custom"
+# What a region's material becomes where a blade has cut it (the request's "cut"; the scene
+# file's cut_to, docs/scene-format.md). Only materials a blade cuts take one.
+CUT_CHOICES = (
+    ("UNCHANGED", "Stays as it is", "A cut tet stays as it was: cutting it again costs as much"),
+    ("FREE", "Free", "Cut tissue offers no resistance, as air"),
+    (
+        "WEAKER",
+        "Weaker",
+        "The same model, its parameters times Factor: a drag's distance, a viscous "
+        "material's viscosity and lag cap, a membrane's break force",
+    ),
+)
 
 
 def _preset_names(self, context, edit_text):
@@ -74,6 +86,21 @@ class HAPTICUT_PG_object(bpy.types.PropertyGroup):
     )
     custom_model: StringProperty(name="Model", search=_model_names, default="drag")
     custom_parameters: CollectionProperty(type=HAPTICUT_PG_parameter)
+    cut_becomes: EnumProperty(
+        name="Once cut",
+        description="What the material becomes where a blade has cut it",
+        items=CUT_CHOICES,
+        default="UNCHANGED",
+    )
+    cut_factor: FloatProperty(
+        name="Factor",
+        description="What a cut tet keeps of the material's parameters (0.1: a tenth of its "
+        "drag); above 0, at most 1",
+        default=0.1,
+        min=0.0,
+        max=1.0,
+        subtype="FACTOR",
+    )
     # Blade.
     blade_points: IntProperty(name="Points", default=50, min=2, max=1000)
     blade_coupling: EnumProperty(name="Coupling", items=COUPLINGS, default="RIGID")

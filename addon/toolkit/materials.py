@@ -44,6 +44,12 @@ def model(table: dict, name: str) -> dict | None:
     return next((m for m in table["models"] if m["name"] == name), None)
 
 
+def cuttable(model: dict | None) -> bool:
+    """A blade cuts this model's materials, so they take a cut variant (the table's
+    ``cuttable``; a table without it offers none)."""
+    return bool(model and model.get("cuttable"))
+
+
 def in_range(parameter: dict, value: float) -> bool:
     """Within the table's range (its minimum exclusive when it says so)."""
     low, high = parameter["minimum"], parameter["maximum"]

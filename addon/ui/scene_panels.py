@@ -29,6 +29,25 @@ def draw_job(layout, settings, job: build_job.Job | None) -> None:
     layout.operator("hapticut.cancel_build", icon="CANCEL", text=f"Cancel {kind.title()}")
 
 
+def draw_cut(layout, settings, model: dict | None, parameters: dict) -> None:
+    """*Once cut* for a material a blade cuts (and a weaker copy's parameters), else why there
+    is nothing to set."""
+    if model is None:
+        return
+    if not materials.cuttable(model):
+        layout.label(text=f"Once cut: a blade never cuts {model['name']} material", icon="INFO")
+        return
+    layout.prop(settings, "cut_becomes")
+    if settings.cut_becomes == "WEAKER":
+        layout.prop(settings, "cut_factor")
+        factor = settings.cut_factor
+        values = [(p["name"], parameters.get(p["name"], p["default"])) for p in model["parameters"]]
+        layout.label(
+            text=f"once cut: {model['name']}: "
+            + ", ".join(f"{name} {factor * value:g}" for name, value in values)
+        )
+
+
 class HAPTICUT_UL_objects(bpy.types.UIList):
     """Regions and blades, with their materials or edges."""
 
@@ -118,6 +137,9 @@ class HAPTICUT_PT_object(SidebarSubpanel, bpy.types.Panel):
                     + ", ".join(f"{k} {v:g}" for k, v in preset["parameters"].items())
                 )
             layout.operator("hapticut.set_custom_material")
+            if preset is not None:
+                model = materials.model(table, preset["model"])
+                draw_cut(layout, settings, model, preset["parameters"])
             return
         layout.prop(settings, "custom_name")
         layout.prop(settings, "custom_model")
@@ -129,6 +151,8 @@ class HAPTICUT_PT_object(SidebarSubpanel, bpy.types.Panel):
             limits = ranges.get(item.name)
             if limits:
                 row.label(text=materials.range_text(limits))
+        parameters = {item.name: item.value for item in settings.custom_parameters}
+        draw_cut(layout, settings, model, parameters)
 
 
 class HAPTICUT_PT_build(SidebarSubpanel, bpy.types.Panel):

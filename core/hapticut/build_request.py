@@ -11,11 +11,12 @@ from __future__ import annotations
 import json
 import math
 import os
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from hapticut.scenebuild import BuildError, BuildSettings, Region
+from hapticut.cut_surface import CUTTABLE_MODELS
+from hapticut.scenebuild import BuildError, BuildSettings, Region, cut_variant
 from hapticut.scenebuild.geometry import signed_volume
 from hapticut.scenefile import BLADE_COUPLINGS, BLADE_ORIENTATIONS, BladeSpec, Material
 from hapticut.scenefile.model import MATERIAL_PARAMETERS
@@ -35,6 +36,9 @@ SETTINGS_FIELDS = (
     "coarsen",
     "threads",
 )
+# What a material's cut tets become ("cut" of a region's material; none: they stay as they
+# are): free (the air's material), or a weaker copy of the material (builder.cut_variant).
+CUT_CHOICES = ("free", "weaker")
 # A region whose |volume| is below this fraction of its bounding box's volume encloses none.
 ZERO_VOLUME_RATIO = 1e-9
 
@@ -79,7 +83,7 @@ def _material(data, field: str) -> Material:
     _expect(isinstance(data.get("model"), str), f"{field}/model", "missing")
     values = {}
     for key, value in data.items():
-        if key in ("name", "model"):
+        if key in ("name", "model", "cut"):
             continue
         _expect(key in MATERIAL_PARAMETERS, f"{field}/{key}", "not a material parameter")
         values[key] = _number(value, f"{field}/{key}")
@@ -89,7 +93,43 @@ def _material(data, field: str) -> Material:
         raise RequestError(field, str(error)) from None
 
 
-def _region(data, field: str, folder: str) -> Region:
+def _cut(data, material: Material, field: str, air: Material) -> tuple[Material, Material | None]:
+    """The material with the cut_to its ``cut`` entry asks for, and the weaker copy it names
+    (None when the scene has the material already: the air)."""
+    _expect(isinstance(data, dict), field, "must be an object")
+    _expect(
+        material.model in CUTTABLE_MODELS,
+        field,
+        f"material {material.name!r} is {material.model}: a blade never cuts it, so it takes "
+        f"no cut variant (only {', '.join(CUTTABLE_MODELS)} do)",
+    )
+    becomes = data.get("becomes")
+    _expect(
+        becomes in CUT_CHOICES,
+        f"{field}/becomes",
+        f"must be one of {', '.join(CUT_CHOICES)}, not {becomes!r}",
+    )
+    allowed = {"becomes", "factor"} if becomes == "weaker" else {"becomes"}
+    unknown = sorted(set(data) - allowed)
+    _expect(
+        not unknown,
+        f"{field}/{unknown[0] if unknown else ''}",
+        f"not a setting of a {becomes} cut variant",
+    )
+    if becomes == "free":
+        return replace(material, cut_to=air.name), None
+    _expect("factor" in data, f"{field}/factor", "required field missing")
+    factor = _number(data["factor"], f"{field}/factor")
+    _expect(
+        0.0 < factor <= 1.0,
+        f"{field}/factor",
+        f'must be in (0, 1], not {factor:g} (0 leaves no resistance: "becomes": "free")',
+    )
+    variant = cut_variant(material, factor)
+    return replace(material, cut_to=variant.name), variant
+
+
+def _region(data, field: str, folder: str, air: Material) -> Region:
     _expect(isinstance(data, dict), field, "must be an object")
     name = data.get("name")
     _expect(isinstance(name, str) and name, f"{field}/name", "missing")
@@ -101,7 +141,12 @@ def _region(data, field: str, folder: str) -> Region:
             vertices, faces = arrays["vertices"], arrays["faces"]
     except (OSError, KeyError, ValueError) as error:
         raise RequestError(f"{field}/mesh", f"cannot read {path}: {error}") from None
-    return Region(name, vertices, faces, _material(data.get("material"), f"{field}/material"))
+    material_data = data.get("material")
+    material = _material(material_data, f"{field}/material")
+    cut_material = None
+    if "cut" in material_data:
+        material, cut_material = _cut(material_data["cut"], material, f"{field}/material/cut", air)
+    return Region(name, vertices, faces, material, cut_material)
 
 
 def _blade(data, field: str) -> tuple[BladeSpec, str]:
@@ -133,6 +178,18 @@ def _blade(data, field: str) -> tuple[BladeSpec, str]:
     return BladeSpec(name, ends[0], ends[1], points, **settings), device
 
 
+def _settings(settings_data) -> BuildSettings:
+    _expect(isinstance(settings_data, dict), "settings", "must be an object")
+    unknown = sorted(set(settings_data) - set(SETTINGS_FIELDS))
+    _expect(not unknown, f"settings/{unknown[0] if unknown else ''}", "not a build setting")
+    known = {f.name for f in fields(BuildSettings)}
+    assert set(SETTINGS_FIELDS) <= known
+    try:
+        return BuildSettings(**settings_data)
+    except TypeError as error:
+        raise RequestError("settings", str(error)) from None
+
+
 def read_request(path: str | os.PathLike) -> BuildRequest:
     """The request at path, its meshes read from beside it; RequestError names a bad entry."""
     path = os.fspath(path)
@@ -145,22 +202,15 @@ def read_request(path: str | os.PathLike) -> BuildRequest:
     _expect(data.get("format") == REQUEST_FORMAT, "format", f"must be {REQUEST_FORMAT!r}")
     _expect(data.get("version") == REQUEST_VERSION, "version", f"must be {REQUEST_VERSION}")
     folder = os.path.dirname(os.path.abspath(path))
+    settings = _settings(data.get("settings", {}))
     regions = data.get("regions")
     _expect(isinstance(regions, list), "regions", "must be a list")
-    regions = [_region(item, f"regions/{i}", folder) for i, item in enumerate(regions)]
+    regions = [
+        _region(item, f"regions/{i}", folder, settings.air) for i, item in enumerate(regions)
+    ]
     blades_data = data.get("blades", [])
     _expect(isinstance(blades_data, list), "blades", "must be a list")
     blades_and_devices = [_blade(item, f"blades/{i}") for i, item in enumerate(blades_data)]
-    settings_data = data.get("settings", {})
-    _expect(isinstance(settings_data, dict), "settings", "must be an object")
-    unknown = sorted(set(settings_data) - set(SETTINGS_FIELDS))
-    _expect(not unknown, f"settings/{unknown[0] if unknown else ''}", "not a build setting")
-    known = {f.name for f in fields(BuildSettings)}
-    assert set(SETTINGS_FIELDS) <= known
-    try:
-        settings = BuildSettings(**settings_data)
-    except TypeError as error:
-        raise RequestError("settings", str(error)) from None
     scene_file = data.get("scene_file", "scene.hapticut.msgpack")
     _expect(
         isinstance(scene_file, str)

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from build_test_support import EXAMPLES, icosphere, run_cli
 from hapticut.build_request import RequestError, input_problems, read_request
+from hapticut.engine import space_from_scene
 from hapticut.preview import preview_arrays
 from hapticut.scenebuild import Region
 from hapticut.scenefile import Material, load_scene
@@ -27,10 +28,15 @@ def write_request(folder, regions, blades=(), settings=None, **extra):
     return path
 
 
+# Flesh whose cut tets keep a tenth of its drag (the add-on's "Once cut: Weaker").
+FLESH = {"name": "flesh", "model": "drag", "drag_distance_mm": 0.5,
+         "cut": {"becomes": "weaker", "factor": 0.1}}  # fmt: skip
+
+
 def nested_spheres(folder):
     return write_request(
         folder,
-        [("Flesh", icosphere(20.0, 2), {"name": "flesh", "model": "drag", "drag_distance_mm": 0.5}),
+        [("Flesh", icosphere(20.0, 2), FLESH),
          ("Bone", icosphere(8.0, 1), {"name": "bone", "model": "rigid"})],
         blades=[{"name": "Knife", "start_mm": [-10, 0, 0], "end_mm": [10, 0, 0], "points": 8,
                  "device": "sim"}],
@@ -54,7 +60,14 @@ def test_build_request_streams_progress_and_writes_the_build_whole(tmp_path):
     assert sorted(os.listdir(out)) == ["preview.npz", "report.json", "scene.hapticut.msgpack"]
     assert os.listdir(out.parent) == ["build"]  # No staging directory left.
     scene = load_scene(out / "scene.hapticut.msgpack")
-    assert [m.name for m in scene.materials] == ["air", "flesh", "bone"]
+    # The flesh's cut variant follows the regions' materials, in no region: every tet starts
+    # uncut, and the servo loads the scene as it is.
+    assert [m.name for m in scene.materials] == ["air", "flesh", "bone", "flesh_cut"]
+    flesh, bone, flesh_cut = scene.materials[1:]
+    assert (flesh.cut_to, bone.cut_to, flesh_cut.cut_to) == ("flesh_cut", "", "")
+    assert (flesh_cut.model, flesh_cut.drag_distance_mm) == ("drag", pytest.approx(0.05))
+    assert set(np.unique(scene.tet_materials)) == {0, 1, 2}
+    space_from_scene(scene)
     assert scene.blades[0].name == "Knife" and scene.blades[0].points == 8
     assert (scene.blades[0].coupling, scene.blades[0].orientation) == ("rigid", "free")
     assert scene.metadata["blade_devices"] == {"Knife": "sim"}
@@ -222,6 +235,98 @@ def test_a_missing_mesh_and_a_bad_material_are_named(tmp_path):
     path.write_text(json.dumps(data))
     with pytest.raises(RequestError, match="regions/0/material/stiffness: not a material"):
         read_request(path)
+
+
+def with_cuts(tmp_path, flesh_cut, bone_cut=None):
+    """nested_spheres with the flesh's cut entry replaced (None: none) and one for the bone."""
+    path = nested_spheres(tmp_path)
+    data = json.loads(path.read_text())
+    flesh, bone = (region["material"] for region in data["regions"])
+    for material, cut in ((flesh, flesh_cut), (bone, bone_cut)):
+        material.pop("cut", None)
+        if cut is not None:
+            material["cut"] = cut
+    path.write_text(json.dumps(data))
+    return path
+
+
+@pytest.mark.parametrize(
+    ("model", "parameters", "factor", "scaled"),
+    [
+        ("drag", {"drag_distance_mm": 2.0}, 0.1, {"drag_distance_mm": 0.2}),
+        ("viscous", {"viscosity_N_s_per_mm": 0.002, "max_lag_mm": 10.0}, 0.5,
+         {"viscosity_N_s_per_mm": 0.001, "max_lag_mm": 5.0}),
+        ("membrane", {"break_force_N": 0.3}, 1.0, {"break_force_N": 0.3}),
+    ],
+)  # fmt: skip
+def test_a_weaker_cut_variant_scales_every_parameter_of_its_model(
+    tmp_path, model, parameters, factor, scaled
+):
+    material = {"name": "tissue", "model": model, **parameters}
+    path = with_cuts(tmp_path, {"becomes": "weaker", "factor": factor})
+    data = json.loads(path.read_text())
+    data["regions"][0]["material"] = {**material, "cut": {"becomes": "weaker", "factor": factor}}
+    path.write_text(json.dumps(data))
+    region = read_request(path).regions[0]
+    assert region.material == Material(cut_to="tissue_cut", **material)
+    assert region.cut_material == Material("tissue_cut", model, **scaled)
+
+
+def test_free_once_cut_names_the_air_and_no_cut_leaves_cut_to_unset(tmp_path):
+    flesh, bone = read_request(with_cuts(tmp_path, {"becomes": "free"})).regions
+    assert (flesh.material.cut_to, flesh.cut_material) == ("air", None)
+    assert (bone.material.cut_to, bone.cut_material) == ("", None)
+    flesh, _ = read_request(with_cuts(tmp_path, None)).regions
+    assert (flesh.material.cut_to, flesh.cut_material) == ("", None)
+
+
+@pytest.mark.parametrize(
+    ("flesh_cut", "bone_cut", "field", "reason"),
+    [
+        ({"becomes": "weaker", "factor": 1.5}, None, "regions/0/material/cut/factor",
+         "must be in (0, 1], not 1.5"),
+        ({"becomes": "weaker", "factor": 0}, None, "regions/0/material/cut/factor",
+         '0 leaves no resistance: "becomes": "free"'),
+        ({"becomes": "weaker", "factor": "a tenth"}, None, "regions/0/material/cut/factor",
+         "must be a finite number"),
+        ({"becomes": "weaker"}, None, "regions/0/material/cut/factor", "required field missing"),
+        ({"becomes": "free", "factor": 0.1}, None, "regions/0/material/cut/factor",
+         "not a setting of a free cut variant"),
+        ({"becomes": "gone"}, None, "regions/0/material/cut/becomes",
+         "must be one of free, weaker, not 'gone'"),
+        ("free", None, "regions/0/material/cut", "must be an object"),
+        (None, {"becomes": "free"}, "regions/1/material/cut",
+         "material 'bone' is rigid: a blade never cuts it, so it takes no cut variant"),
+    ],
+)  # fmt: skip
+def test_a_bad_cut_variant_names_its_field(tmp_path, flesh_cut, bone_cut, field, reason):
+    path = with_cuts(tmp_path, flesh_cut, bone_cut)
+    with pytest.raises(RequestError) as error:
+        read_request(path)
+    assert error.value.field == field and reason in error.value.reason
+    result = run_cli("build-request", path, "--check")
+    assert result.returncode == 2 and f"request {field}: " in result.stderr
+
+
+def test_check_names_the_region_whose_cut_variant_the_scene_cannot_hold(tmp_path):
+    # Two regions of one material cut to different strengths, and a material named as the
+    # flesh's cut variant would be: Check Scene finds both before anything is meshed.
+    ball = icosphere(5.0, 1)
+    far = (ball[0] + [30.0, 0, 0], ball[1])
+    weaker = {"name": "flesh", "model": "drag", "drag_distance_mm": 0.5,
+              "cut": {"becomes": "weaker", "factor": 0.1}}  # fmt: skip
+    cases = [
+        ({**weaker, "cut": {"becomes": "weaker", "factor": 0.2}},
+         "material 'flesh' is given two different cut variants"),
+        ({"name": "flesh_cut", "model": "viscous", "viscosity_N_s_per_mm": 0.001},
+         "the cut variant of material 'flesh' would be named 'flesh_cut', which another "
+         "material has: rename that material"),
+    ]  # fmt: skip
+    for other, problem in cases:
+        result, events = check_events(tmp_path, [("A", ball, weaker), ("B", far, other)])
+        assert result.returncode == 1, result.stderr
+        (found,) = [e for e in events if e["event"] == "problem"]
+        assert found["object"] in ("A", "B") and found["problem"].startswith(problem), found
 
 
 def test_input_problems_pass_a_closed_sphere():

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 from hapticut import _core
 from hapticut.commands.mesh import parse_material
-from hapticut.scenefile import SCHEMA_PATH, Material
+from hapticut.cut_surface import CUTTABLE_MODELS
+from hapticut.scenefile import SCHEMA_PATH, Material, materials_problem
 from hapticut.scenefile.model import MODEL_PARAMETERS, PARAMETER_RANGES, SETTING_RANGES
 
 TABLE = _core.material_table()
@@ -31,7 +32,10 @@ def test_materials_json_prints_the_table():
     result = run_cli("materials", "--json")
     assert result.returncode == 0, result.stderr
     printed = json.loads(result.stdout)
+    # The engine's table, each model marked with whether a blade cuts it.
+    cuttable = {m["name"]: m.pop("cuttable") for m in printed["models"]}
     assert printed == TABLE
+    assert cuttable == {name: name in CUTTABLE_MODELS for name in MODEL_PARAMETERS}
     assert printed["version"] == 1
     assert [m["name"] for m in printed["models"]] == [
         "free", "drag", "rigid", "viscous", "membrane"
@@ -72,6 +76,16 @@ def test_every_range_is_finite_non_negative_and_holds_its_default():
             not row["minimum_exclusive"] and row["default"] == row["minimum"]
         )
         assert low_ok and row["default"] <= row["maximum"], row
+
+
+def test_the_cuttable_models_are_those_the_scene_reader_lets_take_a_cut_to():
+    air = Material("air", "free")
+    for model, takes in MODEL_PARAMETERS.items():
+        required = {k: PARAMETER_RANGES[k]["default"] for k, needed in takes.items() if needed}
+        problem = materials_problem([air, Material("m", model, cut_to="air", **required)])
+        assert (problem is None) == (model in CUTTABLE_MODELS), (model, problem)
+        if problem is not None:
+            assert problem.field == "/materials/1/cut_to", problem
 
 
 def test_presets_build_a_space():

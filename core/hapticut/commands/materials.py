@@ -1,6 +1,7 @@
 """``hapticut materials [--json]``: the material models, their parameters and the presets.
 
-Everything printed comes from the engine's one material table (core/src/material_table.cpp).
+Everything printed comes from the engine's one material table (core/src/material_table.cpp),
+and which models a blade cuts from hapticut.cut_surface.
 """
 
 from __future__ import annotations
@@ -26,7 +27,8 @@ def range_text(parameter: dict) -> str:
 def format_table(table: dict) -> str:
     lines = ["Material models:"]
     for model in table["models"]:
-        lines.append(f"  {model['name']:<10}{model['summary']}")
+        cut = ", cut by a blade" if model["cuttable"] else ""
+        lines.append(f"  {model['name']:<10}{model['summary']}{cut}")
         for parameter in model["parameters"]:
             needed = "" if parameter["required"] else ", optional"
             lines.append(
@@ -41,9 +43,19 @@ def format_table(table: dict) -> str:
     return "\n".join(lines)
 
 
-def run(args: argparse.Namespace) -> int:
+def material_table() -> dict:
+    """The engine's table, each model marked ``cuttable``: whether a blade cuts it, so that
+    its material takes a cut variant (the add-on offers one only then)."""
     from hapticut import _core
+    from hapticut.cut_surface import CUTTABLE_MODELS
 
     table = _core.material_table()
+    for model in table["models"]:
+        model["cuttable"] = model["name"] in CUTTABLE_MODELS
+    return table
+
+
+def run(args: argparse.Namespace) -> int:
+    table = material_table()
     print(json.dumps(table) if args.json else format_table(table))
     return 0

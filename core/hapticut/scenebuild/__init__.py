@@ -2,7 +2,15 @@
 simplification (simplify.py), enclosure, sizing, fTetWild (tetwild.py), labels (labels.py),
 quality (quality.py). The file format is hapticut.scenefile."""
 
-from .builder import BuildSettings, RefineZone, Region, build, check_layout, units_warning
+from .builder import (
+    BuildSettings,
+    RefineZone,
+    Region,
+    build,
+    check_layout,
+    cut_variant,
+    units_warning,
+)
 from .errors import BuildCancelled, BuildError
 from .report import BuildReport
 
@@ -15,5 +23,6 @@ __all__ = [
     "Region",
     "build",
     "check_layout",
+    "cut_variant",
     "units_warning",
 ]

@@ -25,7 +25,8 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from ..scenefile.model import BladeSpec, Material, Scene
+from ..scenefile.format import materials_problem
+from ..scenefile.model import MODEL_PARAMETERS, BladeSpec, Material, Scene
 from . import tetwild
 from .errors import BuildCancelled, BuildError
 from .geometry import (
@@ -68,6 +69,7 @@ __all__ = [
     "Region",
     "build",
     "check_layout",
+    "cut_variant",
     "units_warning",
 ]
 
@@ -118,6 +120,8 @@ LOST_FACE_SHARE = 0.8
 # Lost features named in the report per region, and refine zones per feature.
 LOST_FEATURES_LISTED = 5
 ZONES_PER_LOST_FEATURE = 40
+# The name of a material's weaker cut variant (cut_variant): the material's, then this.
+CUT_VARIANT_SUFFIX = "_cut"
 # An input smaller or larger than this across is most likely in other units than mm.
 UNITS_MIN_MM = 5.0
 UNITS_MAX_MM = 5000.0
@@ -125,12 +129,18 @@ UNITS_MAX_MM = 5000.0
 
 @dataclass(frozen=True, eq=False)
 class Region:
-    """A closed surface mesh filled with one material (vertices (n, 3) mm, faces (f, 3))."""
+    """A closed surface mesh filled with one material (vertices (n, 3) mm, faces (f, 3)).
+
+    ``cut_material``: the material ``material.cut_to`` names when no region is filled with it
+    (a weaker copy, cut_variant): the scene's table holds it after the regions' materials. A
+    cut_to naming the air or another region's material needs none.
+    """
 
     name: str
     vertices: np.ndarray
     faces: np.ndarray
     material: Material
+    cut_material: Material | None = None
 
     @classmethod
     def from_file(
@@ -139,6 +149,7 @@ class Region:
         material: Material,
         name: str | None = None,
         scale: float = 1.0,
+        cut_material: Material | None = None,
     ) -> Region:
         """A region read from a mesh file (OBJ, PLY, STL, OFF...), named after the file."""
         if name is None:
@@ -147,7 +158,8 @@ class Region:
             vertices, faces = read_surface(path)
         except BuildError as error:
             raise BuildError(name, error.problem) from None
-        return cls(name, np.asarray(vertices, np.float64) * scale, np.asarray(faces), material)
+        vertices = np.asarray(vertices, np.float64) * scale
+        return cls(name, vertices, np.asarray(faces), material, cut_material)
 
 
 @dataclass(frozen=True)
@@ -288,18 +300,48 @@ class _Progress:
             raise BuildCancelled(f"cancelled while {message}")
 
 
+def cut_variant(material: Material, factor: float) -> Material:
+    """A weaker copy of ``material`` for its tets once cut, named ``<name>_cut``: the same
+    model, every parameter of it times ``factor`` (a drag's distance, a viscous material's
+    viscosity and lag cap, a membrane's break force), so the force it can push back with
+    scales by the factor. The material names it in its ``cut_to`` (docs/scene-format.md)."""
+    scaled = {name: getattr(material, name) * factor for name in MODEL_PARAMETERS[material.model]}
+    return replace(material, name=material.name + CUT_VARIANT_SUFFIX, cut_to="", **scaled)
+
+
 def _materials(regions: Sequence[Region], air: Material) -> list[Material]:
+    """The scene's material table: the air, each region's material, then the cut variants no
+    region is filled with. BuildError, naming the region, for one name given to different
+    materials, or for a table the scene file would refuse (a parameter out of range, a cut_to
+    naming no material, a rigid one, or making a cycle: the scene writer's own checks)."""
     materials = [air]
-    for region in regions:
-        known = next((m for m in materials if m.name == region.material.name), None)
+    variant_of: dict[str, str] = {}  # A cut variant's name -> its material's.
+    entries = [(region, region.material, "") for region in regions]
+    entries += [(r, r.cut_material, r.material.name) for r in regions if r.cut_material is not None]
+    for region, material, source in entries:
+        known = next((m for m in materials if m.name == material.name), None)
         if known is None:
-            materials.append(region.material)
-        elif known != region.material:
+            materials.append(material)
+            if source:
+                variant_of[material.name] = source
+        elif known != material and source and variant_of.get(material.name) != source:
             raise BuildError(
                 region.name,
-                f"material {region.material.name!r} is given twice with different parameters "
-                f"({asdict(known)} and {asdict(region.material)})",
+                f"the cut variant of material {source!r} would be named {material.name!r}, "
+                "which another material has: rename that material",
             )
+        elif known != material:
+            what = (
+                f"material {source!r} is given two different cut variants"
+                if source
+                else f"material {material.name!r} is given twice with different parameters"
+            )
+            raise BuildError(region.name, f"{what} ({asdict(known)} and {asdict(material)})")
+    problem = materials_problem(materials)
+    if problem is not None:
+        name = materials[int(problem.field.split("/")[2])].name
+        owner = next((r.name for r, m, _ in entries if m.name == name), "")
+        raise BuildError(owner, problem.reason)
     return materials
 
 

@@ -14,10 +14,12 @@ import logging
 import os
 from pathlib import Path
 
+import numpy as np
+
 from hapticut import _core
 
 from ..atomic_file import write_atomically
-from .model import Scene, SceneError, scene_from_dict, scene_to_dict
+from .model import Material, Scene, SceneError, scene_from_dict, scene_to_dict
 
 JSON = "json"
 MSGPACK = "msgpack"
@@ -48,6 +50,22 @@ def serialize_scene(scene: Scene, encoding: str = JSON) -> bytes:
         return _core.serialize_scene_bytes(scene_to_dict(scene), _checked(encoding))
     except _core.SceneError as error:
         raise SceneError(error.field, error.reason) from None
+
+
+def materials_problem(materials: list[Material]) -> SceneError | None:
+    """The first problem the scene reader finds in this material table (a parameter out of
+    range, a repeated name, a cut_to naming no material, naming a rigid one or making a
+    cycle), as the SceneError a file of it would raise (``/materials/<i>/...``), or None.
+
+    The writer's own checks, run on the table with a one-tet mesh of material 0: a builder
+    finds what its scene file would be refused for before it meshes anything."""
+    vertices, tets = _core.two_tets_mesh(10.0)
+    probe = Scene(materials, vertices, tets[:1], np.zeros(1, np.int32))
+    try:
+        serialize_scene(probe)
+    except SceneError as error:
+        return error
+    return None
 
 
 def load_scene(path: str | os.PathLike, *, strict: bool = False) -> Scene:

@@ -58,6 +58,10 @@ def probe(path: str) -> dict:
 def built(addon, tmp_path_factory):
     work = tmp_path_factory.mktemp("finger")
     scene = blender_scene.finger_scene(str(work))
+    # Once cut, the flesh keeps a tenth of its drag and the skin no longer resists.
+    flesh, skin = bpy.data.objects["Flesh"].hapticut, bpy.data.objects["Skin"].hapticut
+    flesh.cut_becomes, flesh.cut_factor = "WEAKER", 0.1
+    skin.cut_becomes = "FREE"
     figures = run_build(scene)
     print(
         f"\nfinger (accuracy {blender_scene.TEST_ACCURACY_MM} mm): Tetrahedralize to preview "
@@ -128,9 +132,17 @@ def test_export_and_reload_with_the_toolkit(built, tmp_path, suffix):
     assert bpy.ops.hapticut.wait() == {"FINISHED"}
     contents = probe(path)
     assert contents["materials"] == {
-        "air": "free", "skin": "membrane", "soft_tissue": "drag", "bone": "rigid"
+        "air": "free", "skin": "membrane", "soft_tissue": "drag", "bone": "rigid",
+        "soft_tissue_cut": "drag",
     }  # fmt: skip
-    assert all(count > 0 for count in contents["tets_per_material"].values())
+    # The panel's Once cut: the servo reads each material's cut variant from the scene.
+    assert contents["cut_to"] == {"skin": "air", "soft_tissue": "soft_tissue_cut"}
+    assert contents["drag_distance_mm"] == {
+        "soft_tissue": pytest.approx(2.0), "soft_tissue_cut": pytest.approx(0.2)
+    }  # fmt: skip
+    # Every tet starts uncut: the variant fills none.
+    filled = {k: v for k, v in contents["tets_per_material"].items() if v > 0}
+    assert set(filled) == set(contents["materials"]) - {"soft_tissue_cut"}
     # Each layer's tets hold that layer's material.
     assert contents["at"] == list(PROBES)
     assert contents["blades"] == ["Knife"]
@@ -180,6 +192,8 @@ def test_properties_survive_save_and_reopen(built, tmp_path):
     assert knife.hapticut.device == "spacemouse"
     assert (knife.hapticut.edge_vertex_a, knife.hapticut.edge_vertex_b) == (0, 1)
     assert bpy.data.objects["Bone"].hapticut.material_preset == "bone"
+    assert bpy.data.objects["Skin"].hapticut.cut_becomes == "FREE"
+    assert (flesh.hapticut.cut_becomes, flesh.hapticut.cut_factor) == ("WEAKER", pytest.approx(0.1))
     assert flesh.hapticut.material_preset == "custom"
     parameters = {p.name: p.value for p in flesh.hapticut.custom_parameters}
     assert parameters["viscosity_N_s_per_mm"] == pytest.approx(0.002)

@@ -15,9 +15,11 @@ class CheckingLayout:
     def __init__(self) -> None:
         self.texts: list[str] = []
         self.operators: list[str] = []
+        self.props: list[str] = []
 
     def prop(self, data, name, **options):
         assert name in data.bl_rna.properties, f"{type(data).__name__} has no {name!r}"
+        self.props.append(name)
 
     def operator(self, idname, **options):
         module, name = idname.split(".")
@@ -89,6 +91,24 @@ def test_every_panel_draws_for_each_role_and_state(addon, tmp_path):
     }), bpy.context)  # fmt: skip
     assert any(text.startswith("Install: ") for text in layout.texts)
     prefs.toolkit_error = ""
+
+
+def test_once_cut_is_offered_for_materials_a_blade_cuts(addon, tmp_path):
+    from addon.ui import scene_panels
+
+    blender_scene.finger_scene(str(tmp_path))
+    drawn = {}
+    for name, becomes in (("Flesh", "WEAKER"), ("Skin", "FREE"), ("Bone", "WEAKER")):
+        obj = bpy.data.objects[name]
+        obj.hapticut.cut_becomes, obj.hapticut.cut_factor = becomes, 0.25
+        bpy.context.view_layer.objects.active = obj
+        drawn[name] = CheckingLayout()
+        draw(scene_panels.HAPTICUT_PT_object, drawn[name])
+    assert {"cut_becomes", "cut_factor"} <= set(drawn["Flesh"].props)
+    assert "once cut: drag: drag_distance_mm 0.5" in drawn["Flesh"].texts  # 2 mm x 0.25.
+    assert "cut_becomes" in drawn["Skin"].props and "cut_factor" not in drawn["Skin"].props
+    assert not {"cut_becomes", "cut_factor"} & set(drawn["Bone"].props)
+    assert "Once cut: a blade never cuts rigid material" in drawn["Bone"].texts
 
 
 def test_problems_and_warnings_show_their_place_and_remedy_and_a_shared_folder_its_fork(

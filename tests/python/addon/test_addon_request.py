@@ -86,3 +86,25 @@ def test_a_custom_material_takes_the_table_defaults_and_ranges(addon, tmp_path):
         written_request(tmp_path)
     item.value = parameter["default"] * 0.5
     assert written_request(tmp_path)[2] != digest  # An edit changes the build's digest.
+
+
+def test_once_cut_goes_into_the_request_for_materials_a_blade_cuts(addon, tmp_path):
+    from addon.authoring import exchange
+
+    blender_scene.finger_scene(str(tmp_path))
+    flesh, skin, bone = (bpy.data.objects[name].hapticut for name in ("Flesh", "Skin", "Bone"))
+    request, _, digest = written_request(tmp_path)
+    assert not any("cut" in r["material"] for r in request["regions"])  # Stays as it is.
+    flesh.cut_becomes, flesh.cut_factor = "WEAKER", 0.25
+    skin.cut_becomes = "FREE"
+    bone.cut_becomes = "WEAKER"  # Rigid: a blade never cuts it, so it has no effect.
+    request, _, weaker_digest = written_request(tmp_path)
+    cuts = {r["name"]: r["material"].get("cut") for r in request["regions"]}
+    assert cuts == {"Flesh": {"becomes": "weaker", "factor": 0.25},
+                    "Skin": {"becomes": "free"}, "Bone": None}  # fmt: skip
+    assert weaker_digest != digest
+    flesh.cut_factor = 0.5
+    assert written_request(tmp_path)[2] != weaker_digest
+    flesh.cut_factor = 0.0
+    with pytest.raises(exchange.SceneProblemError, match="Flesh: Once cut: Factor 0 .*Free"):
+        written_request(tmp_path)

@@ -1,5 +1,6 @@
 """Reads a scene file with the toolkit in a child Python (never inside bpy's process) and
-prints what the tests check: materials, tets per material, the material at given points."""
+prints what the tests check: materials (their cut variants, the drags), tets per material, the
+material at given points."""
 
 import json
 import sys
@@ -32,6 +33,10 @@ def main(path: str, points_json: str) -> None:
         json.dumps(
             {
                 "materials": {m.name: m.model for m in scene.materials},
+                "cut_to": {m.name: m.cut_to for m in scene.materials if m.cut_to},
+                "drag_distance_mm": {
+                    m.name: m.drag_distance_mm for m in scene.materials if m.model == "drag"
+                },
                 "tets_per_material": dict(zip(names, counts.tolist(), strict=True)),
                 "at": [material_at(scene, np.array(p, float)) for p in json.loads(points_json)],
                 "blades": [b.name for b in scene.blades],
