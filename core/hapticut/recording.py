@@ -21,7 +21,7 @@ import json
 import os
 import stat
 import struct
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -40,6 +40,8 @@ class Recording:
     truncated: bool  # No trailer: the run was cut short; ``records`` are its whole records.
     truncated_bytes: int  # A partial last record (or trailer) that was dropped.
     dropped_records: int  # From the trailer: records lost while recording (0 when truncated).
+    # servo_layout.CUT_BLOCK per record (read from the file's bytes).
+    cut_block_records: np.ndarray = field(default_factory=lambda: np.zeros(0, layout.CUT_BLOCK))
 
     @property
     def problem(self) -> str:
@@ -99,7 +101,7 @@ class Recording:
     @property
     def cut_blocks(self) -> np.ndarray:
         """(T,) servo_layout.CUT_BLOCK: each record's cut block."""
-        return layout.cut_blocks(self.records)
+        return self.cut_block_records
 
     def cut_order(self, upto: int | None = None) -> np.ndarray:
         """(k,) int32: the tets the scene had cut at the end of record ``upto`` (default the
@@ -197,8 +199,9 @@ def read_recording(path: str | os.PathLike) -> Recording:
             )
         dropped = int(trailer["dropped_records"])
     records = np.frombuffer(body[: count * dtype.itemsize], dtype=dtype)
+    cuts = layout.cut_blocks(body, count, dtype.itemsize)
     partial = 0 if complete else len(body) - count * dtype.itemsize
-    return Recording(os.fspath(path), header, records, not complete, partial, dropped)
+    return Recording(os.fspath(path), header, records, not complete, partial, dropped, cuts)
 
 
 def fitted_poses(poses: np.ndarray, p: np.ndarray, q: np.ndarray) -> np.ndarray:

@@ -200,18 +200,20 @@ def _with_blades(header: np.dtype, names: list[str], points: list[int]) -> np.dt
     )
 
 
-def cut_blocks(records: np.ndarray) -> np.ndarray:
-    """(T,) CUT_BLOCK: the cut block of each of these records (or frames), the last
-    CUT_BLOCK.itemsize bytes of each (a view, not a copy)."""
-    records = np.ascontiguousarray(records)
-    size = records.dtype.itemsize
+def cut_blocks(buffer, count: int, record_bytes: int) -> np.ndarray:
+    """(count,) CUT_BLOCK, a copy: the cut block of each of ``count`` records (or frames) of
+    ``record_bytes`` each in ``buffer``, its last CUT_BLOCK.itemsize bytes. Read from the
+    bytes, not from a structured array of the records: the block is no field of theirs, and
+    numpy need not copy the bytes between fields."""
+    if count == 0:
+        return np.zeros(0, CUT_BLOCK)
     return np.ndarray(
-        (len(records),),
+        (count,),
         CUT_BLOCK,
-        buffer=records.view(np.uint8).reshape(-1),
-        offset=size - CUT_BLOCK.itemsize,
-        strides=(size,),
-    )
+        buffer=buffer,
+        offset=record_bytes - CUT_BLOCK.itemsize,
+        strides=(record_bytes,),
+    ).copy()
 
 
 def stream_frame_dtype(points: list[int], names: list[str] | None = None) -> np.dtype:
