@@ -22,7 +22,7 @@ from ..authoring.exchange import scene_objects
 from ..background import jobs, steps
 from ..toolkit import preferences, runner, toolkit_link
 from ..toolkit.units import mm_per_unit
-from . import device_list, live_draw, live_session, stroke_path
+from . import device_list, live_cut, live_draw, live_session, stroke_path
 
 TIMER_INTERVAL_S = 1.0 / 120.0
 
@@ -251,6 +251,12 @@ def engage(engaged: bool) -> None:
     live_session.request(_session, "engage", engaged)
 
 
+def reset_cuts() -> None:
+    if _session is None:
+        raise live_session.LiveServoError("no servo: Start it first")
+    live_session.request(_session, "reset_cuts")
+
+
 def record_live(scene) -> str:
     """Toggle recording of the live run; the path while recording, "" once stopped."""
     session = _session
@@ -300,6 +306,8 @@ def timer():
             session.last_status_s = 0.0  # Follow the stroke closely.
         if live_session.tick(session, poses):
             live_draw.invalidate()
+            if scene is not None:
+                live_cut.update(scene, session)
     except Exception as error:  # Never a traceback out of a timer: the panel says it.
         session.error = f"{type(error).__name__}: {error}"
     live_draw.tag_redraw()

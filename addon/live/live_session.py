@@ -52,6 +52,8 @@ class LiveServo:
     state: str = "connected"  # connected, loading, running, simulating, lost, stopped
     error: str = ""
     stream_frame: object = None  # The newest servo_client.StreamFrame.
+    cut_set: object = None  # servo_client.CutSet: the scene's cut tets, from the stream.
+    cuts_pending: bool = False  # A cuts request is unanswered.
     status: dict = field(default_factory=dict)
     blades: list = field(default_factory=list)  # load reply's blades
     scene_path: str = ""
@@ -311,12 +313,18 @@ def tick(session: LiveServo, poses: dict[str, list[float]] | None = None) -> boo
         for reply in client.replies():
             if reply.get("type") == "status" and reply.get("ok"):
                 session.status, session.status_pending = reply, False
+            elif reply.get("type") == "cuts" and reply.get("ok"):
+                session.cuts_pending = False
+                if session.cut_set is not None:
+                    session.cut_set.add_reply(reply)
             elif not reply.get("ok"):
                 session.status_pending = session.status_pending and reply.get("type") != "status"
+                session.cuts_pending = session.cuts_pending and reply.get("type") != "cuts"
                 session.error = f"{reply.get('type')}: {reply.get('error', 'failed')}"
         frame = client.poll_newest(MAX_DATAGRAMS, BUDGET_S)
         if frame is not None:
             session.stream_frame, new = frame, True
+            follow_cuts(session, frame)
             age_s = stream_frame_age_s(frame, time.monotonic())
             if age_s is not None:
                 session.stream_frame_ages_s.append(age_s)
@@ -339,6 +347,18 @@ def tick(session: LiveServo, poses: dict[str, list[float]] | None = None) -> boo
     del session.tick_costs_s[:-4096], session.stream_frame_ages_s[:-4096]
     del session.drawn_ages_s[:-4096]
     return new
+
+
+def follow_cuts(session: LiveServo, frame) -> None:
+    """Adds the cut tets the frame carries to the session's set; the timer takes only the
+    newest frame, so the set often has a hole: one ``cuts`` request at a time fills it."""
+    if session.cut_set is None:
+        session.cut_set = session.link.cut_set()
+    session.cut_set.take(frame)
+    start = session.cut_set.wanted_from()
+    if start is not None and not session.cuts_pending:
+        session.client.send_request("cuts", **{"from": start})
+        session.cuts_pending = True
 
 
 def stop_steps(session: LiveServo) -> steps.Steps[None]:

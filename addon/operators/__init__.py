@@ -14,6 +14,7 @@ from .import_scene import HAPTICUT_OT_import_scene
 from .open_servo_log import HAPTICUT_OT_open_servo_log
 from .record_live import HAPTICUT_OT_record_live
 from .refresh_devices import HAPTICUT_OT_refresh_devices
+from .reset_cuts import HAPTICUT_OT_reset_cuts
 from .set_custom_material import HAPTICUT_OT_set_custom_material
 from .set_cutting_edge import HAPTICUT_OT_set_cutting_edge
 from .simulate_stroke import HAPTICUT_OT_simulate_stroke
@@ -38,6 +39,7 @@ classes = (
     HAPTICUT_OT_stop_servo,
     HAPTICUT_OT_go_live,
     HAPTICUT_OT_engage_servo,
+    HAPTICUT_OT_reset_cuts,
     HAPTICUT_OT_record_live,
     HAPTICUT_OT_simulate_stroke,
     HAPTICUT_OT_bake_recording,

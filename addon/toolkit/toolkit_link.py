@@ -50,6 +50,10 @@ class ToolkitLink:
     def servo_client(self, port: int, timeout_s: float) -> ServoClient:
         return self._servo_client.ServoClient(port=port, timeout_s=timeout_s)
 
+    def cut_set(self):
+        """An empty servo_client.CutSet: the scene's cut tets as the stream carries them."""
+        return self._servo_client.CutSet()
+
     def read_recording(self, path: str) -> Recording:
         return self._recording.read_recording(path)
 

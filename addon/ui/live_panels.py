@@ -70,6 +70,9 @@ def status_lines(session) -> list[str]:
                 f"{name}: TET {counts[0]} FACE {counts[1]} EDGE {counts[2]} "
                 f"VERTEX {counts[3]} OUTSIDE {counts[4]}"
             )
+    cuts = session.cut_set
+    if cuts is not None and cuts.generation is not None:
+        lines.append(f"cut: {len(cuts.order):,} tets (Reset Cuts: fresh tissue)")
     if session.error:
         lines.append(f"error: {session.error}")
     return lines + doing
@@ -139,6 +142,7 @@ class HAPTICUT_PT_live(SidebarSubpanel, bpy.types.Panel):
         row.operator("hapticut.go_live", icon="HAND")
         row.operator("hapticut.engage_servo", text="Engage").engaged = True
         row.operator("hapticut.engage_servo", text="Release").engaged = False
+        layout.operator("hapticut.reset_cuts", icon="LOOP_BACK")
         for line in status_lines(session):
             icon = "ERROR" if line.startswith(("servo lost", "error", "not connected:")) else "NONE"
             layout.label(text=line, icon=icon)

@@ -142,6 +142,26 @@ class CutSet:
             self._append(block["tets"][:carried].tolist()[len(self.order) - first :])
         return len(self.order) >= self.total
 
+    def wanted_from(self) -> int | None:
+        """Where a ``cuts`` request should start for the set to be whole (None: it is): for a
+        client that pipelines its requests (the add-on's timer) rather than waiting in
+        ``take``; its reply goes to ``add_reply``."""
+        return None if len(self.order) >= self.total else len(self.order)
+
+    def add_reply(self, reply: dict) -> None:
+        """A ``cuts`` reply: appended when it goes on from what the set holds; one of a new
+        generation starting at the first entry starts the set again; any other is stale (the
+        next frame asks again)."""
+        generation, start = int(reply["generation"]), int(reply["from"])
+        if generation != self.generation:
+            if start != 0:
+                return
+            self.generation, self.order, self.tets = generation, [], set()
+        if start == len(self.order):
+            self.fills += 1
+            self._append([int(t) for t in reply["tets"]])
+        self.total = max(self.total, int(reply["total"]))
+
     def _fill(self, client: ServoClient) -> None:
         self.fills += 1
         generation, tets = client.cuts(len(self.order))

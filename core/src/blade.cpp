@@ -206,19 +206,19 @@ BladeTick Blade::step(const Pose& pose, double dt_s, const RuntimeSettings& sett
   }
   if (coupling_ == BladeCoupling::Rigid) {
     const BladeTick tick = step_rigid(dt_s, settings);
-    cut_along_chords();
+    cut_swept();
     return tick;
   }
   ideal_pose_ = device_pose_;
   const BladeTick tick = step_points(dt_s, settings);
   count(tick);
-  cut_along_chords();
+  cut_swept();
   return tick;
 }
 
 // A chord from outside the mesh is not walked: its way in through the
 // mesh's boundary cuts what the point leaves behind in later ticks.
-void Blade::cut_along_chords() {
+void Blade::cut_swept() {
   if (!cuttable_materials_) return;
   CutState& cuts = *cuts_;
   for (std::size_t i = 0; i < proxies_.size(); ++i) {
@@ -230,6 +230,12 @@ void Blade::cut_along_chords() {
     if (end.state == start.state && end.tet == start.tet && end.local == start.local) continue;
     if (start.state != ProxyState::Outside) cuts.cut_along(start.tet, start.q, end.q);
     cuts.cut_left_behind(start, end.q);
+  }
+  // The edge between neighbouring points, where they began the tick in
+  // different tets (most ticks, in one: nothing lay between them).
+  for (std::size_t i = 0; i + 1 < proxies_.size(); ++i) {
+    cuts.cut_left_by_edge(start_places_[i], start_places_[i + 1], proxies_[i].place(),
+                          proxies_[i + 1].place());
   }
 }
 

@@ -1,6 +1,7 @@
 #include "hapticut/cut_state.h"
 
 #include <algorithm>
+#include <array>
 #include <stdexcept>
 #include <string>
 
@@ -53,6 +54,44 @@ int CutState::cut_along(std::int32_t start_tet, const Vec3& a, const Vec3& b) {
     if (mesh.outside_distance(t, b) > eps) newly_cut += cut_if_inside(t, (x + leave) * 0.5) ? 1 : 0;
     x = leave;
     t = mesh.neighbour(t, exit.face);
+  }
+  return newly_cut;
+}
+
+int CutState::tets_crossed(std::int32_t start_tet, const Vec3& a, const Vec3& b,
+                           std::array<std::int32_t, kMaxEdgeTets>& out) const {
+  const TetMesh& mesh = space_->mesh();
+  const double eps = space_->tolerance();
+  int count = 0;
+  std::int32_t t = start_tet;
+  Vec3 x = a;
+  for (int step = 0; t >= 0 && t < mesh.tet_count() && count < kMaxEdgeTets; ++step) {
+    const TetExit exit = first_exit(mesh, t, x, b, eps);
+    const Vec3 leave = exit.face < 0 ? b : x + (b - x) * exit.fraction;
+    if (mesh.outside_distance(t, (x + leave) * 0.5) < -eps) out[count++] = t;
+    if (exit.face < 0) break;
+    x = leave;
+    t = mesh.neighbour(t, exit.face);
+  }
+  return count;
+}
+
+int CutState::cut_left_by_edge(const ProxyPlace& a0, const ProxyPlace& b0, const ProxyPlace& a1,
+                               const ProxyPlace& b1) {
+  if (a0.state == ProxyState::Outside || a0.tet == b0.tet) return 0;
+  std::array<std::int32_t, kMaxEdgeTets> before{};
+  std::array<std::int32_t, kMaxEdgeTets> now{};
+  const int crossed = tets_crossed(a0.tet, a0.q, b0.q, before);
+  const int still = a1.state == ProxyState::Outside ? 0 : tets_crossed(a1.tet, a1.q, b1.q, now);
+  int newly_cut = 0;
+  for (int k = 0; k < crossed; ++k) {
+    const std::int32_t t = before[k];
+    const MaterialModel model = space_->own_model(t);
+    if (cut_[t] != 0 || t == a0.tet || t == b0.tet || t == a1.tet || t == b1.tet) continue;
+    if (model != MaterialModel::Drag && model != MaterialModel::Viscous) continue;
+    if (std::find(now.begin(), now.begin() + still, t) != now.begin() + still) continue;
+    mark(t);
+    ++newly_cut;
   }
   return newly_cut;
 }

@@ -258,6 +258,29 @@ TEST_P(CutMemory, ABladeWithoutMemoryCutsNothingAndFeelsTheUncutMaterial) {
   EXPECT_LE(slit(blade, 0.6), kStiffness * 0.4 * blade.point_count() + 1e-9);
 }
 
+// Two points 6 mm apart across the stroke, on a 2.5 mm grid: the tets between
+// their paths, which neither point enters, are cut by the edge between them;
+// a point drawn there afterwards feels the cut flesh.
+TEST_P(CutMemory, TheEdgeCutsTheTetsBetweenItsPoints) {
+  const auto space = flesh_block();
+  BladeSpec wide{"knife", {0, -3, 0}, {0, 3, 0}, 2};
+  wide.coupling = GetParam();
+  auto cuts = std::make_shared<CutState>(space);
+  Blade blade(space, wide, nullptr, cuts);
+  const std::vector<Vec3> corners{{-18, 0.1, -5.6}, {18, 0.1, -5.6}};
+  blade.reset({corners[0], {}});
+  stroke(blade, corners, 3600, [](const Vec3&) { return false; });
+  int between = 0;
+  for (double x = -6.0; x <= 6.0; x += 1.0) {
+    const std::int32_t t = space->mesh().locate({x, 0.1, -5.6});
+    ASSERT_NE(t, kNoTet);
+    between += blade.cuts().cut(t);
+  }
+  EXPECT_EQ(between, 13);
+  Blade probe(space, knife(BladeCoupling::Independent), nullptr, cuts);
+  EXPECT_LE(slit(probe, 0.1), kStiffness * 0.4 + 1e-9);
+}
+
 INSTANTIATE_TEST_SUITE_P(BothCouplings, CutMemory,
                          ::testing::Values(BladeCoupling::Independent, BladeCoupling::Rigid),
                          [](const ::testing::TestParamInfo<BladeCoupling>& info) {

@@ -189,8 +189,9 @@ class Blade {
   void update_ideal_pose(const Pose& device);
   void place_proxies_on_ideal(const RuntimeSettings& settings);
   // The rule for cutting (cut_state.h): what each point left behind over the
-  // tick, from start_places_ to its place now.
-  void cut_along_chords();
+  // tick, from start_places_ to its place now, and what the edge between
+  // neighbouring points lies across.
+  void cut_swept();
 
   std::shared_ptr<const Space> space_;
   std::shared_ptr<const ForceShading> shading_;

@@ -10,7 +10,10 @@
 // been in it and has left it: the tet the point's place owned at the start
 // of the tick (cut_left_behind), and every tet whose inside the point's chord
 // over the tick crosses (cut_along: the thin layers one tick passes, above
-// all a membrane broken through at once). These are the tets the bake's cut
+// all a membrane broken through at once); and a drag or viscous tet is cut
+// once the edge between two neighbouring ideal points has lain across it
+// and left it (cut_left_by_edge), so a stroke cuts the sheet its edge
+// sweeps, not only the lines its points trace. These are the tets the bake's cut
 // surface takes from the recorded proxies (core/hapticut/cut_surface.py,
 // cutting_tets: a TET proxy in a tet of cuttable material), once the point
 // has moved on. A point feels what it cuts only after leaving it: the tet it
@@ -22,6 +25,7 @@
 // Allocates once, in the constructor; mark, reset_cuts and the reads never do.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -48,6 +52,18 @@ class CutState {
   // cut. Never allocates.
   int cut_along(std::int32_t start_tet, const Vec3& a, const Vec3& b);
   static constexpr int kMaxChordTets = 256;
+  // The stretch of the edge between two neighbouring ideal points, at a0, b0
+  // when the tick began and a1, b1 now: cuts the drag and viscous tets whose
+  // inside it crossed between the points' own tets and that it has left
+  // (the stretch now does not touch them, and neither point is in one). So
+  // the edge cuts the sheet it sweeps, not only its points' paths, and only
+  // behind it: a point of the blade that goes on into a tet the stretch lay
+  // across still feels it uncut. A membrane is cut by points alone (a point
+  // breaks it). Returns the tets newly cut. Never allocates.
+  int cut_left_by_edge(const ProxyPlace& a0, const ProxyPlace& b0, const ProxyPlace& a1,
+                       const ProxyPlace& b1);
+  // The most tets a stretch between two points is followed through.
+  static constexpr int kMaxEdgeTets = 32;
   // A point that was in tissue at `start` (its owner tet's own material
   // cuttable) and is now at `now` cuts its owner once `now` has left the
   // owner's closure, and, when `start` held it on a face, edge or vertex,
@@ -87,6 +103,11 @@ class CutState {
   // Cuts tet t if not cut yet, its own material is cuttable and x lies inside
   // it by more than the tolerance.
   bool cut_if_inside(std::int32_t t, const Vec3& x);
+  // The tets whose inside the segment a -> b crosses, from `start_tet`
+  // (whose closure holds a) to b's, at most kMaxEdgeTets, into `out` (a
+  // stretch along a face crosses neither side). Returns how many.
+  int tets_crossed(std::int32_t start_tet, const Vec3& a, const Vec3& b,
+                   std::array<std::int32_t, kMaxEdgeTets>& out) const;
   // Marks tet t cut (not cut yet) and appends it to the order.
   void mark(std::int32_t t);
 

@@ -264,3 +264,48 @@ def test_a_hid_profile_chosen_with_no_such_device_connected_says_so(finger):
         assert [b["kind"] for b in live_link.current().blades] == ["viewport"]
     finally:
         finger.hapticut_live.device_mode = "VIEWPORT"
+
+
+def test_the_live_cut_region_is_the_servos_cut_and_reset_cuts_clears_it(finger):
+    """The knife moved down through the skin and flesh by its keyframes while live: the cut
+    region object is the skin of the tets the servo cut (its cut set, as the stream and the
+    cuts replies carried it), the panel counts them, and Reset Cuts empties it."""
+    from addon.live import live_cut, live_link, live_session
+    from addon.ui import live_panels
+
+    assert bpy.ops.hapticut.start_servo() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
+    session = live_link.current()
+    assert bpy.ops.hapticut.go_live() == {"FINISHED"}
+    assert bpy.ops.hapticut.wait() == {"FINISHED"}
+    for frame in range(finger.frame_start, finger.frame_end + 1):
+        finger.frame_set(frame)
+        ticks = session.status.get("ticks", 0)
+        live_support.follow(lambda t=ticks: session.status.get("ticks", 0) > t + 20)
+    generation, order = live_session.request(session, "cuts")
+    assert len(order) > 10
+    # The stream's set catches up with the servo's (a frame past the last cut, its holes
+    # filled by cuts replies).
+    live_support.follow(
+        lambda: (
+            session.cut_set.generation == generation
+            and len(session.cut_set.order) >= len(order)
+            and session.cut_set.wanted_from() is None
+        )
+    )
+    assert session.cut_set.order[: len(order)] == order.tolist()
+    live_cut.update(finger, session, force=True)
+    tets = session.link.preview_tets(session.preview_path)
+    expected = live_cut.boundary_faces(tets["tets"], session.cut_set.order)
+    assert live_cut.face_count() == len(expected) > 0
+    obj = bpy.data.objects[live_cut.OBJECT]
+    assert obj.hide_render and obj.name in bpy.data.collections[live_cut.COLLECTION].objects
+    assert f"cut: {len(session.cut_set.order):,} tets" in "\n".join(
+        live_panels.status_lines(session)
+    )
+    assert bpy.ops.hapticut.reset_cuts() == {"FINISHED"}
+    live_support.follow(
+        lambda: session.cut_set.generation != generation and not session.cut_set.order
+    )
+    live_cut.update(finger, session, force=True)
+    assert live_cut.face_count() == 0
