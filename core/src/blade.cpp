@@ -11,6 +11,11 @@ namespace hapticut {
 
 namespace {
 
+// The same tet, and the same face, edge or vertex of it.
+bool same_place(const ProxyPlace& a, const ProxyPlace& b) {
+  return a.state == b.state && a.tet == b.tet && a.local == b.local;
+}
+
 const char* pose_check_message(PoseCheck check) {
   switch (check) {
     case PoseCheck::Fine:
@@ -79,6 +84,7 @@ Blade::Blade(std::shared_ptr<const Space> space, const BladeSpec& spec,
   proxies_.assign(tool_points_.size(), Proxy(space_));
   point_ticks_.assign(tool_points_.size(), TickResult{});
   start_places_.assign(tool_points_.size(), ProxyPlace{});
+  edge_walks_.assign(tool_points_.size(), EdgeWalk{});
   coupling_ = spec.coupling;
   orientation_ = spec.orientation;
   length_mm_ = norm(tool_span_);
@@ -134,6 +140,7 @@ void Blade::reset(const Pose& pose) {
   if (check != PoseCheck::Fine) throw std::invalid_argument(pose_check_message(check));
   for (std::size_t i = 0; i < proxies_.size(); ++i) proxies_[i].reset(world_points_[i]);
   std::fill(point_ticks_.begin(), point_ticks_.end(), TickResult{});
+  std::fill(edge_walks_.begin(), edge_walks_.end(), EdgeWalk{});
   first_ = 0;
   tick_index_ = 0;
   last_tick_ = {};
@@ -227,15 +234,26 @@ void Blade::cut_swept() {
     // Most ticks: still in the same tet, or on the same face, edge or vertex
     // of it. Then the chord lies in that tet's closure (a tet is convex) and
     // the point has left nothing: nothing to cut, and nothing to compute.
-    if (end.state == start.state && end.tet == start.tet && end.local == start.local) continue;
+    if (same_place(start, end)) continue;
     if (start.state != ProxyState::Outside) cuts.cut_along(start.tet, start.q, end.q);
     cuts.cut_left_behind(start, end.q);
   }
-  // The edge between neighbouring points, where they began the tick in
-  // different tets (most ticks, in one: nothing lay between them).
+  // The edge between neighbouring points, measured against where it was
+  // last walked: again once one of its ends has moved kEdgeWalkStep_mm or to
+  // another place (walking every stretch every tick cost several times the
+  // rest of the memory); a tet the stretch crossed and left within that step
+  // is a sliver thinner than it. Nothing lies between two points in one tet.
   for (std::size_t i = 0; i + 1 < proxies_.size(); ++i) {
-    cuts.cut_left_by_edge(start_places_[i], start_places_[i + 1], proxies_[i].place(),
-                          proxies_[i + 1].place());
+    EdgeWalk& walked = edge_walks_[i];
+    const ProxyPlace& a1 = proxies_[i].place();
+    const ProxyPlace& b1 = proxies_[i + 1].place();
+    if (!walked.valid) walked = {start_places_[i], start_places_[i + 1], true};
+    const double moved = std::max(norm(a1.q - walked.a.q), norm(b1.q - walked.b.q));
+    if (moved < kEdgeWalkStep_mm && same_place(walked.a, a1) && same_place(walked.b, b1)) {
+      continue;
+    }
+    if (walked.a.tet != walked.b.tet) cuts.cut_left_by_edge(walked.a, walked.b, a1, b1);
+    walked = {a1, b1, true};
   }
 }
 

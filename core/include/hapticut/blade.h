@@ -214,7 +214,16 @@ class Blade {
   std::vector<Proxy> proxies_;
   std::vector<TickResult> point_ticks_;
   std::vector<ProxyPlace> start_places_;  // The points' places when this tick began.
-  std::size_t first_ = 0;                 // Where the next tick starts: the budget's round robin.
+  // Where the stretch between points i and i + 1 was when cut_swept last
+  // walked it (valid: since the last reset).
+  struct EdgeWalk {
+    ProxyPlace a;
+    ProxyPlace b;
+    bool valid = false;
+  };
+  std::vector<EdgeWalk> edge_walks_;
+  static constexpr double kEdgeWalkStep_mm = 0.25;
+  std::size_t first_ = 0;  // Where the next tick starts: the budget's round robin.
   std::uint64_t tick_index_ = 0;
   BladeTick last_tick_;
   BladeCounters counters_;
