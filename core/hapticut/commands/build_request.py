@@ -83,9 +83,11 @@ def _fail(events: JsonLines, name: str, problem: str, code: int = 1) -> int:
 
 def run(args: argparse.Namespace) -> int:
     from hapticut.build_request import RequestError, input_problems, read_request
+    from hapticut.scenebuild import forked
 
     from .mesh import _terminate_as_exit
 
+    forked.allow()  # This process runs nothing but the build (forked.py).
     events = JsonLines(sys.stdout, args.progress == "jsonl")
     if not args.check and not args.out:
         return _fail(events, "", "--out DIR is required (or --check)", 2)

@@ -7,11 +7,13 @@ every repair is counted in the region's report (a dict of counts, zero entries l
 
 from __future__ import annotations
 
+import contextlib
 import os
 
 import numpy as np
 
 from .errors import BuildError
+from .forked import Beside
 from .geometry import Surface, signed_volume, triangle_areas
 
 # Faces with area below this fraction of (mean edge length)^2 count as zero-area (degenerate).
@@ -286,26 +288,42 @@ def hausdorff(
     a scan, whose vertices lie closer together than face samples would). stop_above: when
     the first way finds more than this, that is returned without measuring the other (the
     distance is more than it either way). back_from: the other way is measured only when the
-    first found more than this (math.inf: the first way alone, a one-sided distance)."""
+    first found more than this (math.inf: the first way alone, a one-sided distance).
+
+    A measure of both ways of at least AT_ONCE_SAMPLES samples each measures the other way
+    in a forked child while it measures the first, where this process allows it (forked.py);
+    the result is the same."""
     pymeshlab = _meshlab()
     largest = max(meshes.mesh(first).face_number(), meshes.mesh(second).face_number())
     samples = samples or max(20_000, 4 * largest)
     far = pymeshlab.PercentageValue(50)
-    there = meshes.get_hausdorff_distance(
-        sampledmesh=first, targetmesh=second, samplevert=True,
-        sampleface=not first_vertices_only, samplenum=samples, maxdist=far,
-    )  # fmt: skip
-    if stop_above is not None and there["max"] > stop_above:
-        return float(there["max"])
-    if back_from is not None and there["max"] <= back_from:
-        return float(there["max"])
-    if between is not None:
-        between()
-    back = meshes.get_hausdorff_distance(
-        sampledmesh=second, targetmesh=first, samplevert=True, sampleface=True,
-        samplenum=samples, maxdist=far,
-    )  # fmt: skip
-    return float(max(there["max"], back["max"]))
+
+    def back() -> float:
+        return float(
+            meshes.get_hausdorff_distance(
+                sampledmesh=second, targetmesh=first, samplevert=True, sampleface=True,
+                samplenum=samples, maxdist=far,
+            )["max"]
+        )  # fmt: skip
+
+    at_once = back_from is None and samples >= AT_ONCE_SAMPLES
+    with Beside(back) if at_once else contextlib.nullcontext() as other:
+        there = meshes.get_hausdorff_distance(
+            sampledmesh=first, targetmesh=second, samplevert=True,
+            sampleface=not first_vertices_only, samplenum=samples, maxdist=far,
+        )  # fmt: skip
+        if stop_above is not None and there["max"] > stop_above:
+            return float(there["max"])
+        if back_from is not None and there["max"] <= back_from:
+            return float(there["max"])
+        if between is not None:
+            between()
+        return float(max(there["max"], other.result() if other is not None else back()))
+
+
+# A measure of a scan's surface (4 samples per face of the larger mesh each way) measures
+# its two ways at once: below this, a way costs little more than starting the child.
+AT_ONCE_SAMPLES = 100_000
 
 
 def one_sided_deviation(sampled: Surface, target: Surface) -> float:
