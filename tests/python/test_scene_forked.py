@@ -5,6 +5,8 @@ short, the parent does the work itself."""
 from __future__ import annotations
 
 import contextlib
+import io
+import json
 import os
 import signal
 import subprocess
@@ -16,7 +18,11 @@ import numpy as np
 import pymeshlab
 import pytest
 from build_test_support import icosphere
-from hapticut.scenebuild import forked, repair
+from hapticut import build_request
+from hapticut.build_request import InputCheck, input_problems, read_request
+from hapticut.commands import build_request as command
+from hapticut.scenebuild import Region, forked, repair
+from hapticut.scenefile import Material
 
 
 @pytest.fixture
@@ -157,3 +163,66 @@ def test_both_ways_measured_at_once_find_what_one_after_the_other_do(monkeypatch
     assert started and started[0].pid is None  # Forked, and reaped.
     monkeypatch.setattr(forked, "_allowed", False)
     assert repair.hausdorff(meshes, 0, 1) == at_once == pytest.approx(4.0, abs=0.3)
+
+
+def regions_with_problems():
+    vertices, faces = icosphere(10.0, 2)
+    crossing = (
+        np.vstack([vertices, vertices + [5.0, 0, 0]]),
+        np.vstack([faces, faces + len(vertices)]),
+    )
+    rigid = Material("a", "rigid")
+    return [
+        Region("Crossing", *crossing, rigid),
+        Region("Open", vertices, faces[1:], rigid),
+        Region("Good", vertices + [40.0, 0, 0], faces, rigid),
+        Region("Good", vertices + [80.0, 0, 0], faces, rigid),
+    ]
+
+
+def test_the_input_check_beside_finds_what_it_finds_alone(monkeypatch, may_fork):
+    monkeypatch.setattr(build_request, "BESIDE_FACES", 0)
+    regions = regions_with_problems()
+    alone = input_problems(regions)
+    assert [name for name, _ in alone] == ["Crossing", "Open", "Good"]
+    with InputCheck(regions) as check:
+        assert check.beside.forked and check.failed()  # The open region's, known at once.
+        assert check.problems() == alone
+    with InputCheck(regions[:1]) as check:
+        assert check.beside.forked
+        assert wait_until(check.failed)  # Its crossing faces, once the child has counted.
+        assert check.problems() == alone[:1]
+
+
+def test_check_scene_stops_the_layout_check_for_the_regions_own_problems(tmp_path):
+    """Check Scene checks the layout while the input check still runs; a problem it then
+    finds ends the layout's check, and is the one reported."""
+    vertices, faces = icosphere(10.0, 2)
+    np.savez(tmp_path / "ball.npz", vertices=vertices, faces=faces)
+    region = {"name": "Ball", "mesh": "ball.npz", "material": {"name": "a", "model": "rigid"}}
+    path = tmp_path / "request.json"
+    path.write_text(json.dumps({"format": "hapticut.build-request", "version": 1,
+                                "regions": [region]}))  # fmt: skip
+    request = read_request(path)
+
+    class FoundLater:
+        """An input check whose crossing faces are found after the layout's first steps."""
+
+        asked = 0
+
+        def failed(self) -> bool:
+            self.asked += 1
+            return self.asked > 3
+
+        def problems(self):
+            return [("Ball", "the mesh intersects itself (4 faces)")]
+
+    out = io.StringIO()
+    assert command._check(request, FoundLater(), command.JsonLines(out)) == 1
+    events = [json.loads(line) for line in out.getvalue().splitlines()]
+    stages = {e["stage"] for e in events if e["event"] == "progress"}
+    assert "repair" in stages and "done" not in stages
+    assert [e for e in events if e["event"] != "progress"] == [
+        {"event": "problem", "object": "Ball", "problem": "the mesh intersects itself (4 faces)"},
+        {"event": "checked", "problems": 1},
+    ]
