@@ -200,7 +200,7 @@ class InputCheck:
     def __init__(self, regions: list[Region], progress=None, beside: bool = True) -> None:
         from hapticut.scenebuild.forked import Beside
         from hapticut.scenebuild.geometry import Surface
-        from hapticut.scenebuild.repair import check_arrays
+        from hapticut.scenebuild.repair import _meshlab, check_arrays
 
         # The problems in the order reported: (region, problem), or (region, None) where its
         # crossing faces are told.
@@ -236,6 +236,8 @@ class InputCheck:
         self.known = any(problem is not None for _, problem in self.found)
         self.work = _crossing_counts(surfaces)
         beside = beside and sum(len(s.faces) for s in surfaces) >= BESIDE_FACES
+        if beside:
+            _meshlab()  # Imported once, here, rather than again by the child and the caller.
         self.beside = Beside(self.work) if beside else None
         self.counts: list[int] | None = None
 
