@@ -138,30 +138,40 @@ def test_a_cancel_of_check_scene_leaves_no_child_behind(tmp_path):
     assert wait_until(lambda: all(gone(pid) for pid in children))
 
 
-def spiked_sphere():
+def spiked_sphere(in_child: bool):
     """A MeshSet of a fine sphere and a coarse one with a vertex pulled out: their distance
-    is that vertex's, a sample every measure takes (the same in every measure)."""
+    is that vertex's, a sample every measure takes (the same in every measure). The faces
+    around the vertex come first (the part of the way back that the child measures) or last
+    (the parent's)."""
     meshes = pymeshlab.MeshSet()
     vertices, faces = icosphere(30.0, 3)
     meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=vertices, face_matrix=faces))
     vertices, faces = icosphere(30.0, 1)
     vertices[0] *= 34.0 / np.linalg.norm(vertices[0])
+    around = (faces == 0).any(axis=1)
+    order = [faces[around], faces[~around]]
+    faces = np.vstack(order if in_child else order[::-1])
     meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=vertices, face_matrix=faces))
     return meshes
 
 
-def test_both_ways_measured_at_once_find_what_one_after_the_other_do(monkeypatch, may_fork):
-    meshes = spiked_sphere()
+@pytest.mark.parametrize("in_child", [True, False])
+def test_both_ways_measured_at_once_find_what_one_after_the_other_do(
+    monkeypatch, may_fork, in_child
+):
+    meshes = spiked_sphere(in_child)
     monkeypatch.setattr(repair, "AT_ONCE_SAMPLES", 0)
     started = []
 
     def beside(work):
         started.append(forked.Beside(work))
+        assert started[-1].forked
         return started[-1]
 
     monkeypatch.setattr(repair, "Beside", beside)
     at_once = repair.hausdorff(meshes, 0, 1)
-    assert started and started[0].pid is None  # Forked, and reaped.
+    assert started and started[0].pid is None  # Reaped.
+    assert meshes.mesh_number() == 2 and meshes.current_mesh_id() == 1  # As they were.
     monkeypatch.setattr(forked, "_allowed", False)
     assert repair.hausdorff(meshes, 0, 1) == at_once == pytest.approx(4.0, abs=0.3)
 

@@ -7,11 +7,11 @@ every repair is counted in the region's report (a dict of counts, zero entries l
 
 from __future__ import annotations
 
-import contextlib
 import os
 
 import numpy as np
 
+from . import forked
 from .errors import BuildError
 from .forked import Beside
 from .geometry import Surface, signed_volume, triangle_areas
@@ -290,40 +290,77 @@ def hausdorff(
     distance is more than it either way). back_from: the other way is measured only when the
     first found more than this (math.inf: the first way alone, a one-sided distance).
 
-    A measure of both ways of at least AT_ONCE_SAMPLES samples each measures the other way
-    in a forked child while it measures the first, where this process allows it (forked.py);
-    the result is the same."""
+    A measure of both ways of at least AT_ONCE_SAMPLES samples each, where this process can
+    fork (forked.py), measures most of the other way in a forked child while it measures the
+    first way and the rest of the other (at_once): the same samples, spread alike."""
     pymeshlab = _meshlab()
     largest = max(meshes.mesh(first).face_number(), meshes.mesh(second).face_number())
     samples = samples or max(20_000, 4 * largest)
     far = pymeshlab.PercentageValue(50)
 
-    def back() -> float:
+    def way(sampled: int, target: int, count: int, faces: bool = True) -> float:
         return float(
             meshes.get_hausdorff_distance(
-                sampledmesh=second, targetmesh=first, samplevert=True, sampleface=True,
-                samplenum=samples, maxdist=far,
+                sampledmesh=sampled, targetmesh=target, samplevert=True, sampleface=faces,
+                samplenum=count, maxdist=far,
             )["max"]
         )  # fmt: skip
 
-    at_once = back_from is None and samples >= AT_ONCE_SAMPLES
-    with Beside(back) if at_once else contextlib.nullcontext() as other:
-        there = meshes.get_hausdorff_distance(
-            sampledmesh=first, targetmesh=second, samplevert=True,
-            sampleface=not first_vertices_only, samplenum=samples, maxdist=far,
-        )  # fmt: skip
-        if stop_above is not None and there["max"] > stop_above:
-            return float(there["max"])
-        if back_from is not None and there["max"] <= back_from:
-            return float(there["max"])
-        if between is not None:
-            between()
-        return float(max(there["max"], other.result() if other is not None else back()))
+    full = back_from is None and not first_vertices_only
+    if full and samples >= AT_ONCE_SAMPLES and forked.can_fork():
+        return _at_once(meshes, first, second, samples, way, between, stop_above)
+    there = way(first, second, samples, faces=not first_vertices_only)
+    if stop_above is not None and there > stop_above:
+        return there
+    if back_from is not None and there <= back_from:
+        return there
+    if between is not None:
+        between()
+    return max(there, way(second, first, samples))
 
 
 # A measure of a scan's surface (4 samples per face of the larger mesh each way) measures
 # its two ways at once: below this, a way costs little more than starting the child.
 AT_ONCE_SAMPLES = 100_000
+# The share of the way back (from the second mesh's samples to the first) that the child
+# measures: the parent measures the way there and the rest. On a scan the way back, to the
+# scan's many faces, costs about twice the way there, to the candidate's few, so that each
+# then measures about as long.
+BACK_IN_CHILD = 0.75
+
+
+def _at_once(meshes, first: int, second: int, samples: int, way, between, stop_above) -> float:
+    """hausdorff's two ways at once: the second mesh cut in two parts (its faces in order,
+    BACK_IN_CHILD of its area in the first), each sampled with its share of the samples (the
+    face samples are spread by area, the vertices all sampled) and measured against the
+    first mesh, the first part in a forked child."""
+    current = meshes.current_mesh_id()
+    mesh = meshes.mesh(second)
+    vertices, faces = mesh.vertex_matrix(), mesh.face_matrix()
+    areas = triangle_areas(vertices, faces)
+    in_child = np.cumsum(areas) <= BACK_IN_CHILD * areas.sum()
+    parts = []
+    for chosen in (in_child, ~in_child):
+        used, index = np.unique(faces[chosen], return_inverse=True)
+        meshes.add_mesh(
+            _meshlab().Mesh(vertex_matrix=vertices[used], face_matrix=index.reshape(-1, 3))
+        )
+        parts.append(meshes.current_mesh_id())
+    child_samples = round(samples * areas[in_child].sum() / max(areas.sum(), 1e-300))
+    try:
+        with Beside(lambda: way(parts[0], first, max(child_samples, 1))) as other:
+            there = way(first, second, samples)
+            if stop_above is not None and there > stop_above:
+                return there
+            if between is not None:
+                between()
+            mine = way(parts[1], first, max(samples - child_samples, 1))
+            return max(there, mine, other.result())
+    finally:
+        for part in parts:
+            meshes.set_current_mesh(part)
+            meshes.delete_current_mesh()
+        meshes.set_current_mesh(current)
 
 
 def one_sided_deviation(sampled: Surface, target: Surface) -> float:
