@@ -21,8 +21,7 @@ from build_test_support import icosphere
 from hapticut import build_request
 from hapticut.build_request import InputCheck, input_problems, read_request
 from hapticut.commands import build_request as command
-from hapticut.scenebuild import Region, forked, repair, simplify
-from hapticut.scenebuild.geometry import Surface, signed_volume
+from hapticut.scenebuild import Region, forked, repair
 from hapticut.scenefile import Material
 
 
@@ -237,52 +236,3 @@ def test_check_scene_stops_the_layout_check_for_the_regions_own_problems(tmp_pat
         {"event": "problem", "object": "Ball", "problem": "the mesh intersects itself (4 faces)"},
         {"event": "checked", "problems": 1},
     ]
-
-
-def edge_uses(faces) -> np.ndarray:
-    edges = np.sort(np.asarray(faces)[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    return np.unique(edges, axis=0, return_counts=True)[1]
-
-
-def test_a_surface_decimated_in_halves_is_whole_again(may_fork):
-    """The halves, one decimated in a child, join at their cut into one closed surface of
-    the target's faces, about as near the input as one decimated whole (at a quarter of the
-    faces, as a scan's first try: the faces along the cut, kept, leave fewer elsewhere)."""
-    surface = Surface(*icosphere(30.0, 5))
-    halved = simplify.decimate_halves(surface, 5_000, preservenormal=False)
-    assert halved is not None
-    vertices, faces = halved
-    assert 4_500 <= len(faces) <= 5_000
-    assert (edge_uses(faces) == 2).all()  # Closed, and manifold along the cut.
-    joined = Surface(np.asarray(vertices, np.float64), np.asarray(faces, np.int32))
-    assert signed_volume(joined.vertices, joined.faces) > 0.95 * signed_volume(
-        surface.vertices, surface.faces
-    )
-    meshes = pymeshlab.MeshSet()
-    meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=surface.vertices, face_matrix=surface.faces))
-    meshes.meshing_decimation_quadric_edge_collapse(
-        targetfacenum=5_000, preservenormal=False, **simplify.DECIMATION
-    )
-    whole = Surface(meshes.current_mesh().vertex_matrix(), meshes.current_mesh().face_matrix())
-    assert repair.surface_deviation(surface, joined) < 1.5 * repair.surface_deviation(
-        surface, whole
-    )
-
-
-def test_a_scan_simplified_in_halves_keeps_its_tolerance(monkeypatch, may_fork):
-    monkeypatch.setattr(simplify, "HALVES_FACES", 0)
-    monkeypatch.setattr(simplify, "SCREEN_SAMPLES", 1_000)  # Screened as a scan is.
-    halved = []
-
-    def decimate_halves(*args, **kwargs):
-        halved.append(original(*args, **kwargs))
-        return halved[-1]
-
-    original = simplify.decimate_halves
-    monkeypatch.setattr(simplify, "decimate_halves", decimate_halves)
-    surface = Surface(*icosphere(30.0, 4))
-    simple, _, deviation = simplify.simplify_surface(surface, 0.3)
-    assert halved and halved[0] is not None
-    assert deviation <= 0.3 and len(simple.faces) < len(surface.faces) / 4
-    assert (edge_uses(simple.faces) == 2).all()
-    assert repair.surface_deviation(surface, simple) <= 0.3 * 1.05

@@ -7,9 +7,7 @@ spends them once each:
 - the first try decimates the input; a try below a try that fitted is decimated from that one
   (a few collapses more, not the whole input again), and a try just below a candidate that
   fitted from that candidate. On a scan that first decimation checks no face flip, unless
-  it made a face cross another (then it is made again with the check), and where the
-  process can fork (forked.py) it decimates the scan's two halves at once
-  (decimate_halves);
+  it made a face cross another (then it is made again with the check);
 - the tries steer the search with a screening measure (every input vertex, and as many face
   samples; the way back from the candidate only when the way from the input comes near the
   tolerance); the candidate the search ends on is then measured as every kept surface is
@@ -27,7 +25,6 @@ from collections.abc import Callable
 
 import numpy as np
 
-from . import forked
 from .geometry import Surface, signed_volume
 from .repair import _meshlab, crossing_faces, hausdorff
 
@@ -73,18 +70,6 @@ SCREEN_BACK_SHARE = 0.8
 # the finger's parts such a try fitted where one decimated from further up had missed, and
 # the search kept up to 17% fewer faces (never more).
 CHAIN_SHARE = 2 * FACE_COUNT_PRECISION
-# pymeshlab's quadric edge collapse as every try runs it (preservenormal: whether a
-# collapse may flip a face, chosen per try).
-DECIMATION = {
-    "preservetopology": True,
-    "optimalplacement": True,
-    "planarquadric": True,
-    "qualitythr": 0.3,
-}
-# A first decimation of at least this many faces decimates the surface's two halves at once,
-# one in a forked child, where the process can fork (forked.py): on fewer, starting the child
-# costs about what it saves.
-HALVES_FACES = 20_000
 
 
 def simplify_surface(
@@ -126,21 +111,19 @@ def simplify_surface(
             if target < faces < start_faces:
                 start, start_faces = mesh_id, faces
         # A scan's first decimation, the search's dearest, skips the check that no face
-        # flips (a quarter of its time) unless that made a face cross another; it decimates
-        # the scan's halves at once where it can.
+        # flips (a quarter of its time) unless that made a face cross another.
         quick = fine_input and start == source and not bases
         for check_normals in (False, True) if quick else (True,):
-            halves = None
-            if not check_normals and original >= HALVES_FACES and forked.can_fork():
-                halves = decimate_halves(surface, int(target), preservenormal=False)
-            if halves is not None:
-                meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=halves[0], face_matrix=halves[1]))
-            else:
-                meshes.set_current_mesh(start)
-                meshes.add_mesh(meshes.current_mesh(), "candidate")
-                meshes.meshing_decimation_quadric_edge_collapse(
-                    targetfacenum=int(target), preservenormal=check_normals, **DECIMATION
-                )
+            meshes.set_current_mesh(start)
+            meshes.add_mesh(meshes.current_mesh(), "candidate")
+            meshes.meshing_decimation_quadric_edge_collapse(
+                targetfacenum=int(target),
+                preservetopology=True,
+                preservenormal=check_normals,
+                optimalplacement=True,
+                planarquadric=True,
+                qualitythr=0.3,
+            )
             if check_normals or not crossing_faces(meshes).any():
                 break
             meshes.delete_current_mesh()
@@ -314,74 +297,3 @@ def next_face_count(
 
 def _inside(target: float, misses: int, fits: int) -> int:
     return int(min(max(round(target), misses + 1), fits - 1))
-
-
-def decimate_halves(
-    surface: Surface, target: int, preservenormal: bool
-) -> tuple[np.ndarray, np.ndarray] | None:
-    """The surface decimated to about ``target`` faces as two halves at once (the second in
-    a forked child, forked.Beside), the halves cut across its longest side at the median
-    face. The faces along the cut are kept as they are, so that the halves join again
-    (topology kept, the seam's vertices where they were); the rest of each half is decimated
-    to the share of its faces that leaves the target in all. (vertices, faces), or None when
-    the faces along the cut leave nothing to decimate or the halves did not join into as
-    many vertices as they should (the caller then decimates the whole)."""
-    halves = _halves(surface)
-    kept = [on_cut[faces].any(axis=1) for _, faces, on_cut in halves]
-    # The share of the faces away from the cut that leaves ``target`` faces in all.
-    share = (target - sum(k.sum() for k in kept)) / sum((~k).sum() for k in kept)
-    if share <= 0 or any(k.all() for k in kept):
-        return None
-    # (pymeshlab's target counts the faces it may decimate, the selected ones, alone.)
-    targets = [int(share * (~k).sum()) for k in kept]
-    beside = forked.Beside(lambda: _decimate_part(*halves[1], targets[1], preservenormal))
-    with beside:
-        mine = _decimate_part(*halves[0], targets[0], preservenormal)
-        theirs = beside.result()
-    vertices = np.vstack([mine[0], theirs[0]])
-    faces = np.vstack([mine[1], theirs[1] + len(mine[0])])
-    joined, index = np.unique(vertices, axis=0, return_inverse=True)
-    seam = int(halves[0][2].sum())
-    if len(joined) != len(vertices) - seam:
-        return None
-    return joined, index.reshape(-1)[faces].astype(np.int32)
-
-
-def _halves(surface: Surface) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-    """The surface's two halves: each one's vertices, faces and which vertices lie on the
-    cut (shared with the other half)."""
-    vertices, faces = surface.vertices, surface.faces
-    axis = int(np.argmax(np.ptp(vertices, axis=0)))
-    centres = vertices[faces, axis].mean(axis=1)
-    first = centres < np.median(centres)
-    in_first = np.zeros(len(vertices), bool)
-    in_first[faces[first]] = True
-    in_second = np.zeros(len(vertices), bool)
-    in_second[faces[~first]] = True
-    on_cut = in_first & in_second
-    halves = []
-    for side in (first, ~first):
-        used, index = np.unique(faces[side], return_inverse=True)
-        halves.append((vertices[used], index.reshape(-1, 3).astype(np.int32), on_cut[used]))
-    return halves
-
-
-def _decimate_part(
-    vertices: np.ndarray, faces: np.ndarray, on_cut: np.ndarray, target: int, preservenormal: bool
-) -> tuple[np.ndarray, np.ndarray]:
-    """A half decimated to ``target`` faces, its faces at the cut left as they are."""
-    pymeshlab = _meshlab()
-    meshes = pymeshlab.MeshSet()
-    free = ~on_cut[faces].any(axis=1)
-    meshes.add_mesh(
-        pymeshlab.Mesh(vertex_matrix=vertices, face_matrix=faces, f_scalar_array=free * 1.0)
-    )
-    meshes.compute_selection_by_condition_per_face(condselect="fq > 0.5")
-    meshes.meshing_decimation_quadric_edge_collapse(
-        targetfacenum=max(target, 1),
-        selected=True,
-        preservenormal=preservenormal,
-        **DECIMATION,
-    )
-    mesh = meshes.current_mesh()
-    return mesh.vertex_matrix().copy(), mesh.face_matrix().copy()
