@@ -31,6 +31,7 @@ def may_fork(monkeypatch):
     if threading.active_count() != 1:
         pytest.skip("another test left a thread running: this process may not fork")
     monkeypatch.setattr(forked, "_allowed", True)
+    monkeypatch.setattr(forked, "second_core_free", lambda: True)  # Whatever the load.
 
 
 def gone(pid: int) -> bool:
@@ -66,6 +67,15 @@ def test_without_leave_to_fork_the_parent_does_the_work(monkeypatch):
     assert beside.result() == os.getpid()
 
 
+@pytest.mark.parametrize(
+    ("cores", "load", "free"), [({0, 1}, 1.5, True), ({0, 1}, 2.5, False), ({0}, 0.0, False)]
+)
+def test_a_child_is_forked_only_with_a_core_free_for_it(monkeypatch, cores, load, free):
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: cores)
+    monkeypatch.setattr(os, "getloadavg", lambda: (load, load, load))
+    assert forked.second_core_free() == free
+
+
 def test_a_running_thread_keeps_the_work_in_the_parent(may_fork):
     stop = threading.Event()
     thread = threading.Thread(target=stop.wait)
@@ -99,6 +109,7 @@ def test_a_child_dies_with_its_parent():
         "import os, signal, time\n"
         "from hapticut.scenebuild import forked\n"
         "forked.allow()\n"
+        "forked.second_core_free = lambda: True\n"
         "beside = forked.Beside(lambda: time.sleep(60))\n"
         "print(beside.pid, flush=True)\n"
         "os.kill(os.getpid(), signal.SIGKILL)\n"
@@ -116,8 +127,15 @@ def test_a_cancel_of_check_scene_leaves_no_child_behind(tmp_path):
     from measure_check_time import sample_mesh, write_request
 
     request = write_request(tmp_path, sample_mesh(), 100.0)
+    child = (
+        "import sys\n"
+        "from hapticut.scenebuild import forked\n"
+        "forked.second_core_free = lambda: True  # Whatever the load.\n"
+        "from hapticut.cli import main\n"
+        "sys.exit(main())\n"
+    )
     process = subprocess.Popen(
-        [sys.executable, "-m", "hapticut.cli", "build-request", str(request), "--check"],
+        [sys.executable, "-c", child, "build-request", str(request), "--check"],
         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True,
     )  # fmt: skip
     children: set[int] = set()

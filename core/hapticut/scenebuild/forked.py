@@ -6,8 +6,8 @@ process allows it itself (allow(); the build-request command does, the process t
 starts for Check Scene and Build Scene), on Linux only (fork is the platform's own way to start
 a process there; on macOS a forked child of a process that loaded Qt may crash), only while
 no other Python thread runs (a fork copies no thread, and a lock one held would stay held in
-the child), and only with a second core. Elsewhere the work runs in the parent when its
-result is asked for.
+the child), and only with a core free for the child. Elsewhere the work runs in the parent
+when its result is asked for.
 
 The child is in the parent's process group (a cancel that ends the group ends it), dies with
 the parent (Linux's parent-death signal), sends its result pickled through a pipe and ends
@@ -46,14 +46,23 @@ def allow(allowed: bool = True) -> None:
 
 
 def can_fork() -> bool:
-    """Whether Beside forks now: allowed, on Linux, no other thread, and a second core to
-    run the child on (on one, it would only take turns with the parent)."""
+    """Whether Beside forks now: allowed, on Linux, no other thread, and a core free for the
+    child (second_core_free)."""
     return (
         _allowed
         and sys.platform.startswith("linux")
         and threading.active_count() == 1
-        and len(os.sched_getaffinity(0)) > 1
+        and second_core_free()
     )
+
+
+def second_core_free() -> bool:
+    """Whether this process has a second core, and the machine's load (its last minute's
+    average, this process's own share in it) leaves one free: on a busy machine the child
+    would only take turns with the parent and the other work, and forking it costs time of
+    its own (the pages parent and child write are copied)."""
+    cores = len(os.sched_getaffinity(0))
+    return cores > 1 and os.getloadavg()[0] < cores
 
 
 class Beside(Generic[T]):
