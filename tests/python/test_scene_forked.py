@@ -193,6 +193,19 @@ def test_both_ways_measured_at_once_find_what_one_after_the_other_do(
     assert repair.hausdorff(meshes, 0, 1) == at_once == pytest.approx(4.0, abs=0.3)
 
 
+def test_a_surface_of_one_large_face_is_measured_one_way_after_the_other(monkeypatch, may_fork):
+    """Its way back cannot be cut into two parts of faces by area: the parent measures it."""
+    meshes = pymeshlab.MeshSet()
+    vertices, faces = icosphere(30.0, 2)
+    meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=vertices, face_matrix=faces))
+    sheet = np.array([[-40.0, -40, 0], [40, -40, 0], [0, 40, 0], [0, 0, 1], [1, 0, 1]])
+    meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=sheet, face_matrix=[[0, 1, 2], [2, 3, 4]]))
+    monkeypatch.setattr(repair, "AT_ONCE_SAMPLES", 0)
+    monkeypatch.setattr(repair, "Beside", lambda work: pytest.fail("a child was forked"))
+    measured = repair.hausdorff(meshes, 0, 1)
+    assert measured == pytest.approx(30.0, abs=1.0) and meshes.mesh_number() == 2
+
+
 def regions_with_problems():
     vertices, faces = icosphere(10.0, 2)
     crossing = (

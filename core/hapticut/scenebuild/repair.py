@@ -308,7 +308,9 @@ def hausdorff(
 
     full = back_from is None and not first_vertices_only
     if full and samples >= AT_ONCE_SAMPLES and forked.can_fork():
-        return _at_once(meshes, first, second, samples, way, between, stop_above)
+        found = _at_once(meshes, first, second, samples, way, between, stop_above)
+        if found is not None:
+            return found
     there = way(first, second, samples, faces=not first_vertices_only)
     if stop_above is not None and there > stop_above:
         return there
@@ -329,16 +331,21 @@ AT_ONCE_SAMPLES = 100_000
 BACK_IN_CHILD = 0.75
 
 
-def _at_once(meshes, first: int, second: int, samples: int, way, between, stop_above) -> float:
+def _at_once(
+    meshes, first: int, second: int, samples: int, way, between, stop_above
+) -> float | None:
     """hausdorff's two ways at once: the second mesh cut in two parts (its faces in order,
     BACK_IN_CHILD of its area in the first), each sampled with its share of the samples (the
     face samples are spread by area, the vertices all sampled) and measured against the
-    first mesh, the first part in a forked child."""
+    first mesh, the first part in a forked child. None, measuring nothing, when a part would
+    be empty (a face of over BACK_IN_CHILD of the area)."""
     current = meshes.current_mesh_id()
     mesh = meshes.mesh(second)
     vertices, faces = mesh.vertex_matrix(), mesh.face_matrix()
     areas = triangle_areas(vertices, faces)
     in_child = np.cumsum(areas) <= BACK_IN_CHILD * areas.sum()
+    if in_child.all() or not in_child.any():
+        return None
     parts = []
     for chosen in (in_child, ~in_child):
         used, index = np.unique(faces[chosen], return_inverse=True)
