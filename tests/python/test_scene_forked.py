@@ -103,6 +103,17 @@ def test_a_child_that_fails_or_is_killed_leaves_the_work_to_the_parent(may_fork)
     assert beside.result() == parent and gone(child)
 
 
+def test_a_child_that_does_not_answer_is_taken_for_hung(monkeypatch, may_fork):
+    """A child that does not answer in time (a lock held at the fork by a thread Python does
+    not know of would hang it) is killed, and the parent does the work."""
+    monkeypatch.setattr(forked, "HUNG_AFTER_S", 0.2)
+    monkeypatch.setattr(forked, "HUNG_AFTER_SHARE", 0.0)
+    parent = os.getpid()
+    beside = forked.Beside(lambda: os.getpid() if os.getpid() == parent else time.sleep(60))
+    child = beside.pid
+    assert beside.forked and beside.result() == parent and gone(child)
+
+
 def test_a_child_dies_with_its_parent():
     """A parent killed alone (not its process group) takes its child with it."""
     script = (
