@@ -239,11 +239,15 @@ class InputCheck:
         if beside:
             _meshlab()  # Imported once, here, rather than again by the child and the caller.
         self.beside = Beside(self.work) if beside else None
+        if self.beside is not None and not self.beside.forked:
+            self.beside = None  # Not forked after all: the work is done here when asked.
         self.counts: list[int] | None = None
 
     def failed(self) -> bool:
-        """Whether a problem is known now (the child's answer is not waited for)."""
-        if not self.known and self.beside is not None and self.beside.ready():
+        """Whether a problem is known now: the child's answer is not waited for, but without
+        a child the crossing faces are looked for at once."""
+        answered = self.beside is None or self.beside.ready()
+        if not self.known and self.counts is None and answered:
             self.known = any(self._counts())
         return self.known
 

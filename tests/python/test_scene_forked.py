@@ -246,6 +246,15 @@ def test_the_input_check_beside_finds_what_it_finds_alone(monkeypatch, may_fork)
         assert check.problems() == alone[:1]
 
 
+def test_without_a_child_the_input_check_finds_crossing_faces_before_the_layout(
+    monkeypatch,
+):
+    monkeypatch.setattr(build_request, "BESIDE_FACES", 0)
+    monkeypatch.setattr(forked, "_allowed", False)
+    with InputCheck(regions_with_problems()[:1]) as check:
+        assert check.beside is None and check.failed()
+
+
 def test_check_scene_stops_the_layout_check_for_the_regions_own_problems(tmp_path):
     """Check Scene checks the layout while the input check still runs; a problem it then
     finds ends the layout's check, and is the one reported."""
