@@ -68,11 +68,14 @@ def test_without_leave_to_fork_the_parent_does_the_work(monkeypatch):
 
 
 @pytest.mark.parametrize(
-    ("cores", "load", "free"), [({0, 1}, 1.5, True), ({0, 1}, 2.5, False), ({0}, 0.0, False)]
-)
-def test_a_child_is_forked_only_with_a_core_free_for_it(monkeypatch, cores, load, free):
+    ("cores", "load", "running", "free"),
+    [({0, 1}, 1.5, 1, True), ({0, 1}, 2.5, 1, False), ({0, 1}, 0.5, 2, False),
+     ({0}, 0.0, 1, False)],
+)  # fmt: skip
+def test_a_child_is_forked_only_with_a_core_free_for_it(monkeypatch, cores, load, running, free):
     monkeypatch.setattr(os, "sched_getaffinity", lambda pid: cores)
     monkeypatch.setattr(os, "getloadavg", lambda: (load, load, load))
+    monkeypatch.setattr(forked, "runnable", lambda: running)
     assert forked.second_core_free() == free
 
 

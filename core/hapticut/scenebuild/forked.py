@@ -57,12 +57,23 @@ def can_fork() -> bool:
 
 
 def second_core_free() -> bool:
-    """Whether this process has a second core, and the machine's load (its last minute's
-    average, this process's own share in it) leaves one free: on a busy machine the child
-    would only take turns with the parent and the other work, and forking it costs time of
-    its own (the pages parent and child write are copied)."""
+    """Whether this process has a second core, and the machine's load leaves one free: its
+    last minute's average, and the processes runnable now (the average lags a minute behind
+    work that has just begun), this process among them. On a busy machine the child would
+    only take turns with the parent and the other work, and forking it costs time of its own
+    (the pages parent and child write are copied)."""
     cores = len(os.sched_getaffinity(0))
-    return cores > 1 and os.getloadavg()[0] < cores
+    return cores > 1 and os.getloadavg()[0] < cores and runnable() < cores
+
+
+def runnable() -> int:
+    """How many processes (threads) are runnable now, this one among them (Linux's
+    /proc/loadavg; 1 where it cannot be read)."""
+    try:
+        with open("/proc/loadavg") as file:
+            return int(file.read().split()[3].split("/")[0])
+    except (OSError, ValueError, IndexError):
+        return 1
 
 
 class Beside(Generic[T]):
