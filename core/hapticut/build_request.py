@@ -232,36 +232,110 @@ def input_problems(regions: list[Region], progress=None) -> list[tuple[str, str]
     """(region, problem) for each region that is open, self-intersecting or without volume,
     before any repair: the add-on asks its user to fix these rather than have them patched.
     progress(fraction, message), when given, is told which region is checked."""
-    from hapticut.scenebuild.geometry import Surface
-    from hapticut.scenebuild.repair import check_arrays, self_intersecting_faces
+    return InputCheck(regions, progress, beside=False).problems()
 
-    problems = []
-    for i, region in enumerate(regions):
-        if progress is not None:
-            progress(i / len(regions), f"checking {region.name} ({len(region.faces):,} faces)")
-        try:
-            vertices, faces = check_arrays(region.name, region.vertices, region.faces)
-        except BuildError as error:
-            problems.append((region.name, error.problem))
-            continue
-        edges = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1).astype(np.int64)
-        # Each edge as one number (unique over rows sorts much slower on a scan).
-        _, uses = np.unique(edges[:, 0] * len(vertices) + edges[:, 1], return_counts=True)
-        open_edges = int((uses == 1).sum())
-        if open_edges:
-            problems.append((region.name, f"the mesh is open ({open_edges} boundary edges)"))
-        if (uses > 2).any():
-            problems.append(
-                (region.name, f"the mesh is not manifold ({int((uses > 2).sum())} edges)")
-            )
-        crossing = int(self_intersecting_faces([Surface(vertices, faces)]).sum())
-        if crossing:
-            problems.append((region.name, f"the mesh intersects itself ({crossing} faces)"))
-        extent = vertices.max(axis=0) - vertices.min(axis=0)
-        volume = abs(signed_volume(vertices, faces))
-        if volume <= ZERO_VOLUME_RATIO * max(float(np.prod(extent)), float(extent.max()) ** 3):
-            problems.append((region.name, f"the region has no volume ({volume:.3g} mm^3)"))
-    names = [region.name for region in regions]
-    for name in sorted({n for n in names if names.count(n) > 1}):
-        problems.append((name, "two regions have this name"))
-    return problems
+
+# Regions of at least this many faces in all have their crossing faces looked for beside
+# the caller's work (InputCheck): on fewer, that costs less than starting a process.
+BESIDE_FACES = 20_000
+
+
+class InputCheck:
+    """input_problems' checks, begun. With ``beside``, the dearest, faces crossing others,
+    runs in a forked child (hapticut.scenebuild.forked, where the process allows it) on
+    regions of at least BESIDE_FACES faces, while the caller goes on (Check Scene checks the
+    layout meanwhile). problems() waits for it; failed() says, without waiting, whether a
+    problem is known. Close it (or use it as a context manager) to end the child."""
+
+    def __init__(self, regions: list[Region], progress=None, beside: bool = True) -> None:
+        from hapticut.scenebuild.forked import Beside
+        from hapticut.scenebuild.geometry import Surface
+        from hapticut.scenebuild.repair import _meshlab, check_arrays
+
+        # The problems in the order reported: (region, problem), or (region, None) where its
+        # crossing faces are told.
+        self.found: list[tuple[str, str | None]] = []
+        surfaces: list[Surface] = []
+        for i, region in enumerate(regions):
+            if progress is not None:
+                progress(i / len(regions), f"checking {region.name} ({len(region.faces):,} faces)")
+            try:
+                vertices, faces = check_arrays(region.name, region.vertices, region.faces)
+            except BuildError as error:
+                self.found.append((region.name, error.problem))
+                continue
+            edges = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1).astype(np.int64)
+            # Each edge as one number (unique over rows sorts much slower on a scan).
+            _, uses = np.unique(edges[:, 0] * len(vertices) + edges[:, 1], return_counts=True)
+            open_edges = int((uses == 1).sum())
+            if open_edges:
+                self.found.append((region.name, f"the mesh is open ({open_edges} boundary edges)"))
+            if (uses > 2).any():
+                self.found.append(
+                    (region.name, f"the mesh is not manifold ({int((uses > 2).sum())} edges)")
+                )
+            self.found.append((region.name, None))
+            surfaces.append(Surface(vertices, faces))
+            extent = vertices.max(axis=0) - vertices.min(axis=0)
+            volume = abs(signed_volume(vertices, faces))
+            if volume <= ZERO_VOLUME_RATIO * max(float(np.prod(extent)), float(extent.max()) ** 3):
+                self.found.append((region.name, f"the region has no volume ({volume:.3g} mm^3)"))
+        names = [region.name for region in regions]
+        for name in sorted({n for n in names if names.count(n) > 1}):
+            self.found.append((name, "two regions have this name"))
+        self.known = any(problem is not None for _, problem in self.found)
+        self.work = _crossing_counts(surfaces)
+        beside = beside and sum(len(s.faces) for s in surfaces) >= BESIDE_FACES
+        if beside:
+            _meshlab()  # Imported once, here, rather than again by the child and the caller.
+        self.beside = Beside(self.work) if beside else None
+        if self.beside is not None and not self.beside.forked:
+            self.beside = None  # Not forked after all: the work is done here when asked.
+        self.counts: list[int] | None = None
+
+    def failed(self) -> bool:
+        """Whether a problem is known now: the child's answer is not waited for, but without
+        a child the crossing faces are looked for at once."""
+        answered = self.beside is None or self.beside.ready()
+        if not self.known and self.counts is None and answered:
+            self.known = any(self._counts())
+        return self.known
+
+    def _counts(self) -> list[int]:
+        """Each surface's count of crossing faces (waits for the child)."""
+        if self.counts is None:
+            self.counts = self.beside.result() if self.beside is not None else self.work()
+        return self.counts
+
+    def problems(self) -> list[tuple[str, str]]:
+        counts = iter(self._counts())
+        problems = []
+        for region, problem in self.found:
+            if problem is None:
+                crossing = next(counts)
+                if not crossing:
+                    continue
+                problem = f"the mesh intersects itself ({crossing} faces)"
+            problems.append((region, problem))
+        return problems
+
+    def close(self) -> None:
+        """End the child, if one still runs."""
+        if self.beside is not None:
+            self.beside.close()
+
+    def __enter__(self) -> InputCheck:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def _crossing_counts(surfaces):
+    """work() counting each surface's faces that cross another of its faces."""
+    from hapticut.scenebuild.repair import self_intersecting_faces
+
+    def work() -> list[int]:
+        return [int(self_intersecting_faces([surface]).sum()) for surface in surfaces]
+
+    return work

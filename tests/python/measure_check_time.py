@@ -8,7 +8,8 @@ settings: the accuracy 1% of the size). A measurement, not a test: nothing is as
 
 Each run starts the child as the add-on does (stdout to a file read as it grows) and prints
 its wall time, its CPU time (user + system: less changed by other processes on a loaded
-machine), the face count kept, and its progress records: how many, the longest wait
+machine; on Linux also the CPU time the rest of the machine used meanwhile, "others": near 0
+at rest), the face count kept, and its progress records: how many, the longest wait
 between two of them (or the start and the first, or the last and the end) and the largest
 step of the fraction. A first run of each toolkit, which compiles its modules, is not
 counted. The toolkit is this checkout's (``core`` first on PYTHONPATH); with several --core
@@ -74,6 +75,7 @@ def run_check(request: Path, folder: Path, core: Path) -> dict:
     env["PYTHONPYCACHEPREFIX"] = str(folder / "pycache")
     log = folder / "progress.jsonl"
     records: list[tuple[float, float]] = []
+    busy = machine_cpu()
     with open(log, "wb") as stdout:
         started = time.perf_counter()
         process = subprocess.Popen(
@@ -105,7 +107,19 @@ def run_check(request: Path, folder: Path, core: Path) -> dict:
                 break
             time.sleep(0.01)
     seconds = time.perf_counter() - started
-    return {"seconds": seconds, "cpu": cpu, "records": records, "last": last, "kept": kept}
+    others = None if busy is None else machine_cpu() - busy - cpu
+    return {"seconds": seconds, "cpu": cpu, "records": records, "last": last, "kept": kept,
+            "others": others}  # fmt: skip
+
+
+def machine_cpu() -> float | None:
+    """CPU seconds the whole machine has been busy (Linux's /proc/stat; None elsewhere)."""
+    try:
+        with open("/proc/stat") as file:
+            ticks = [int(word) for word in file.readline().split()[1:]]
+    except OSError:
+        return None
+    return (sum(ticks) - ticks[3] - ticks[4]) / os.sysconf("SC_CLK_TCK")  # Not idle or iowait.
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -128,8 +142,9 @@ def main(argv: list[str] | None = None) -> int:
                 runs[core].append(run)
                 stamps = [0.0] + [t for t, _ in run["records"]] + [run["seconds"]]
                 fractions = [0.0] + [f for _, f in run["records"]]
+                others = "" if run["others"] is None else f", others {run['others']:.2f} s"
                 print(
-                    f"{core} run {i + 1}: {run['seconds']:.2f} s (CPU {run['cpu']:.2f} s), "
+                    f"{core} run {i + 1}: {run['seconds']:.2f} s (CPU {run['cpu']:.2f} s{others}), "
                     f"{len(run['records'])} progress records, longest gap "
                     f"{max(np.diff(stamps)):.2f} s, largest step "
                     f"{max(np.diff(fractions), default=0.0):.2f}; {run['kept']}; {run['last']}"

@@ -82,10 +82,12 @@ def _fail(events: JsonLines, name: str, problem: str, code: int = 1) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hapticut.build_request import RequestError, input_problems, read_request
+    from hapticut.build_request import InputCheck, RequestError, read_request
+    from hapticut.scenebuild import forked
 
     from .mesh import _terminate_as_exit
 
+    forked.allow()  # This process runs nothing but the build (forked.py).
     events = JsonLines(sys.stdout, args.progress == "jsonl")
     if not args.check and not args.out:
         return _fail(events, "", "--out DIR is required (or --check)", 2)
@@ -94,35 +96,56 @@ def run(args: argparse.Namespace) -> int:
     except RequestError as error:
         return _fail(events, "", f"request {error}", 2)
     events.emit("progress", stage="validate", fraction=0.0, message="checking regions")
-    problems = input_problems(
+    with InputCheck(
         request.regions,
         lambda fraction, message: events.emit(
             "progress", stage="validate", fraction=0.0, message=message
         ),
-    )
+        beside=args.check,  # A build waits for the check: nothing to do beside it.
+    ) as check:
+        if args.check:
+            return _check(request, check, events)
+        problems = check.problems()
     if not request.regions:
         problems.append(("", "no regions to build a scene from"))
-    if args.check:
-        return _check(request, problems, events)
     if problems:
         return _fail(events, *problems[0])
     with _terminate_as_exit():
         return _build(request, os.path.abspath(args.out), events)
 
 
-def _check(request, problems: list[tuple[str, str]], events: JsonLines) -> int:
-    """The regions' own problems; when there are none, the build's checks before meshing."""
-    from hapticut.scenebuild import BuildError, check_layout
+def _check(request, check, events: JsonLines) -> int:
+    """The regions' own problems; when there are none, the build's checks before meshing.
+    These begin while the input check (InputCheck) may still look for crossing faces, and
+    stop once it found some: its problems come first."""
+    from hapticut.scenebuild import BuildCancelled, BuildError, check_layout
 
-    if not problems:
+    layout: list[tuple[str, str]] = []
+    if request.regions and not check.failed():
         try:
-            check_layout(request.regions, request.settings, progress=events)
+            check_layout(request.regions, request.settings, progress=_Until(events, check.failed))
         except BuildError as error:
-            problems = [(error.region, error.problem)]
+            layout = [(error.region, error.problem)]
+        except BuildCancelled:
+            pass
+    problems = check.problems() or layout
+    if not request.regions:
+        problems.append(("", "no regions to build a scene from"))
     for name, problem in problems:
         events.emit("problem", object=name, problem=problem)
     events.emit("checked", problems=len(problems))
     return 1 if problems else 0
+
+
+class _Until:
+    """The events as a progress callback that cancels once stop() is true."""
+
+    def __init__(self, events: JsonLines, stop) -> None:
+        self.events, self.stop = events, stop
+        self.on_step = events.on_step
+
+    def __call__(self, fraction: float, message: str) -> bool:
+        return self.events(fraction, message) and not self.stop()
 
 
 def _build(request, out: str, events: JsonLines) -> int:

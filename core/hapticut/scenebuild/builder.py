@@ -603,7 +603,7 @@ def check_layout(
     of the steps run (repairs, nesting, volumes)."""
     settings = (settings or BuildSettings()).checked()
     steps = _Progress(progress, CHECK_STEPS)
-    report = BuildReport(tetwild=f"pytetwild {tetwild.version()}")
+    report = BuildReport(tetwild="")  # Nothing is meshed.
     _prepare(list(regions), settings, steps, report)
     steps.finish()
     report.timings_s = dict(steps.timings)

@@ -11,7 +11,9 @@ import os
 
 import numpy as np
 
+from . import forked
 from .errors import BuildError
+from .forked import Beside
 from .geometry import Surface, signed_volume, triangle_areas
 
 # Faces with area below this fraction of (mean edge length)^2 count as zero-area (degenerate).
@@ -286,26 +288,86 @@ def hausdorff(
     a scan, whose vertices lie closer together than face samples would). stop_above: when
     the first way finds more than this, that is returned without measuring the other (the
     distance is more than it either way). back_from: the other way is measured only when the
-    first found more than this (math.inf: the first way alone, a one-sided distance)."""
+    first found more than this (math.inf: the first way alone, a one-sided distance).
+
+    A measure of both ways of at least AT_ONCE_SAMPLES samples each, where this process can
+    fork (forked.py), measures most of the other way in a forked child while it measures the
+    first way and the rest of the other (at_once): the same samples, spread alike."""
     pymeshlab = _meshlab()
     largest = max(meshes.mesh(first).face_number(), meshes.mesh(second).face_number())
     samples = samples or max(20_000, 4 * largest)
     far = pymeshlab.PercentageValue(50)
-    there = meshes.get_hausdorff_distance(
-        sampledmesh=first, targetmesh=second, samplevert=True,
-        sampleface=not first_vertices_only, samplenum=samples, maxdist=far,
-    )  # fmt: skip
-    if stop_above is not None and there["max"] > stop_above:
-        return float(there["max"])
-    if back_from is not None and there["max"] <= back_from:
-        return float(there["max"])
+
+    def way(sampled: int, target: int, count: int, faces: bool = True) -> float:
+        return float(
+            meshes.get_hausdorff_distance(
+                sampledmesh=sampled, targetmesh=target, samplevert=True, sampleface=faces,
+                samplenum=count, maxdist=far,
+            )["max"]
+        )  # fmt: skip
+
+    full = back_from is None and not first_vertices_only
+    if full and samples >= AT_ONCE_SAMPLES and forked.can_fork():
+        found = _at_once(meshes, first, second, samples, way, between, stop_above)
+        if found is not None:
+            return found
+    there = way(first, second, samples, faces=not first_vertices_only)
+    if stop_above is not None and there > stop_above:
+        return there
+    if back_from is not None and there <= back_from:
+        return there
     if between is not None:
         between()
-    back = meshes.get_hausdorff_distance(
-        sampledmesh=second, targetmesh=first, samplevert=True, sampleface=True,
-        samplenum=samples, maxdist=far,
-    )  # fmt: skip
-    return float(max(there["max"], back["max"]))
+    return max(there, way(second, first, samples))
+
+
+# A measure of a scan's surface (4 samples per face of the larger mesh each way) measures
+# its two ways at once: below this, a way costs little more than starting the child.
+AT_ONCE_SAMPLES = 100_000
+# The share of the way back (from the second mesh's samples to the first) that the child
+# measures: the parent measures the way there and the rest. On a scan the way back, to the
+# scan's many faces, costs about twice the way there, to the candidate's few, so that each
+# then measures about as long.
+BACK_IN_CHILD = 0.75
+
+
+def _at_once(
+    meshes, first: int, second: int, samples: int, way, between, stop_above
+) -> float | None:
+    """hausdorff's two ways at once: the second mesh cut in two parts (its faces in order,
+    BACK_IN_CHILD of its area in the first), each sampled with its share of the samples (the
+    face samples are spread by area, the vertices all sampled) and measured against the
+    first mesh, the first part in a forked child. None, measuring nothing, when a part would
+    be empty (a face of over BACK_IN_CHILD of the area)."""
+    current = meshes.current_mesh_id()
+    mesh = meshes.mesh(second)
+    vertices, faces = mesh.vertex_matrix(), mesh.face_matrix()
+    areas = triangle_areas(vertices, faces)
+    in_child = np.cumsum(areas) <= BACK_IN_CHILD * areas.sum()
+    if in_child.all() or not in_child.any():
+        return None
+    parts = []
+    for chosen in (in_child, ~in_child):
+        used, index = np.unique(faces[chosen], return_inverse=True)
+        meshes.add_mesh(
+            _meshlab().Mesh(vertex_matrix=vertices[used], face_matrix=index.reshape(-1, 3))
+        )
+        parts.append(meshes.current_mesh_id())
+    child_samples = round(samples * areas[in_child].sum() / max(areas.sum(), 1e-300))
+    try:
+        with Beside(lambda: way(parts[0], first, max(child_samples, 1))) as other:
+            there = way(first, second, samples)
+            if stop_above is not None and there > stop_above:
+                return there
+            if between is not None:
+                between()
+            mine = way(parts[1], first, max(samples - child_samples, 1))
+            return max(there, mine, other.result())
+    finally:
+        for part in parts:
+            meshes.set_current_mesh(part)
+            meshes.delete_current_mesh()
+        meshes.set_current_mesh(current)
 
 
 def one_sided_deviation(sampled: Surface, target: Surface) -> float:

@@ -13,8 +13,6 @@ killed on cancel. This file is also that child's program: it imports nothing fro
 from __future__ import annotations
 
 import contextlib
-import importlib.metadata
-import importlib.util
 import json
 import math
 import os
@@ -55,6 +53,10 @@ class TetWildParams:
 
 def version() -> str:
     """The installed pytetwild version ("" when it is missing)."""
+    # importlib.metadata is imported where it is used: its import is a noticeable share of
+    # the start of Check Scene's child, which meshes nothing.
+    import importlib.metadata
+
     try:
         return importlib.metadata.version(DISTRIBUTION)
     except importlib.metadata.PackageNotFoundError:
@@ -66,6 +68,9 @@ def load_wrapper():
     global _wrapper
     if _wrapper is not None:
         return _wrapper
+    import importlib.metadata
+    import importlib.util
+
     try:
         dist = importlib.metadata.distribution(DISTRIBUTION)
     except importlib.metadata.PackageNotFoundError:
