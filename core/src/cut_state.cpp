@@ -37,24 +37,43 @@ bool CutState::cut_if_inside(std::int32_t t, const Vec3& x) {
   return true;
 }
 
-// The walk of segment_probe.cpp's probe_segment, without walls: in each tet
-// the face the chord leaves by first (only a plane it strictly exits
-// counts); the piece of the chord inside the tet is inside it exactly when
-// its middle is (a tet is convex), so a piece along a face cuts neither side.
+namespace {
+
+// The walk of segment_probe.cpp's probe_segment, without walls: from
+// `start_tet` (whose closure holds a), in each tet the face the segment a -> b
+// leaves by first (only a plane it strictly exits counts), at most `most`
+// tets. visit(t, middle, holds_b) for each: `middle` is the middle of the
+// segment's piece in t, inside t exactly when the piece crosses t's inside
+// (a tet is convex: a piece along a face crosses neither side); the last,
+// b's own tet, has holds_b set.
+template <typename Visit>
+void walk_segment(const TetMesh& mesh, double eps, std::int32_t start_tet, const Vec3& a,
+                  const Vec3& b, int most, Visit&& visit) {
+  std::int32_t t = start_tet;
+  Vec3 x = a;
+  for (int step = 0; t >= 0 && t < mesh.tet_count() && step < most; ++step) {
+    const TetExit exit = first_exit(mesh, t, x, b, eps);
+    const Vec3 leave = exit.face < 0 ? b : x + (b - x) * exit.fraction;
+    visit(t, (x + leave) * 0.5, exit.face < 0);
+    if (exit.face < 0) return;
+    x = leave;
+    t = mesh.neighbour(t, exit.face);
+  }
+}
+
+}  // namespace
+
 int CutState::cut_along(std::int32_t start_tet, const Vec3& a, const Vec3& b) {
   const TetMesh& mesh = space_->mesh();
   const double eps = space_->tolerance();
   int newly_cut = 0;
-  std::int32_t t = start_tet;
-  Vec3 x = a;
-  for (int step = 0; t >= 0 && t < mesh.tet_count() && step < kMaxChordTets; ++step) {
-    const TetExit exit = first_exit(mesh, t, x, b, eps);
-    if (exit.face < 0) break;  // b is in t: the point has not left it.
-    const Vec3 leave = x + (b - x) * exit.fraction;
-    if (mesh.outside_distance(t, b) > eps) newly_cut += cut_if_inside(t, (x + leave) * 0.5) ? 1 : 0;
-    x = leave;
-    t = mesh.neighbour(t, exit.face);
-  }
+  // b's own tet: the point has not left it.
+  walk_segment(mesh, eps, start_tet, a, b, kMaxChordTets,
+               [&](std::int32_t t, const Vec3& middle, bool holds_b) {
+                 if (!holds_b && mesh.outside_distance(t, b) > eps && cut_if_inside(t, middle)) {
+                   ++newly_cut;
+                 }
+               });
   return newly_cut;
 }
 
@@ -63,16 +82,12 @@ int CutState::tets_crossed(std::int32_t start_tet, const Vec3& a, const Vec3& b,
   const TetMesh& mesh = space_->mesh();
   const double eps = space_->tolerance();
   int count = 0;
-  std::int32_t t = start_tet;
-  Vec3 x = a;
-  for (int step = 0; t >= 0 && t < mesh.tet_count() && count < kMaxEdgeTets; ++step) {
-    const TetExit exit = first_exit(mesh, t, x, b, eps);
-    const Vec3 leave = exit.face < 0 ? b : x + (b - x) * exit.fraction;
-    if (mesh.outside_distance(t, (x + leave) * 0.5) < -eps) out[count++] = t;
-    if (exit.face < 0) break;
-    x = leave;
-    t = mesh.neighbour(t, exit.face);
-  }
+  walk_segment(mesh, eps, start_tet, a, b, kMaxChordTets,
+               [&](std::int32_t t, const Vec3& middle, bool) {
+                 if (count < kMaxEdgeTets && mesh.outside_distance(t, middle) < -eps) {
+                   out[count++] = t;
+                 }
+               });
   return count;
 }
 
