@@ -119,44 +119,35 @@ SLIT_PASSES = (("first", 0.0), ("second, in the slit", 0.0), ("parallel, 5 mm be
 SKIN_PASSES = (("first entry", 0.0), ("re-entry, same place", 0.0), ("5 mm beside", BESIDE_MM))
 
 
-def slit_passes() -> list[dict]:
-    """The three passes through the flesh, in turn, by one blade: position x (mm) and
-    |force| (N) at every tick."""
-    knife = blade(flesh_space())
+def _passes(space: _core.Space, passes, stroke, axis: str, column: int) -> list[dict]:
+    """The passes in turn by one blade: for each, the pose's coordinate `column` as `axis`
+    (mm) and |force| (N) at every tick."""
+    knife = blade(space)
     out = []
-    for name, beside in SLIT_PASSES:
-        poses = slit_stroke(beside)
-        force = _run(knife, poses)
+    for name, beside in passes:
+        poses = stroke(beside)
         out.append(
             {
                 "pass": name,
                 "beside_mm": beside,
-                "x_mm": poses[:, 0],
-                "force_N": force,
+                axis: poses[:, column],
+                "force_N": _run(knife, poses),
                 "tets_cut": len(knife.cut_tets),
             }
         )
     return out
+
+
+def slit_passes() -> list[dict]:
+    """The three passes through the flesh, in turn, by one blade: position x (mm) and
+    |force| (N) at every tick."""
+    return _passes(flesh_space(), SLIT_PASSES, slit_stroke, "x_mm", 0)
 
 
 def skin_passes() -> list[dict]:
     """The three presses through the skin, in turn, by one blade: the device's height z (mm)
     and |force| (N) at every tick of the way down."""
-    knife = blade(skin_space())
-    out = []
-    for name, beside in SKIN_PASSES:
-        poses = press_stroke(beside)
-        force = _run(knife, poses)
-        out.append(
-            {
-                "pass": name,
-                "beside_mm": beside,
-                "z_mm": poses[:, 2],
-                "force_N": force,
-                "tets_cut": len(knife.cut_tets),
-            }
-        )
-    return out
+    return _passes(skin_space(), SKIN_PASSES, press_stroke, "z_mm", 2)
 
 
 def run_cut_memory(
